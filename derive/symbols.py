@@ -1,0 +1,47 @@
+"""The symbols of the model, in the order fixed by MODEL.md (the public contract)."""
+import sympy as sp
+
+# State x = [eta1, eta2, nu1, nu2].
+x, y, z = sp.symbols("x y z", real=True)
+phi, theta, psi = sp.symbols("phi theta psi", real=True)
+u, v, w = sp.symbols("u v w", real=True)
+p, q, r = sp.symbols("p q r", real=True)
+eta1 = sp.Matrix([x, y, z])
+eta2 = sp.Matrix([phi, theta, psi])
+nu1 = sp.Matrix([u, v, w])
+nu2 = sp.Matrix([p, q, r])
+eta = sp.Matrix.vstack(eta1, eta2)
+nu = sp.Matrix.vstack(nu1, nu2)
+state = sp.Matrix.vstack(eta, nu)
+
+# Input U = [U1 (thrust, N), U2, U3, U4 (body moments about O, N m)].
+U = sp.Matrix(sp.symbols("U1:5", real=True))
+
+# Parameters p (14 entries, this order).
+m, g = sp.symbols("m g", positive=True)
+Ixx, Iyy, Izz = sp.symbols("I_xx I_yy I_zz", positive=True)
+c_x, c_y, c_z, c_phi, c_theta, c_psi = sp.symbols(
+    "c_x c_y c_z c_phi c_theta c_psi", nonnegative=True)
+x_G, y_G, z_G = sp.symbols("x_G y_G z_G", real=True)
+r_G = sp.Matrix([x_G, y_G, z_G])
+params = sp.Matrix([m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x_G, y_G, z_G])
+PARAM_NAMES = ("m", "g", "Ixx", "Iyy", "Izz", "c_x", "c_y", "c_z",
+               "c_phi", "c_theta", "c_psi", "x_G", "y_G", "z_G")
+
+# Commanded generalized acceleration (argument of the regressor).
+vartheta = sp.Matrix(sp.symbols("vartheta1:7", real=True))
+
+# Placeholders for the inverse of the inertia about the CoG, I_G^{-1} (symmetric).
+# They depend on parameters only, so derivatives with respect to the state never
+# have to expand a symbolic 3x3 inverse; the exporter substitutes their definition.
+_Gi = {}
+for i in range(3):
+    for j in range(i, 3):
+        _Gi[(i, j)] = _Gi[(j, i)] = sp.Symbol(f"Gamma_{i + 1}{j + 1}", real=True)
+I_G_inv = sp.Matrix(3, 3, lambda i, j: _Gi[(i, j)])
+I_G_INV_SYMBOLS = tuple(_Gi[(i, j)] for i in range(3) for j in range(i, 3))
+
+
+def skew(a):
+    """S(a) with S(a) b = a x b."""
+    return sp.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])

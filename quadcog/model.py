@@ -1,0 +1,163 @@
+"""The generated functions as fast numpy callables: ``quadcog.load()``."""
+from collections import namedtuple
+from pathlib import Path
+import threading
+import warnings
+
+import casadi as ca
+import numpy as np
+
+from .build import compile_library, find_compiler
+from .conventions import FUNCTIONS, N_PARAM
+from .errors import InputError, QuadcogWarning
+from .fastcall import FastCall
+from .generated import C_SOURCE, load_casadi_function, verify
+from .params import check_parameters
+from .paths import generated_dir
+
+Linearization = namedtuple("Linearization", "A B")
+_warned_no_compiler = False
+_cache = {}
+_cache_lock = threading.Lock()
+
+
+def _as_vector(name, value, n):
+    a = np.asarray(value, dtype=float)
+    if a.shape not in ((n,), (n, 1)):
+        raise InputError(f"{name} must have shape ({n},), got shape {a.shape}")
+    a = a.reshape(n)
+    if not np.isfinite(a).all():
+        k = int(np.flatnonzero(~np.isfinite(a))[0])
+        raise InputError(f"{name}[{k}] = {a[k]} is not finite")
+    return a
+
+
+class Model:
+    """The derived model: one method per generated function.
+
+    Methods take numpy arrays (vectors of shape (n,)) and return new arrays, matrices as
+    2-D arrays; every argument is checked (shape, finiteness, admissible ``p``). Pass
+    ``out=`` (arrays of the output shapes) to reuse memory, or use ``fast(name)`` for the
+    unchecked allocation-free path. ``backend`` is "c" (compiled generated/c) or
+    "casadi-vm" (CasADi's virtual machine, when there is no C compiler).
+    """
+
+    def __init__(self, compiled, symbolic, backend):
+        self._compiled = compiled           # name -> casadi.Function (external or VM)
+        self._symbolic = symbolic           # name -> casadi.Function (SX), for expressions
+        self.backend = backend
+        self._calls = {}
+        self._last_p = None
+
+    def casadi_function(self, name):
+        """The generated CasADi Function ``name`` (SX), callable on SX/MX symbols."""
+        if name not in FUNCTIONS:
+            raise InputError(f"unknown function {name!r}; expected one of {tuple(FUNCTIONS)}")
+        if name not in self._symbolic:
+            self._symbolic[name] = load_casadi_function(name)
+        return self._symbolic[name]
+
+    def fast(self, name):
+        """A new FastCall (preallocated buffers) of the compiled function ``name``."""
+        if name not in FUNCTIONS:
+            raise InputError(f"unknown function {name!r}; expected one of {tuple(FUNCTIONS)}")
+        return FastCall(self._compiled[name])
+
+    def _call(self, name, args, out):
+        spec_in, spec_out = FUNCTIONS[name]
+        call = self._calls.get(name)
+        if call is None:
+            call = self._calls[name] = self.fast(name)
+        for buf, (arg_name, n), value in zip(call.inputs, spec_in, args):
+            if arg_name == "p":
+                self._check_p(value)
+            buf[:] = _as_vector(arg_name, value, n)
+        call()
+        if out is None:
+            results = [o.copy() for o in call.outputs]
+        else:
+            outs = out if len(spec_out) > 1 else (out,)
+            for dst, src, (oname, shape) in zip(outs, call.outputs, spec_out):
+                if np.shape(dst) != shape:
+                    raise InputError(f"out for {oname} must have shape {shape}, "
+                                     f"got {np.shape(dst)}")
+                dst[...] = src
+            results = list(outs)
+        return results[0] if len(results) == 1 else Linearization(*results)
+
+    def _check_p(self, p):
+        p = np.asarray(p, dtype=float)
+        key = p.tobytes()
+        if key != self._last_p:       # admissibility once per distinct p, not per call
+            check_parameters(p)
+            self._last_p = key
+
+    def dynamics(self, x, U, p, out=None):
+        """x_dot (12,) of the state x (12,) under inputs U (4,: N, N m, N m, N m) and p (14,)."""
+        return self._call("dynamics", (x, U, p), out)
+
+    def mass_matrix(self, p, out=None):
+        """M (6, 6), the mass and inertia matrix about O, for parameters p (14,)."""
+        return self._call("mass_matrix", (p,), out)
+
+    def coriolis(self, x, p, out=None):
+        """C(nu) (6, 6), skew-symmetric, at state x (12,), parameters p (14,)."""
+        return self._call("coriolis", (x, p), out)
+
+    def damping(self, p, out=None):
+        """D (6, 6) = diag(c_x, c_y, c_z, c_phi, c_theta, c_psi) for p (14,)."""
+        return self._call("damping", (p,), out)
+
+    def gravity(self, x, p, out=None):
+        """g_G (6,) = -[f_G; r_G x f_G] in N and N m at state x (12,), parameters p (14,)."""
+        return self._call("gravity", (x, p), out)
+
+    def regressor(self, x, vartheta, p, out=None):
+        """Phi (6, 3) = d/dr_G [M vartheta + C nu + g_G]; vartheta (6,) a generalized
+        acceleration (m/s^2, rad/s^2), x (12,), p (14,). Phi does not depend on r_G."""
+        return self._call("regressor", (x, vartheta, p), out)
+
+    def decoupling(self, x, p, out=None):
+        """alpha (4, 4) = L_g L_f h for y = [z, phi, theta, psi], at x (12,), p (14,)."""
+        return self._call("decoupling", (x, p), out)
+
+    def drift(self, x, p, out=None):
+        """b (4,) = L_f^2 h, so that y_ddot = alpha U + b; x (12,), p (14,)."""
+        return self._call("drift", (x, p), out)
+
+    def linearization(self, x, U, p, out=None):
+        """Linearization(A (12, 12), B (12, 4)) of the dynamics at x (12,), U (4,), p (14,)."""
+        return self._call("linearization", (x, U, p), out)
+
+
+def _compiled_functions(folder):
+    global _warned_no_compiler
+    cc = find_compiler()
+    if cc is None:
+        if not _warned_no_compiler:
+            warnings.warn("no C compiler found ($CC or `cc`): quadcog falls back to CasADi's "
+                          "virtual machine, which is about 100x slower per call",
+                          QuadcogWarning, stacklevel=3)
+            _warned_no_compiler = True
+        return {n: load_casadi_function(n, folder) for n in FUNCTIONS}, "casadi-vm"
+    verify(folder, only={C_SOURCE})
+    lib = compile_library((folder / C_SOURCE).read_bytes(), "quadcog_gen", cc)
+    return {n: ca.external(n, str(lib)) for n in FUNCTIONS}, "c"
+
+
+def load(folder=None):
+    """The Model of generated/ (or ``folder``), compiled on first use and cached.
+
+    Raises GeneratedFilesError naming the file when generated/ is missing, corrupted or
+    incomplete; run ``make derive`` then.
+    """
+    folder = generated_dir() if folder is None else folder
+    folder = Path(folder).resolve()
+    with _cache_lock:
+        if folder not in _cache:
+            verify(folder)
+            compiled, backend = _compiled_functions(folder)
+            symbolic = {} if backend == "c" else dict(compiled)
+            _cache[folder] = (compiled, symbolic, backend)
+    compiled, symbolic, backend = _cache[folder]
+    return Model(compiled, dict(symbolic), backend)
