@@ -55,11 +55,18 @@ class Translator:
                 memo[node] = ca.SX(float(node))
                 continue
             if not ready:
+                self._check_supported(node, obj_name)
                 stack.append((node, True))
                 stack.extend((a, False) for a in node.args if a not in memo)
                 continue
             memo[node] = self._combine(node, [memo[a] for a in node.args], obj_name)
         return memo[e]
+
+    @staticmethod
+    def _check_supported(node, obj_name):
+        """Fail on the outermost unsupported node, before descending into its arguments."""
+        if not (node.is_Add or node.is_Mul or node.is_Pow or node.func in _FUNCTIONS):
+            raise UnsupportedAtomError(obj_name, node)
 
     @staticmethod
     def _combine(node, args, obj_name):

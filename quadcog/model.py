@@ -42,7 +42,8 @@ class Model:
     "casadi-vm" (CasADi's virtual machine, when there is no C compiler).
     """
 
-    def __init__(self, compiled, symbolic, backend):
+    def __init__(self, compiled, symbolic, backend, folder):
+        self.folder = folder                # the generated/ folder this model was loaded from
         self._compiled = compiled           # name -> casadi.Function (external or VM)
         self._symbolic = symbolic           # name -> casadi.Function (SX), for expressions
         self.backend = backend
@@ -54,7 +55,7 @@ class Model:
         if name not in FUNCTIONS:
             raise InputError(f"unknown function {name!r}; expected one of {tuple(FUNCTIONS)}")
         if name not in self._symbolic:
-            self._symbolic[name] = load_casadi_function(name)
+            self._symbolic[name] = load_casadi_function(name, self.folder)
         return self._symbolic[name]
 
     def fast(self, name):
@@ -160,4 +161,4 @@ def load(folder=None):
             symbolic = {} if backend == "c" else dict(compiled)
             _cache[folder] = (compiled, symbolic, backend)
     compiled, symbolic, backend = _cache[folder]
-    return Model(compiled, dict(symbolic), backend)
+    return Model(compiled, dict(symbolic), backend, folder)

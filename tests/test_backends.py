@@ -1,0 +1,54 @@
+"""The CasADi functions (virtual machine), the compiled C and SymPy lambdify agree."""
+import numpy as np
+import pytest
+import sympy as sp
+
+from conftest import assert_close
+from derive import symbols as sym
+from derive.export import FUNCTION_SPECS
+from quadcog.conventions import FUNCTIONS
+
+RTOL = 1e-12
+
+
+@pytest.fixture(scope="module")
+def lambdified(derived):
+    """name -> callable(args by input name) -> list of outputs, from the SymPy objects.
+
+    The I_G^{-1} placeholders are evaluated from their own lambdified definition, so the
+    whole chain is SymPy's."""
+    gammas = list(sym.I_G_INV_SYMBOLS)
+    gamma_fn = sp.lambdify([list(sym.params)], [derived.I_G_inv[s] for s in gammas], "numpy")
+    out = {}
+    for spec in FUNCTION_SPECS:
+        arg_syms = [list(symbols) for _, symbols in spec.inputs] + [gammas]
+        fns = [sp.lambdify(arg_syms, getter(derived), "numpy", cse=True)
+               for _, getter in spec.outputs]
+        names = [n for n, _ in spec.inputs]
+        out[spec.name] = (names, fns, gamma_fn)
+    return out
+
+
+def _args(names, x, U, p, v):
+    return [{"x": x, "U": U, "p": p, "vartheta": v}[n] for n in names]
+
+
+def test_every_function_exported(lambdified):
+    assert set(lambdified) == set(FUNCTIONS)
+
+
+@pytest.mark.parametrize("name", list(FUNCTIONS))
+def test_c_casadi_sympy_agree(name, model, lambdified, points):
+    names, fns, gamma_fn = lambdified[name]
+    vm = model.casadi_function(name)
+    compiled = getattr(model, name)
+    for k, (x, U, p, v) in enumerate(points):
+        args = _args(names, x, U, p, v)
+        c_out = compiled(*args)
+        c_out = list(c_out) if isinstance(c_out, tuple) else [c_out]
+        vm_out = vm(*args)
+        vm_out = [np.array(o) for o in (vm_out if isinstance(vm_out, tuple) else [vm_out])]
+        sp_out = [np.array(f(*args, gamma_fn(p)), dtype=float) for f in fns]
+        for c, m, s in zip(c_out, vm_out, sp_out):
+            assert_close(c, m.reshape(c.shape), RTOL, f"{name}: C vs CasADi", k)
+            assert_close(c, s.reshape(c.shape), RTOL, f"{name}: C vs SymPy", k)
