@@ -16,6 +16,8 @@ _X = ("x", sym.state)
 _U = ("U", sym.U)
 _P = ("p", sym.params)
 _VT = ("vartheta", sym.vartheta)
+_IP = ("I_products", sym.I_products)
+_W = ("wrench", sym.wrench)
 
 
 @dataclass(frozen=True)
@@ -24,6 +26,7 @@ class FunctionSpec:
     inputs: tuple
     outputs: tuple       # (output name, callable DerivedModel -> sympy Matrix)
     doc: str
+    placeholders: object = lambda d: d.I_G_inv     # which I_G^{-1} definition applies
 
 
 FUNCTION_SPECS = (
@@ -45,6 +48,11 @@ FUNCTION_SPECS = (
                  "b = L_f^2 h, 4"),
     FunctionSpec("linearization", (_X, _U, _P), (("A", lambda d: d.A), ("B", lambda d: d.B)),
                  "A = d x_dot / dx (12x12), B = d x_dot / dU (12x4)"),
+    FunctionSpec("truth_dynamics", (_X, _U, _P, _IP, _W),
+                 (("xdot", lambda d: d.xdot_general),),
+                 "x_dot with I_O = [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] and an "
+                 "external wrench (truth model: parallel-axis I_O, disturbances)",
+                 lambda d: d.I_G_inv_general),
 )
 
 
@@ -56,7 +64,7 @@ def build_function(spec, model):
         for k, s in enumerate(symbols):
             tr.bind(s, args[name][k])
     if "p" in args:
-        for placeholder, definition in model.I_G_inv.items():
+        for placeholder, definition in spec.placeholders(model).items():
             tr.bind(placeholder, tr.expr(definition, f"{spec.name} (I_G^-1)"))
     outs = [ca.densify(tr.matrix(getter(model), spec.name)) for _, getter in spec.outputs]
     outs = ca.cse(outs)   # CasADi's CSE finds what the SymPy memo misses (10-20 % fewer ops)

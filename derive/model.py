@@ -8,7 +8,7 @@ from . import symbols as sym
 from .kinematics import kinematics
 from .lie import OutputDerivatives, output_derivatives
 from .linearization import linearization
-from .newton_euler import RigidBody, inverse_inertia_definition, rigid_body
+from .newton_euler import RigidBody, inverse_inertia_definition, rigid_body, solve_accelerations
 from .regressor import regressor
 from .vector_field import dynamics, vector_field
 
@@ -29,6 +29,8 @@ class DerivedModel:
     A: sp.Matrix
     B: sp.Matrix
     I_G_inv: dict                          # placeholder symbol -> definition in p
+    xdot_general: sp.Matrix                # truth model: products of inertia, external wrench
+    I_G_inv_general: dict                  # placeholders for that model
     timings: dict = field(default_factory=dict)
 
     def substituted(self, expr):
@@ -50,12 +52,31 @@ def derive_model(log=None):
 
     R, Q, J = stage("kinematics", kinematics)
     body = stage("newton-euler", rigid_body, R)
-    inv = inverse_inertia_definition(body.I_G)
-    placeholders = {s: inv[i, j] for s, (i, j) in zip(
-        sym.I_G_INV_SYMBOLS, [(i, j) for i in range(3) for j in range(i, 3)])}
+    placeholders = _placeholders(body)
     f, G = stage("vector field", vector_field, R, Q, body)
     xdot = dynamics(f, G)
+    general = stage("truth model (full I_O)", _general_inertia_dynamics, R, Q)
     Phi = stage("regressor", regressor, body)
     outputs = stage("lie derivatives", output_derivatives, f, G, placeholders)
     A, B = stage("linearization", linearization, xdot)
-    return DerivedModel(R, Q, J, body, f, G, xdot, Phi, outputs, A, B, placeholders, timings)
+    return DerivedModel(R, Q, J, body, f, G, xdot, Phi, outputs, A, B, placeholders,
+                        *general, timings)
+
+
+def _placeholders(body):
+    """I_G^{-1} placeholder symbol -> its definition (adjugate / determinant of I_G)."""
+    inv = inverse_inertia_definition(body.I_G)
+    upper = [(i, j) for i in range(3) for j in range(i, 3)]
+    return {s: inv[i, j] for s, (i, j) in zip(sym.I_G_INV_SYMBOLS, upper)}
+
+
+def _general_inertia_dynamics(R, Q):
+    """The truth model: the same derivation with a full symmetric I_O (diagonal from p,
+    products extra) and an external wrench [F (ground axes, at O); M (body axes)]."""
+    Ixy, Ixz, Iyz = sym.I_products
+    I_O = sp.Matrix([[sym.Ixx, Ixy, Ixz], [Ixy, sym.Iyy, Iyz], [Ixz, Iyz, sym.Izz]])
+    body = rigid_body(R, I_O)
+    f, G = vector_field(R, Q, body)
+    tau_ext = sp.Matrix.vstack(R.T * sym.wrench[:3, :], sym.wrench[3:, :])
+    f_ext = sp.Matrix.vstack(sp.zeros(6, 1), solve_accelerations(body, tau_ext))
+    return dynamics(f, G) + f_ext, _placeholders(body)

@@ -56,9 +56,12 @@ def coriolis_from_mass_matrix(M):
                             sp.Matrix.hstack(-Sa, -Sb)).applyfunc(sp.expand)
 
 
-def rigid_body(R):
-    """Derive M, C, D, g_G and B_u; ``R`` is the body-to-ground rotation."""
-    I_O = sp.diag(Ixx, Iyy, Izz)
+def rigid_body(R, I_O=None):
+    """Derive M, C, D, g_G and B_u; ``R`` is the body-to-ground rotation.
+
+    ``I_O`` defaults to diag(Ixx, Iyy, Izz), the paper's (and the controller's) model.
+    """
+    I_O = sp.diag(Ixx, Iyy, Izz) if I_O is None else I_O
     lhs = newton_euler_lhs(I_O)
     M = lhs.jacobian(NU_DOT)
     C = coriolis_from_mass_matrix(M)

@@ -48,6 +48,7 @@ def generate_atomically(target, echo=print):
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    tmp.chmod(0o755)          # mkdtemp makes 0700; generated/ is shared, readable by all
     old = None
     if target.exists():
         old = Path(tempfile.mkdtemp(prefix=".generated-old-", dir=target.parent))

@@ -28,6 +28,14 @@ params = sp.Matrix([m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x
 PARAM_NAMES = ("m", "g", "Ixx", "Iyy", "Izz", "c_x", "c_y", "c_z",
                "c_phi", "c_theta", "c_psi", "x_G", "y_G", "z_G")
 
+# Products of inertia about O, for the truth model whose I_O changes with r_G (MODEL.md
+# item 9); the controller's model keeps I_O diagonal.
+Ixy, Ixz, Iyz = sp.symbols("I_xy I_xz I_yz", real=True)
+I_products = sp.Matrix([Ixy, Ixz, Iyz])
+
+# External wrench for the truth model: force at O in ground axes (N), moment in body axes (N m).
+wrench = sp.Matrix(sp.symbols("F_x F_y F_z M_x M_y M_z", real=True))
+
 # Commanded generalized acceleration (argument of the regressor).
 vartheta = sp.Matrix(sp.symbols("vartheta1:7", real=True))
 

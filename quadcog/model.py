@@ -126,6 +126,12 @@ class Model:
         """b (4,) = L_f^2 h, so that y_ddot = alpha U + b; x (12,), p (14,)."""
         return self._call("drift", (x, p), out)
 
+    def truth_dynamics(self, x, U, p, I_products, wrench, out=None):
+        """x_dot (12,) of the truth model: full inertia about O (diagonal from p, off-diagonal
+        entries I_products = [Ixy, Ixz, Iyz], kg m^2) and an external wrench (6,) =
+        [force at O in ground axes (N), moment in body axes (N m)]."""
+        return self._call("truth_dynamics", (x, U, p, I_products, wrench), out)
+
     def linearization(self, x, U, p, out=None):
         """Linearization(A (12, 12), B (12, 4)) of the dynamics at x (12,), U (4,), p (14,)."""
         return self._call("linearization", (x, U, p), out)

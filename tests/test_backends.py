@@ -18,11 +18,12 @@ def lambdified(derived):
     The I_G^{-1} placeholders are evaluated from their own lambdified definition, so the
     whole chain is SymPy's."""
     gammas = list(sym.I_G_INV_SYMBOLS)
-    gamma_fn = sp.lambdify([list(sym.params)], [derived.I_G_inv[s] for s in gammas], "numpy")
     out = {}
     for spec in FUNCTION_SPECS:
-        arg_syms = [list(symbols) for _, symbols in spec.inputs] + [gammas]
-        fns = [sp.lambdify(arg_syms, getter(derived), "numpy", cse=True)
+        inputs = [list(symbols) for _, symbols in spec.inputs]
+        definitions = spec.placeholders(derived)
+        gamma_fn = sp.lambdify(inputs, [definitions[s] for s in gammas], "numpy")
+        fns = [sp.lambdify(inputs + [gammas], getter(derived), "numpy", cse=True)
                for _, getter in spec.outputs]
         names = [n for n, _ in spec.inputs]
         out[spec.name] = (names, fns, gamma_fn)
@@ -30,7 +31,10 @@ def lambdified(derived):
 
 
 def _args(names, x, U, p, v):
-    return [{"x": x, "U": U, "p": p, "vartheta": v}[n] for n in names]
+    products = 0.1 * p[2:5] * np.sin(x[:3])      # small products of inertia, I_G stays > 0
+    wrench = np.concatenate([v[:3], 0.1 * v[3:]])
+    return [{"x": x, "U": U, "p": p, "vartheta": v, "I_products": products,
+             "wrench": wrench}[n] for n in names]
 
 
 def test_every_function_exported(lambdified):
@@ -48,7 +52,7 @@ def test_c_casadi_sympy_agree(name, model, lambdified, points):
         c_out = list(c_out) if isinstance(c_out, tuple) else [c_out]
         vm_out = vm(*args)
         vm_out = [np.array(o) for o in (vm_out if isinstance(vm_out, tuple) else [vm_out])]
-        sp_out = [np.array(f(*args, gamma_fn(p)), dtype=float) for f in fns]
+        sp_out = [np.array(f(*args, gamma_fn(*args)), dtype=float) for f in fns]
         for c, m, s in zip(c_out, vm_out, sp_out):
             assert_close(c, m.reshape(c.shape), RTOL, f"{name}: C vs CasADi", k)
             assert_close(c, s.reshape(c.shape), RTOL, f"{name}: C vs SymPy", k)

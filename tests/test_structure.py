@@ -54,3 +54,32 @@ def test_newton_euler_z_row_sign(model, points):
                    - z_G * (Q ** 2 + P ** 2))
         lhs = model.mass_matrix(p) @ model.dynamics(x, U, p)[6:] + model.coriolis(x, p) @ x[6:]
         assert_close(lhs[2], F_z, 1e-11, "F_z row", k)
+
+
+def test_truth_model_equations_of_motion(model, points):
+    """truth_dynamics satisfies Euler's axioms with a full I_O and an external wrench, written
+    out by hand in numpy; with zero products and wrench it is ``dynamics``."""
+    for k, (x, U, p, vt) in enumerate(points):
+        F_ground, M_body = vt[:3], 0.1 * vt[3:]
+        Ixy, Ixz, Iyz = 0.1 * p[2:5] * np.sin(x[:3])
+        I_O = np.array([[p[2], Ixy, Ixz], [Ixy, p[3], Iyz], [Ixz, Iyz, p[4]]])
+        m, g, r, c = p[0], p[1], p[11:14], p[5:11]
+        nu1, nu2 = x[6:9], x[9:12]
+        wrench = np.concatenate([F_ground, M_body])
+        a, al = np.split(model.truth_dynamics(x, U, p, [Ixy, Ixz, Iyz], wrench)[6:], 2)
+        phi, th, ps = x[3:6]
+        c_, s_ = np.cos, np.sin
+        R = (np.array([[c_(ps), -s_(ps), 0], [s_(ps), c_(ps), 0], [0, 0, 1]])
+             @ np.array([[c_(th), 0, s_(th)], [0, 1, 0], [-s_(th), 0, c_(th)]])
+             @ np.array([[1, 0, 0], [0, c_(phi), -s_(phi)], [0, s_(phi), c_(phi)]]))
+        f_G = m * g * np.array([np.sin(th), -np.sin(phi) * np.cos(th), -np.cos(phi) * np.cos(th)])
+        force = f_G + [0, 0, U[0]] - c[:3] * nu1 + R.T @ F_ground
+        moment = np.cross(r, f_G) + U[1:] - c[3:] * nu2 + M_body
+        v_G = nu1 + np.cross(nu2, r)
+        assert_close(m * (a + np.cross(al, r) + np.cross(nu2, v_G)), force, 1e-11, "1st axiom", k)
+        h_O = I_O @ nu2 + m * np.cross(r, nu1)
+        h_dot = I_O @ al + m * np.cross(r, a)
+        assert_close(h_dot + np.cross(nu2, h_O) + np.cross(nu1, m * v_G), moment, 1e-11,
+                     "2nd axiom", k)
+        assert_close(model.truth_dynamics(x, U, p, np.zeros(3), np.zeros(6)),
+                     model.dynamics(x, U, p), 1e-13, "zero products and wrench", k)

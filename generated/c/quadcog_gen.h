@@ -180,6 +180,24 @@ int linearization_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define linearization_SZ_RES 2
 #define linearization_SZ_IW 0
 #define linearization_SZ_W 0
+int truth_dynamics(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int truth_dynamics_checkout(void);
+void truth_dynamics_release(int mem);
+void truth_dynamics_incref(void);
+void truth_dynamics_decref(void);
+casadi_int truth_dynamics_n_in(void);
+casadi_int truth_dynamics_n_out(void);
+casadi_real truth_dynamics_default_in(casadi_int i);
+const char* truth_dynamics_name_in(casadi_int i);
+const char* truth_dynamics_name_out(casadi_int i);
+const casadi_int* truth_dynamics_sparsity_in(casadi_int i);
+const casadi_int* truth_dynamics_sparsity_out(casadi_int i);
+int truth_dynamics_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int truth_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define truth_dynamics_SZ_ARG 5
+#define truth_dynamics_SZ_RES 1
+#define truth_dynamics_SZ_IW 0
+#define truth_dynamics_SZ_W 0
 void quadcog_gen_casadi_version(int* major, int* minor, int* patch);
 int quadcog_gen_casadi_int_size(void);
 int quadcog_gen_casadi_real_size(void);
