@@ -5,10 +5,17 @@
 ``linearization``) as fast numpy callables. This package never imports SymPy.
 """
 from .conventions import FUNCTIONS, INPUT_NAMES, OUTPUT_NAMES, PARAM_NAMES, STATE_NAMES
-from .errors import (CompileError, GeneratedFilesError, InputError, ParameterError,
-                     QuadcogError, QuadcogWarning)
+from .errors import (CompileError, EulerSingularityError, GeneratedFilesError, InputError,
+                     ParameterError, QuadcogError, QuadcogWarning)
 from .model import Linearization, Model, load
 from .params import (ARM_LENGTH, HUMMINGBIRD, check_parameters, default_parameters,
                      inertia_about_cog, with_cog)
+from .controllers import (AdaptiveFeedbackLinearization, CascadePD, Controller,
+                          FeedbackLinearization, make_controller)
+from .plant import TruthOptions, mixer_matrix
+from .result import Metrics, SimulationResult
+from .simulate import BatchResult, Limits, simulate, simulate_batch
+from .timeline import CogChange, CogProfile, Disturbance
+from .trajectory import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
 
 __version__ = "0.1.0"

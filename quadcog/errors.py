@@ -23,3 +23,7 @@ class CompileError(QuadcogError):
 
 class QuadcogWarning(UserWarning):
     """Warnings such as falling back to CasADi's virtual machine without a C compiler."""
+
+
+class EulerSingularityError(QuadcogError):
+    """|theta| reached pi/2, where the ZYX Euler-angle kinematics are singular."""

@@ -1,0 +1,29 @@
+"""Compile any CasADi Function to C through the build cache; the VM when there is no compiler."""
+import warnings
+
+import casadi as ca
+
+from .build import compile_library, find_compiler
+from .errors import QuadcogWarning
+
+_warned = False
+
+
+def compile_function(fn, flags=None):
+    """A compiled (external) equivalent of ``fn``, built once per source and cached on disk.
+
+    Without a C compiler, ``fn`` itself is returned (CasADi's virtual machine) with a warning.
+    """
+    global _warned
+    cc = find_compiler()
+    if cc is None:
+        if not _warned:
+            warnings.warn("no C compiler: running CasADi functions in the virtual machine "
+                          "(slower)", QuadcogWarning, stacklevel=2)
+            _warned = True
+        return fn
+    gen = ca.CodeGenerator(f"{fn.name()}.c")
+    gen.add(fn)
+    kwargs = {} if flags is None else {"flags": flags}
+    lib = compile_library(gen.dump().encode(), fn.name(), cc, **kwargs)
+    return ca.external(fn.name(), str(lib))

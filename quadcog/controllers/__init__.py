@@ -1,0 +1,15 @@
+"""The paper's three controllers, each a CasADi law, a compiled call and a Python object."""
+from .adaptive import AdaptiveFeedbackLinearization
+from .base import Controller
+from .cascade_pd import CascadePD
+from .feedback_linearization import FeedbackLinearization
+
+BY_NAME = {"pd": CascadePD, "fl": FeedbackLinearization, "adaptive": AdaptiveFeedbackLinearization}
+
+
+def make_controller(kind, **params):
+    """A controller by short name: 'pd', 'fl' or 'adaptive', with keyword parameters."""
+    from ..errors import InputError
+    if kind not in BY_NAME:
+        raise InputError(f"unknown controller {kind!r}; expected one of {tuple(BY_NAME)}")
+    return BY_NAME[kind](**params)

@@ -1,0 +1,83 @@
+"""Cascade PD control (paper sec. 3.1), designed by pole placement on the generated
+linearization at hover with r_G = 0.
+
+Inner loops z, phi, theta, psi; outer loops x -> theta and y -> phi. The x-theta chain
+(x, u, theta, q) and the y-phi chain (y, v, phi, p) are each placed as one 4th-order system;
+the state-feedback gain [k1, k2, k3, k4] is then read as a cascade,
+theta_d = -(k1 e_x + k2 e_u) / k3 (+ feedforward), U3 = -k3 (theta - theta_d) - k4 q,
+so all 12 closed-loop eigenvalues are exactly the chosen poles.
+"""
+import casadi as ca
+import numpy as np
+from scipy.signal import place_poles
+
+from ..conventions import IDX
+from ..errors import InputError
+from ..trajectory import ACC, POS, VEL, YAW, YAW_RATE
+from .base import Controller
+from .shaping import drag_over_mass, kinematics, wrap_angle, yaw_rotation_T
+
+# (states, input) of each decoupled loop of the hover linearization (yaw 0, r_G = 0).
+LOOPS = {"z": ([2, 8], 0), "psi": ([5, 11], 3),
+         "x": ([0, 6, 4, 10], 2), "y": ([1, 7, 3, 9], 1)}
+
+
+class CascadePD(Controller):
+    """Linear cascade PD; poles in rad/s (negative real parts).
+
+    poles_z, poles_psi: 2 poles each; poles_x, poles_y: 4 poles each (two slow for position,
+    two fast for attitude). max_tilt: clip on the commanded roll and pitch (rad).
+    """
+
+    name = "cascade_pd"
+
+    def __init__(self, nominal=None, model=None, poles_z=(-3.0, -4.0), poles_psi=(-4.0, -5.0),
+                 poles_x=(-2.0, -2.5, -10.0, -12.0), poles_y=(-2.0, -2.5, -10.0, -12.0),
+                 max_tilt=0.6):
+        super().__init__(nominal, model)
+        self.poles = {"z": poles_z, "psi": poles_psi, "x": poles_x, "y": poles_y}
+        self.max_tilt = float(max_tilt)
+        p = self.nominal
+        self.hover_input = np.array([p[IDX["m"]] * p[IDX["g"]], 0, 0, 0])
+        A, B = self.model.linearization(np.zeros(12), self.hover_input, p)
+        self.A, self.B = A, B
+        self.gains = {}
+        K = np.zeros((4, 12))
+        for loop, (states, inp) in LOOPS.items():
+            poles = np.asarray(self.poles[loop], dtype=float)
+            if poles.size != len(states) or np.any(poles >= 0):
+                raise InputError(f"poles_{loop} must be {len(states)} negative numbers, "
+                                 f"got {self.poles[loop]}")
+            Ai = A[np.ix_(states, states)]
+            Bi = B[np.ix_(states, [inp])]
+            k = place_poles(Ai, Bi, poles).gain_matrix.ravel()
+            self.gains[loop] = k
+            K[inp, states] = k
+        self.K = K
+        self.closed_loop_eigenvalues = np.linalg.eigvals(A - B @ K)
+        chosen = np.sort(np.concatenate([np.asarray(v, float) for v in self.poles.values()]))
+        got = np.sort(self.closed_loop_eigenvalues.real)
+        if np.max(np.abs(got - chosen)) > 1e-6 * np.max(np.abs(chosen)) or \
+                np.max(np.abs(self.closed_loop_eigenvalues.imag)) > 1e-6:
+            raise AssertionError(f"closed-loop eigenvalues {got} differ from the poles {chosen}")
+
+    def expression(self, t, x, ref, c):
+        p = self.nominal
+        m, g = p[IDX["m"]], p[IDX["g"]]
+        cx, cy, cz = drag_over_mass(p)
+        eta_dot, _ = kinematics(self.model, x, ca.DM(p))
+        psi = x[5]
+        Rt = yaw_rotation_T(psi)
+        e_p = Rt @ (x[0:3] - ref[POS])           # position error in the yaw frame
+        e_v = Rt @ (eta_dot[0:3] - ref[VEL])     # ground velocity error in the yaw frame
+        a_ff, v_ff = Rt @ ref[ACC], Rt @ ref[VEL]
+        kx, ky, kz, kpsi = (self.gains[k] for k in ("x", "y", "z", "psi"))
+        clip = lambda v: ca.fmin(ca.fmax(v, -self.max_tilt), self.max_tilt)
+        theta_d = clip(-(kx[0] * e_p[0] + kx[1] * e_v[0]) / kx[2] + (a_ff[0] + cx * v_ff[0]) / g)
+        phi_d = clip(-(ky[0] * e_p[1] + ky[1] * e_v[1]) / ky[2] - (a_ff[1] + cy * v_ff[1]) / g)
+        U1 = (m * (g + ref[ACC][2]) + cz * m * ref[VEL][2] - kz[0] * (x[2] - ref[POS][2])
+              - kz[1] * e_v[2])
+        U2 = -ky[2] * (x[3] - phi_d) - ky[3] * x[9]
+        U3 = -kx[2] * (x[4] - theta_d) - kx[3] * x[10]
+        U4 = -kpsi[0] * wrap_angle(x[5] - ref[YAW]) - kpsi[1] * (x[11] - ref[YAW_RATE])
+        return ca.vertcat(U1, U2, U3, U4), ca.SX(0, 1)

@@ -1,0 +1,79 @@
+"""Input-output feedback linearization (paper sec. 3.2): U = alpha^{-1} (v - b) with alpha and
+b from the generated Lie derivatives at the nominal r_G, v from PD on the output errors of
+y = [z, phi, theta, psi], and an outer position loop that commands phi and theta."""
+import casadi as ca
+import numpy as np
+
+from ..conventions import IDX
+from ..trajectory import ACC, JERK, POS, VEL, YAW, YAW_RATE
+from .base import Controller
+from .shaping import desired_tilt, drag_over_mass, kinematics, second_order_gains, wrap_angle
+
+
+class FeedbackLinearization(Controller):
+    """Feedback linearization with a cascade position loop; poles in rad/s.
+
+    poles_z, poles_attitude (phi, theta), poles_psi: 2 poles each for the linearized output
+    errors e_ddot + kd e_dot + kp e = 0; poles_position: 2 poles of the outer x, y loop
+    (slower than the attitude). max_tilt: clip on the commanded roll and pitch (rad).
+    """
+
+    name = "feedback_linearization"
+
+    def __init__(self, nominal=None, model=None, poles_z=(-3.0, -4.0),
+                 poles_attitude=(-10.0, -12.0), poles_psi=(-4.0, -5.0),
+                 poles_position=(-1.5, -2.0), max_tilt=0.6):
+        super().__init__(nominal, model)
+        kz = second_order_gains(poles_z, "poles_z")
+        ka = second_order_gains(poles_attitude, "poles_attitude")
+        kpsi = second_order_gains(poles_psi, "poles_psi")
+        self.kp = np.array([kz[0], ka[0], ka[0], kpsi[0]])
+        self.kd = np.array([kz[1], ka[1], ka[1], kpsi[1]])
+        self.kp_pos, self.kd_pos = second_order_gains(poles_position, "poles_position")
+        self.max_tilt = float(max_tilt)
+
+    def output_errors(self, x, ref, p):
+        """(e (4,), e_dot (4,), y_ddot_d (4,)) relative to y_d = [z_d, phi_d, theta_d, psi_d].
+
+        The outer loop commands the acceleration a_cmd = a_ref + Kp e_p + Kd e_v (+ drag),
+        turned into phi_d, theta_d by exact inversion of the thrust direction. The part of
+        their rates that the reference explains (jerk, yaw rate) is fed forward; their second
+        derivatives are taken as zero."""
+        g = self.nominal[IDX["g"]]
+        eta_dot, y_dot = kinematics(self.model, x, p)
+        drag = ca.DM(np.append(drag_over_mass(self.nominal)[:2], 0.0))
+        kp = ca.DM([self.kp_pos, self.kp_pos, self.kp[0]])
+        kd = ca.DM([self.kd_pos, self.kd_pos, self.kd[0]])
+        e_p, e_v = ref[POS] - x[0:3], ref[VEL] - eta_dot[0:3]
+        # (the vertical component is the z output's own PD law, in v below)
+        a_cmd = ref[ACC] + kp * e_p + kd * e_v + drag * eta_dot[0:3]
+        a_cmd_dot = ref[JERK] + drag * ref[ACC]
+        phi_d, theta_d, rates = self._tilt(a_cmd, x[5], a_cmd_dot, y_dot[3], g)
+        e = ca.vertcat(x[2] - ref[POS][2], x[3] - phi_d, x[4] - theta_d,
+                       wrap_angle(x[5] - ref[YAW]))
+        y_dot_d = ca.vertcat(ref[VEL][2], rates[0], rates[1], ref[YAW_RATE])
+        y_ddot_d = ca.vertcat(ref[ACC][2], 0, 0, 0)
+        return e, y_dot - y_dot_d, y_ddot_d
+
+    def _tilt(self, a_cmd, psi, a_cmd_dot, psi_dot, g):
+        """(phi_d, theta_d, their rates) through a small Function, differentiated by AD."""
+        if getattr(self, "_tilt_fn", None) is None:
+            a, ps = ca.SX.sym("a", 3), ca.SX.sym("psi")
+            ad, psd = ca.SX.sym("a_dot", 3), ca.SX.sym("psi_dot")
+            tilt = ca.vertcat(*desired_tilt(a, g, ps, self.max_tilt))
+            rate = ca.jtimes(tilt, ca.vertcat(a, ps), ca.vertcat(ad, psd))
+            self._tilt_fn = ca.Function("desired_tilt", [a, ps, ad, psd], [tilt, rate])
+        tilt, rate = self._tilt_fn(a_cmd, psi, a_cmd_dot, psi_dot)
+        return tilt[0], tilt[1], rate
+
+    def commanded_acceleration(self, e, e_dot, y_ddot_d):
+        """v = y_ddot_d - Kp e - Kd e_dot."""
+        return y_ddot_d - ca.DM(self.kp) * e - ca.DM(self.kd) * e_dot
+
+    def expression(self, t, x, ref, c):
+        p = ca.DM(self.nominal)
+        e, e_dot, y_ddot_d = self.output_errors(x, ref, p)
+        v = self.commanded_acceleration(e, e_dot, y_ddot_d)
+        alpha = self.model.casadi_function("decoupling")(x, p)
+        b = self.model.casadi_function("drift")(x, p)
+        return ca.solve(alpha, v - b), ca.SX(0, 1)

@@ -1,0 +1,27 @@
+"""A minimal progress bar on stderr for long runs."""
+import sys
+import time
+
+
+class ProgressBar:
+    """Call with a fraction in [0, 1]; prints at most every 0.2 s, finishes on close()."""
+
+    def __init__(self, label, stream=None, width=30):
+        self.label, self.stream, self.width = label, stream or sys.stderr, width
+        self._last = 0.0
+        self._t0 = time.perf_counter()
+
+    def __call__(self, fraction):
+        now = time.perf_counter()
+        if now - self._last < 0.2 and fraction < 1:
+            return
+        self._last = now
+        n = int(self.width * min(max(fraction, 0.0), 1.0))
+        self.stream.write(f"\r{self.label} [{'#' * n}{'.' * (self.width - n)}] "
+                          f"{100 * fraction:5.1f}% {now - self._t0:6.1f} s")
+        self.stream.flush()
+
+    def close(self):
+        self(1.0)
+        self.stream.write("\n")
+        self.stream.flush()

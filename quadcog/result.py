@@ -1,0 +1,90 @@
+"""What a simulation returns: arrays, metrics, and a plot."""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class Metrics:
+    """Position-error metrics in m; ``diverged_at`` in s or None; the tail is the last 25 %."""
+    rms_position_error: float
+    max_position_error: float
+    final_position_error: float
+    rms_position_error_tail: float
+    diverged: bool = False
+    diverged_at: float | None = None
+    diverged_cause: str | None = None
+    r_hat_final: list | None = None
+    r_G_final: list | None = None
+
+    def as_dict(self):
+        return dict(self.__dict__)
+
+
+def position_metrics(t, x, ref, duration, tail_fraction=0.25):
+    """Metrics of the position error ||p - p_ref|| sampled at ``t``."""
+    e = np.linalg.norm(x[:, :3] - ref[:, :3], axis=1)
+    tail = t >= (1 - tail_fraction) * duration - 1e-12
+    rms_tail = float(np.sqrt(np.mean(e[tail] ** 2))) if tail.any() else float("nan")
+    return dict(rms_position_error=float(np.sqrt(np.mean(e ** 2))),
+                max_position_error=float(np.max(e)), final_position_error=float(e[-1]),
+                rms_position_error_tail=rms_tail)
+
+
+@dataclass
+class SimulationResult:
+    """One flight. Arrays are sampled at the step times t (N,): state x (N, 12), applied input
+    U (N, 4) (held over each step; the last row repeats), reference ref (N, 11), the estimate
+    r_hat (N, 3) (zeros for controllers without one) and the true CoG r_G (N, 3)."""
+    t: np.ndarray
+    x: np.ndarray
+    U: np.ndarray
+    ref: np.ndarray
+    r_hat: np.ndarray
+    r_G: np.ndarray
+    metrics: Metrics
+    controller: str = ""
+    path: str = ""
+    info: dict = field(default_factory=dict)
+
+    @property
+    def diverged(self):
+        return self.metrics.diverged
+
+    def plot(self, path=None, title=None):
+        """Position vs reference, attitude, inputs, r_hat vs r_G; saved to ``path`` if given.
+        Returns the matplotlib Figure."""
+        import matplotlib
+        if path is not None:
+            matplotlib.use("Agg", force=False)
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(4, 1, figsize=(9, 11), sharex=True)
+        t = self.t
+        for i, (name, col) in enumerate(zip("xyz", ("C0", "C1", "C2"))):
+            ax[0].plot(t, self.x[:, i], color=col, label=name)
+            ax[0].plot(t, self.ref[:, i], color=col, ls="--", lw=1)
+        ax[0].set_ylabel("position (m)\n(dashed: reference)")
+        for i, name in enumerate(("phi", "theta", "psi")):
+            ax[1].plot(t, np.degrees(self.x[:, 3 + i]), label=name)
+        ax[1].set_ylabel("attitude (deg)")
+        ax[2].plot(t, self.U[:, 0], label="U1 (N)")
+        for i in range(1, 4):
+            ax[2].plot(t, 10 * self.U[:, i], label=f"10 x U{i + 1} (N m)")
+        ax[2].set_ylabel("inputs")
+        for i, (name, col) in enumerate(zip(("x_G", "y_G", "z_G"), ("C0", "C1", "C2"))):
+            ax[3].plot(t, 100 * self.r_G[:, i], color=col, ls="--", lw=1, label=f"{name} true")
+            ax[3].plot(t, 100 * self.r_hat[:, i], color=col, label=f"{name} estimate")
+        ax[3].set_ylabel("CoG offset (cm)")
+        ax[3].set_xlabel("time (s)")
+        for a in ax:
+            a.grid(alpha=0.3)
+            a.legend(loc="upper right", fontsize=7, ncol=3)
+        m = self.metrics
+        status = (f"diverged at {m.diverged_at:.3f} s ({m.diverged_cause})" if m.diverged
+                  else f"tail RMS error {100 * m.rms_position_error_tail:.2f} cm")
+        fig.suptitle(f"{title or self.controller}: {status}")
+        fig.tight_layout()
+        if path is not None:
+            fig.savefig(path, dpi=110)
+            plt.close(fig)
+        return fig

@@ -1,0 +1,372 @@
+"""Closed-loop simulation: a Python step loop (any controller) and a one-call compiled path
+(the closed-loop step mapaccum'd over chunks of steps, compiled), plus batches."""
+from dataclasses import dataclass
+import time
+
+import casadi as ca
+import numpy as np
+
+from .closed_loop import (TABLE, TABLE_SIZE, closed_loop_step, monitored_step, step_table,
+                          truth_parameters)
+from .compiled import compile_function
+from .controllers.base import Controller
+from .errors import EulerSingularityError, InputError
+from .fastcall import FastCall
+from .model import load
+from .params import check_parameters, default_parameters, with_cog
+from .plant import TruthOptions, plant_step_function
+from .result import Metrics, SimulationResult, position_metrics
+from .timeline import CogProfile, wrench_table
+from .trajectory import POS, VEL, YAW, as_trajectory
+
+CHUNK = 1000          # steps per compiled call
+RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region with margin
+
+
+@dataclass(frozen=True)
+class Limits:
+    """When a run counts as diverged: position error over ``max_position_error`` (m) or
+    |phi| or |theta| over ``max_tilt`` (rad)."""
+    max_position_error: float = 10.0
+    max_tilt: float = np.radians(85.0)
+
+
+_compiled_cache = {}
+
+
+def _compiled(key, build):
+    if key not in _compiled_cache:
+        _compiled_cache[key] = compile_function(build())
+    return _compiled_cache[key]
+
+
+def _controller_key(controller):
+    return (type(controller).__name__, controller.function().serialize())
+
+
+def _check_time(duration, dt):
+    for name, v in (("duration", duration), ("dt", dt)):
+        if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
+            raise InputError(f"{name} must be a positive number of seconds, got {v!r}")
+    if dt > duration:
+        raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
+
+
+def check_step_size(controller, x0, ref0, P, dt, options):
+    """Raise InputError if RK4 with step dt is unstable for the closed loop at the start.
+
+    The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from CasADi AD."""
+    x = ca.SX.sym("x", 12)
+    c0 = controller.initial_state()
+    U, _ = controller.function()(0.0, x, ref0, c0)
+    f = controller.model.casadi_function("truth_dynamics")
+    J = ca.Function("J", [x], [ca.jacobian(f(x, U, P, ca.DM.zeros(3), ca.DM.zeros(6)), x)])
+    lam = np.linalg.eigvals(np.array(J(x0)))
+    fastest = float(np.max(np.abs(lam)))
+    if fastest * dt > RK4_LIMIT:
+        raise InputError(f"dt = {dt} s is too large: the closed loop has an eigenvalue of "
+                         f"magnitude {fastest:.3g} 1/s, and RK4 needs dt < {RK4_LIMIT / fastest:.3g} s")
+
+
+def _prepare(controller, trajectory, duration, dt, params, cog, disturbances, x0):
+    _check_time(duration, dt)
+    trajectory = as_trajectory(trajectory)
+    P = default_parameters() if params is None else check_parameters(params, "params")
+    cog = cog if isinstance(cog, CogProfile) else CogProfile(list(cog or []))
+    n = int(round(duration / dt))
+    times = np.arange(n + 1) * dt
+    refs = trajectory.sample(times)
+    r_tab = cog.sample(times)
+    # The admissible set of r_G is convex (|r|^2 - (u.r)^2 is convex for every unit u), so
+    # checking where each change ends covers the ramps between them.
+    for i, change in enumerate(cog.changes):
+        check_parameters(with_cog(P, P[11:14] + np.asarray(change.r)),
+                         f"params with the CoG of cog change {i} (r = {list(change.r)} m)")
+    table = step_table(times, dt, refs, r_tab, wrench_table(disturbances, times),
+                       tail_from=0.75 * duration)
+    if x0 is None:
+        x0 = np.zeros(12)
+        x0[:3], x0[5] = refs[0, POS], refs[0, YAW]
+        x0[6:9] = _yaw_T(refs[0, YAW]) @ refs[0, VEL]
+    x0 = np.asarray(x0, dtype=float)
+    if x0.shape != (12,) or not np.isfinite(x0).all():
+        raise InputError(f"x0 must be 12 finite numbers, got {x0!r}")
+    return trajectory, P, table, x0
+
+
+def _yaw_T(psi):
+    c, s = np.cos(psi), np.sin(psi)
+    return np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+
+
+def _first_divergence(x, err, limits):
+    """(index, cause) of the first diverged sample, or (None, None)."""
+    finite = np.isfinite(x).all(axis=1) & np.isfinite(err)
+    tilt = np.max(np.abs(x[:, 3:5]), axis=1)
+    causes = [(~finite, "non-finite state"),
+              (finite & (err > limits.max_position_error),
+               f"position error over {limits.max_position_error:g} m"),
+              (finite & (tilt > limits.max_tilt),
+               f"|phi| or |theta| over {np.degrees(limits.max_tilt):.0f} deg")]
+    first = [(int(np.argmax(m)), cause) for m, cause in causes if m.any()]
+    if not first:
+        return None, None
+    return min(first)
+
+
+def _singularity_check(t, x):
+    th = np.abs(x[:, 4])
+    hit = np.flatnonzero(np.isfinite(th) & (th >= np.pi / 2 - 1e-6))
+    if hit.size:
+        k = hit[0]
+        raise EulerSingularityError(
+            f"|theta| = {th[k]:.6f} rad reached pi/2 at t = {t[k]:.4f} s: the Euler-angle "
+            f"kinematics (Q(eta2)) are singular there; lower Limits.max_tilt below 90 deg")
+
+
+def simulate(controller, trajectory="hover", duration=10.0, dt=1e-3, params=None, cog=None,
+             disturbances=(), truth=None, x0=None, path="compiled", limits=None,
+             progress=None, check_dt=True):
+    """Fly one closed-loop run and return a SimulationResult.
+
+    controller: a quadcog Controller, or (path="python" only) a callable U = ctrl(t, x).
+    trajectory: a Trajectory, 'hover' | 'circle' | 'figure8' | 'helix', or a callable
+        (see quadcog.trajectory). duration, dt: seconds (fixed-step RK4, default 1 ms).
+    params: the truth parameters p (14,) (default vehicle); the CoG of the run is
+        r_G(params) + cog(t). cog: a CogProfile or a list of (t, r, ramp) changes.
+    disturbances: Disturbance pulses. truth: TruthOptions (parallel axis, rotor saturation).
+    x0: initial state (default: at the reference, level, with the reference velocity).
+    path: "compiled" (one compiled call per 1000 steps) or "python" (a step loop).
+    limits: Limits of divergence. progress: a callable(fraction), e.g. a ProgressBar.
+    A diverged run stops there and says when and why in result.metrics.
+    """
+    options = truth or TruthOptions()
+    limits = limits or Limits()
+    if path not in ("compiled", "python"):
+        raise InputError(f"path must be 'compiled' or 'python', got {path!r}")
+    is_law = isinstance(controller, Controller)
+    if not is_law and not (path == "python" and callable(controller)):
+        raise InputError("controller must be a quadcog Controller, or a callable U = ctrl(t, x) "
+                         f"with path='python'; got {controller!r}")
+    trajectory, P, table, x0 = _prepare(controller if is_law else None, trajectory, duration,
+                                        dt, params, cog, disturbances, x0)
+    if check_dt and is_law:
+        check_step_size(controller, x0, table[0, TABLE["ref"]], truth_parameters(P, table[0]),
+                        dt, options)
+    t0 = time.perf_counter()
+    if path == "compiled":
+        X, U = _run_compiled(controller, P, table, x0, options, limits, progress)
+    else:
+        X, U = _run_python(controller, P, table, x0, options, limits, progress, is_law)
+    elapsed = time.perf_counter() - t0
+    return _result(controller, X, U, table, P, duration, limits, path, elapsed)
+
+
+def _run_compiled(controller, P, table, x0, options, limits, progress):
+    key = ("chunk", _controller_key(controller), options, CHUNK)
+    chunk = _compiled(key, lambda: closed_loop_step(controller, options).mapaccum(
+        "closed_loop_chunk", CHUNK))
+    n_steps = table.shape[0] - 1
+    X = np.empty((n_steps + 1, 12 + controller.n_state))
+    U = np.empty((n_steps + 1, 4))
+    X[0] = np.concatenate([x0, controller.initial_state()])
+    k = 0
+    Pdm = ca.DM(P)
+    while k < n_steps:
+        m = min(CHUNK, n_steps - k)
+        rows = table[k:k + CHUNK]
+        if rows.shape[0] < CHUNK:
+            rows = np.vstack([rows, np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)])
+        Xc, Uc = chunk(X[k], Pdm, rows.T)
+        X[k + 1:k + 1 + m] = np.array(Xc).T[:m]
+        U[k:k + m] = np.array(Uc).T[:m]
+        seg = slice(k, k + m + 1)
+        err = np.linalg.norm(X[seg, :3] - table[seg, TABLE["ref"]][:, :3], axis=1)
+        idx, _ = _first_divergence(X[seg, :12], err, limits)
+        k += m
+        if progress:
+            progress(k / n_steps)
+        if idx is not None:
+            stop = seg.start + idx
+            return X[:stop + 1], U[:stop + 1]
+    U[n_steps] = U[n_steps - 1]
+    return X, U
+
+
+def _run_python(controller, P, table, x0, options, limits, progress, is_law):
+    key = ("plant", options)
+    plant = FastCall(_compiled(key, lambda: plant_step_function(load(), options)))
+    n_steps = table.shape[0] - 1
+    nc = controller.n_state if is_law else 0
+    X = np.empty((n_steps + 1, 12 + nc))
+    U = np.empty((n_steps + 1, 4))
+    X[0, :12] = x0
+    if nc:
+        X[0, 12:] = controller.initial_state()
+    law = controller.compiled() if is_law else None
+    if law is not None:
+        t_in, x_in, ref_in, c_in = law.inputs
+        U_out, cdot_out = law.outputs
+    px, pU, pP, pw, pdt = plant.inputs
+    x_next, U_app = plant.outputs
+    ref_slice, w_slice = TABLE["ref"], TABLE["wrench"]
+    report_every = max(1, n_steps // 100)
+    for k in range(n_steps):
+        row = table[k]
+        x = X[k, :12]
+        if law is not None:
+            t_in[0] = row[0]
+            x_in[:] = x
+            ref_in[:] = row[ref_slice]
+            if nc:
+                c_in[:] = X[k, 12:]
+            law()
+            pU[:] = U_out
+        else:
+            Uk = np.asarray(controller(float(row[0]), x.copy()), dtype=float).reshape(-1)
+            if Uk.shape != (4,):
+                raise InputError(f"controller returned shape {Uk.shape} at t = {row[0]} s, "
+                                 "expected (4,)")
+            pU[:] = Uk
+        px[:] = x
+        pP[:] = truth_parameters(P, row)
+        pw[:] = row[w_slice]
+        pdt[0] = row[1]
+        plant()
+        X[k + 1, :12] = x_next
+        U[k] = U_app
+        if nc:
+            X[k + 1, 12:] = X[k, 12:] + row[1] * cdot_out
+        err = np.linalg.norm(X[k + 1, :3] - table[k + 1, ref_slice][:3])
+        idx, _ = _first_divergence(X[k + 1:k + 2, :12], np.array([err]), limits)
+        if idx is not None:
+            return X[:k + 2], U[:k + 2]
+        if progress and k % report_every == 0:
+            progress(k / n_steps)
+    U[n_steps] = U[n_steps - 1]
+    if progress:
+        progress(1.0)
+    return X, U
+
+
+def _result(controller, X, U, table, P, duration, limits, path, elapsed):
+    n = X.shape[0]
+    t = table[:n, TABLE["t"]]
+    ref = table[:n, TABLE["ref"]]
+    r_G = table[:n, TABLE["s"], None] * P[11:14] + table[:n, TABLE["r_table"]]
+    err = np.linalg.norm(X[:, :3] - ref[:, :3], axis=1)
+    idx, cause = _first_divergence(X[:, :12], err, limits)
+    if idx is not None and not np.isfinite(X[idx]).all():
+        keep = idx              # never hand out NaN arrays: drop the non-finite sample
+    else:
+        keep = n if idx is None else idx + 1
+    if limits.max_tilt >= np.pi / 2 - 1e-6:     # otherwise the tilt limit catches it first
+        _singularity_check(t[:keep], X[:keep])
+    x = X[:keep, :12]
+    nc = X.shape[1] - 12
+    r_hat = X[:keep, 12:15] if nc >= 3 else np.zeros((keep, 3))
+    metrics = Metrics(**position_metrics(t[:keep], x, ref[:keep], duration))
+    if idx is not None:
+        metrics.diverged, metrics.diverged_at, metrics.diverged_cause = True, float(t[idx]), cause
+    if nc >= 3:
+        metrics.r_hat_final = r_hat[-1].tolist()
+        metrics.r_G_final = r_G[keep - 1].tolist()
+    name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))
+    return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,
+                            controller=name, path=path, info={"seconds": elapsed})
+
+
+@dataclass
+class BatchResult:
+    """Metrics of many flights (arrays with one entry per flight, lengths in m, times in s)."""
+    rms_position_error: np.ndarray
+    max_position_error: np.ndarray
+    rms_position_error_tail: np.ndarray
+    final_position_error: np.ndarray
+    diverged: np.ndarray
+    diverged_at: np.ndarray           # NaN where the flight did not diverge
+    final_state: np.ndarray           # (B, 12 + n_state)
+    seconds: float
+
+
+def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-3,
+                   cog_shape=None, disturbances=(), truth=None, limits=None, threads=2,
+                   progress=None):
+    """Fly one controller over many truth parameter sets ``params`` (B, 14) in parallel.
+
+    Flight b's CoG at time t is ``cog_shape(t) * r_G(params[b])``: cog_shape is a function of
+    time, a CogProfile whose x component is used as the shape, or None (the CoG is there from
+    t = 0). Keeps metrics, not trajectories. ``threads`` CasADi threads share the flights.
+    """
+    options = truth or TruthOptions()
+    limits = limits or Limits()
+    params = np.atleast_2d(np.asarray(params, dtype=float))
+    if params.ndim != 2 or params.shape[1] != 14:
+        raise InputError(f"params must have shape (B, 14), got {params.shape}")
+    for b, p in enumerate(params):
+        check_parameters(p, f"params[{b}]")
+    _check_time(duration, dt)
+    traj = as_trajectory(trajectory)
+    n = int(round(duration / dt))
+    times = np.arange(n + 1) * dt
+    refs = traj.sample(times)
+    if cog_shape is None:
+        s = np.ones_like(times)
+    elif isinstance(cog_shape, CogProfile):
+        s = cog_shape.sample(times)[:, 0]
+    else:
+        s = np.array([float(cog_shape(t)) for t in times])
+    table = step_table(times, dt, refs, np.zeros((n + 1, 3)), wrench_table(disturbances, times),
+                       tail_from=0.75 * duration)
+    table[:, TABLE["s"]] = s
+    x0 = np.zeros(12)
+    x0[:3], x0[5] = refs[0, POS], refs[0, YAW]
+    x0[6:9] = _yaw_T(refs[0, YAW]) @ refs[0, VEL]
+    B = params.shape[0]
+    key = ("batch", _controller_key(controller), options, limits, CHUNK)
+
+    def build():
+        step = monitored_step(controller, options, limits)
+        acc = step.mapaccum("monitored_chunk", CHUNK)
+        Z, P, rows = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("P", 14), \
+            ca.MX.sym("rows", TABLE_SIZE, CHUNK)
+        return ca.Function("monitored_last", [Z, P, rows], [acc(Z, P, rows)[:, -1]])
+
+    last = _compiled(key, build)
+    mapped = last.map("batch", "thread", B, [2], []) if threads > 1 else last.map(B)
+    nc = controller.n_state
+    Z = np.zeros((12 + nc + 4, B))
+    Z[:12] = x0[:, None]
+    Z[12:12 + nc] = controller.initial_state()[:, None]
+    Z[-1] = -1.0
+    t0 = time.perf_counter()
+    k = 0
+    while k < n:
+        rows = table[k:k + CHUNK]
+        if rows.shape[0] < CHUNK:
+            # pad with rows that change nothing: dt = 0 and no contribution to the sums
+            pad = np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)
+            pad[:, TABLE["dt"]] = 0.0
+            rows = np.vstack([rows, pad])
+        Z = np.array(mapped(Z, params.T, rows.T) if threads > 1
+                     else mapped(Z, params.T, np.tile(rows.T, (1, 1))))
+        k += min(CHUNK, n - k)
+        if progress:
+            progress(k / n)
+    seconds = time.perf_counter() - t0
+    return _batch_result(Z, n, table, nc, seconds)
+
+
+def _batch_result(Z, n, table, nc, seconds):
+    nX = 12 + nc
+    sumsq, emax, sumsq_tail, div_at = Z[nX], Z[nX + 1], Z[nX + 2], Z[nX + 3]
+    n_tail = int(table[:n, TABLE["tail"]].sum())
+    diverged = div_at >= 0
+    rms = np.sqrt(sumsq / n)
+    return BatchResult(rms_position_error=rms, max_position_error=emax,
+                       rms_position_error_tail=np.where(diverged, np.inf,
+                                                        np.sqrt(sumsq_tail / max(n_tail, 1))),
+                       final_position_error=np.linalg.norm(
+                           Z[:3] - table[n, TABLE["ref"]][:3, None], axis=0),
+                       diverged=diverged, diverged_at=np.where(diverged, div_at, np.nan),
+                       final_state=Z[:nX].T, seconds=seconds)
