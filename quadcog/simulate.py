@@ -236,7 +236,7 @@ def _run_python(controller, P, table, x0, options, limits, progress, is_law):
         X[k + 1, :12] = x_next
         U[k] = U_app
         if nc:
-            X[k + 1, 12:] = X[k, 12:] + row[1] * cdot_out
+            X[k + 1, 12:] = controller.project_numpy(X[k, 12:] + row[1] * cdot_out)
         err = np.linalg.norm(X[k + 1, :3] - table[k + 1, ref_slice][:3])
         idx, _ = _first_divergence(X[k + 1:k + 2, :12], np.array([err]), limits)
         if idx is not None:
@@ -354,19 +354,33 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-
         if progress:
             progress(k / n)
     seconds = time.perf_counter() - t0
-    return _batch_result(Z, n, table, nc, seconds)
+    return _batch_result(Z, n, table, nc, seconds, limits)
 
 
-def _batch_result(Z, n, table, nc, seconds):
+def _batch_result(Z, n, table, nc, seconds, limits):
+    """Metrics over the samples t_0 .. t_n, as for a single flight: the steps accumulated
+    t_0 .. t_{n-1}; the final state is added here."""
     nX = 12 + nc
+    Z = Z.copy()
     sumsq, emax, sumsq_tail, div_at = Z[nX], Z[nX + 1], Z[nX + 2], Z[nX + 3]
-    n_tail = int(table[:n, TABLE["tail"]].sum())
+    running = div_at < 0
+    e_final = np.linalg.norm(Z[:3] - table[n, TABLE["ref"]][:3, None], axis=0)
+    for b in np.flatnonzero(running):
+        idx, _ = _first_divergence(Z[None, :12, b], e_final[b:b + 1], limits)
+        if idx is not None:
+            div_at[b] = table[n, TABLE["t"]]
+            continue
+        sumsq[b] += e_final[b] ** 2
+        sumsq_tail[b] += e_final[b] ** 2
+        emax[b] = max(emax[b], e_final[b])
+    n_tail = int(table[:n, TABLE["tail"]].sum()) + 1
     diverged = div_at >= 0
-    rms = np.sqrt(sumsq / n)
+    dt = table[0, TABLE["dt"]]
+    samples = np.where(diverged, np.maximum(np.round(div_at / dt), 1), n + 1)
+    rms = np.sqrt(sumsq / samples)
     return BatchResult(rms_position_error=rms, max_position_error=emax,
                        rms_position_error_tail=np.where(diverged, np.inf,
                                                         np.sqrt(sumsq_tail / max(n_tail, 1))),
-                       final_position_error=np.linalg.norm(
-                           Z[:3] - table[n, TABLE["ref"]][:3, None], axis=0),
+                       final_position_error=e_final,
                        diverged=diverged, diverged_at=np.where(diverged, div_at, np.nan),
                        final_state=Z[:nX].T, seconds=seconds)

@@ -4,7 +4,8 @@ The feedback-linearizing law runs on the estimate r_hat: U solves alpha_hat U + 
 With nu_dot_star = M_hat^{-1} (B_u U - n_hat), the output error e_s = [e; e_dot] obeys
 e_s_dot = A e_s + B Phi(nu, eta, nu_dot_star) (r_hat - r), B = [0; H M^{-1}], and
 r_hat_dot = -Gamma Phi^T B^T P e_s with A^T P + P A = -Q (M_hat in place of M).
-An optional projection keeps r_hat inside a ball; without it this is the paper's law.
+An optional projection keeps r_hat inside a ball (the radial part of the update is removed on
+the sphere, and each discrete update is scaled back onto it); without it this is the paper's law.
 """
 import casadi as ca
 import numpy as np
@@ -77,3 +78,18 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
             radial = c * outward / ca.fmax(ca.dot(c, c), 1e-12)
             r_dot = ca.if_else(ca.logic_and(ca.dot(c, c) >= R2, outward > 0), r_dot - radial, r_dot)
         return U, r_dot
+
+    def project(self, c):
+        """Scale r_hat back onto the ball after a discrete update step (SX)."""
+        if self.projection_radius is None:
+            return c
+        norm = ca.norm_2(c)
+        return ca.if_else(norm > self.projection_radius, c * (self.projection_radius / norm), c)
+
+    def project_numpy(self, c):
+        if self.projection_radius is None:
+            return c
+        norm = np.sqrt(c @ c)
+        if norm > self.projection_radius:
+            c *= self.projection_radius / norm
+        return c

@@ -36,6 +36,14 @@ class Controller:
         """(U (4x1 SX), c_dot (n_state x 1 SX)) for SX symbols t, x, ref, c."""
         raise NotImplementedError
 
+    def project(self, c):
+        """The controller state after an update step is mapped through this (SX); identity."""
+        return c
+
+    def project_numpy(self, c):
+        """``project`` for numpy arrays, in place where possible."""
+        return c
+
     # -- provided ---------------------------------------------------------------------
     def initial_state(self):
         """The controller state at t = 0 (zeros: e.g. r_hat = 0)."""

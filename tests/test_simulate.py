@@ -1,0 +1,191 @@
+"""The simulator: the two execution paths agree, batches agree with single flights, user
+controllers run, divergence is detected and named, bad input is refused."""
+import numpy as np
+import pytest
+
+import quadcog
+from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile, Disturbance,
+                     FeedbackLinearization, Limits, TruthOptions, simulate, simulate_batch)
+from quadcog.plant import MAX_ROTOR_THRUST, mixer_matrix
+from conftest import assert_close
+
+COG = CogProfile([(0.3, (0.03, -0.02, 0.005), 0.0), (1.0, (0.05, 0.01, 0.0), 0.5)])
+PULSE = [Disturbance(t=0.6, duration=0.2, force=(0.5, -0.3, 0.2), moment=(0.01, 0.0, -0.005))]
+
+
+@pytest.mark.parametrize("controller", [CascadePD, FeedbackLinearization,
+                                        AdaptiveFeedbackLinearization])
+@pytest.mark.parametrize("truth", [TruthOptions(), TruthOptions(True, True)])
+def test_paths_agree(controller, truth):
+    ctl = controller()
+    kw = dict(trajectory=quadcog.Circle(), duration=2.0, cog=COG, disturbances=PULSE, truth=truth)
+    a = simulate(ctl, path="python", **kw)
+    b = simulate(ctl, path="compiled", **kw)
+    assert a.x.shape == b.x.shape == (2001, 12)
+    assert_close(a.x, b.x, 1e-9, "state")
+    assert_close(a.U, b.U, 1e-9, "input")
+    assert_close(a.r_hat, b.r_hat, 1e-9, "r_hat")
+    assert_close(a.r_G, b.r_G, 0, "r_G")
+
+
+def test_cog_profile_and_disturbance_act():
+    ctl = FeedbackLinearization()
+    calm = simulate(ctl, "hover", duration=2.0)
+    hit = simulate(ctl, "hover", duration=2.0, disturbances=PULSE)
+    assert calm.metrics.max_position_error < 1e-9
+    assert hit.metrics.max_position_error > 1e-3
+    res = simulate(ctl, "hover", duration=2.0, cog=COG)
+    assert_close(res.r_G[res.t < 0.3], np.zeros((300, 3)), 0, "r_G before the first change")
+    assert_close(res.r_G[np.searchsorted(res.t, 0.5)], [0.03, -0.02, 0.005], 0, "step")
+    assert_close(res.r_G[np.searchsorted(res.t, 1.25)], [0.04, -0.005, 0.0025], 1e-12, "ramp")
+    assert_close(res.r_G[-1], [0.05, 0.01, 0.0], 1e-15, "after the ramp")
+
+
+def test_truth_options_change_the_flight():
+    ctl = CascadePD()
+    kw = dict(trajectory="hover", duration=1.0, cog=CogProfile.step(0.1, (0.08, 0.0, 0.0)))
+    base = simulate(ctl, **kw)
+    pa = simulate(ctl, truth=TruthOptions(parallel_axis=True), **kw)
+    sat = simulate(ctl, truth=TruthOptions(rotor_saturation=True, max_rotor_thrust=2.0), **kw)
+    assert np.max(np.abs(base.x - pa.x)) > 1e-4
+    f = np.linalg.solve(mixer_matrix(), sat.U.T)
+    assert f.min() >= -1e-12 and f.max() <= 2.0 + 1e-12
+    n = min(len(base.t), len(sat.t))
+    assert np.max(np.abs(base.x[:n] - sat.x[:n])) > 1e-4
+    f_base = np.linalg.solve(mixer_matrix(), base.U.T)
+    assert f_base.max() > 2.0, "the saturation test did not saturate"
+    assert MAX_ROTOR_THRUST == pytest.approx(8.54858e-6 * 838 ** 2)
+
+
+def test_parallel_axis_is_neutral_at_zero_offset():
+    ctl = FeedbackLinearization()
+    a = simulate(ctl, "circle", duration=1.0)
+    b = simulate(ctl, "circle", duration=1.0, truth=TruthOptions(parallel_axis=True))
+    assert_close(a.x, b.x, 1e-12, "parallel axis with r_G = 0")
+
+
+def test_user_python_controller():
+    p = quadcog.default_parameters()
+    m, g = p[0], p[1]
+
+    def hover_pd(t, x):           # a user's own attitude and altitude PD, no position loop
+        return np.array([m * g - 3.0 * (x[2] - 1.0) - 2.0 * x[8],
+                         -0.05 * x[3] - 0.01 * x[9], -0.05 * x[4] - 0.01 * x[10],
+                         -0.02 * x[5] - 0.01 * x[11]])
+
+    x0 = np.zeros(12)
+    x0[2], x0[3] = 1.2, 0.1
+    res = simulate(hover_pd, "hover", duration=5.0, path="python", x0=x0)
+    assert not res.diverged
+    assert abs(res.x[-1, 2] - 1.0) < 0.02 and abs(res.x[-1, 3]) < 0.01
+    assert res.controller == "hover_pd"
+    with pytest.raises(quadcog.InputError, match="path='python'"):
+        simulate(hover_pd, "hover", duration=1.0)
+    with pytest.raises(quadcog.InputError, match=r"returned shape \(3,\)"):
+        simulate(lambda t, x: np.zeros(3), "hover", duration=1.0, path="python")
+
+
+@pytest.mark.parametrize("path", ["python", "compiled"])
+def test_divergence_detected_and_named(path):
+    cog = CogProfile.step(0.2, (0.06, 0.06, 0.0))
+    res = simulate(AdaptiveFeedbackLinearization(gamma=0.2), "hover", duration=10.0, cog=cog,
+                   path=path)
+    m = res.metrics
+    assert m.diverged and 0.2 < m.diverged_at < 10.0
+    assert "deg" in m.diverged_cause or "m" in m.diverged_cause
+    assert np.isfinite(res.x).all() and np.isfinite(res.U).all()
+    assert res.t[-1] == pytest.approx(m.diverged_at)
+    assert res.t.size < 10001
+
+
+def test_divergence_non_finite_and_position():
+    crazy = simulate(lambda t, x: np.array([np.nan, 0, 0, 0]), "hover", duration=1.0,
+                     path="python")
+    assert crazy.metrics.diverged_cause == "non-finite state" and crazy.metrics.diverged_at == 0.001
+    assert np.isfinite(crazy.x).all()
+    rocket = simulate(lambda t, x: np.array([40.0, 0, 0, 0]), "hover", duration=5.0,
+                      path="python")
+    assert rocket.metrics.diverged_cause == "position error over 10 m"
+
+
+def test_euler_singularity_named():
+    flip = lambda t, x: np.array([6.0, 0.0, 0.2, 0.0])
+    with pytest.raises(quadcog.EulerSingularityError, match="reached pi/2"):
+        simulate(flip, "hover", duration=3.0, path="python",
+                 limits=Limits(max_tilt=np.radians(100)))
+    res = simulate(flip, "hover", duration=3.0, path="python")
+    assert res.metrics.diverged_cause == "|phi| or |theta| over 85 deg"
+
+
+def test_batch_agrees_with_single_flights():
+    ctl = AdaptiveFeedbackLinearization()
+    base = quadcog.default_parameters()
+    params = np.array([quadcog.with_cog(base, r) for r in
+                       [(0.0, 0.0, 0.0), (0.03, 0.0, 0.0), (0.0, -0.04, 0.01), (0.05, 0.05, 0.0)]])
+    batch = simulate_batch(ctl, params, "circle", duration=3.0, threads=2)
+    serial = simulate_batch(ctl, params, "circle", duration=3.0, threads=1)
+    for b, p in enumerate(params):
+        single = simulate(ctl, "circle", duration=3.0, params=p).metrics
+        assert batch.rms_position_error[b] == pytest.approx(single.rms_position_error, rel=1e-9)
+        assert batch.max_position_error[b] == pytest.approx(single.max_position_error, rel=1e-9)
+        assert batch.rms_position_error_tail[b] == pytest.approx(single.rms_position_error_tail,
+                                                                 rel=1e-9)
+        assert serial.rms_position_error[b] == batch.rms_position_error[b]
+    assert not batch.diverged.any()
+
+
+def test_batch_reports_divergence():
+    ctl = AdaptiveFeedbackLinearization(gamma=0.2)
+    base = quadcog.default_parameters()
+    params = np.array([base, quadcog.with_cog(base, (0.06, 0.06, 0.0))])
+    res = simulate_batch(ctl, params, "hover", duration=5.0, cog_shape=lambda t: float(t >= 0.2))
+    single = simulate(ctl, "hover", duration=5.0, cog=CogProfile.step(0.2, (0.06, 0.06, 0.0)))
+    assert list(res.diverged) == [False, True]
+    assert res.diverged_at[1] == pytest.approx(single.metrics.diverged_at)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(dt=0.0), "dt must be a positive number of seconds, got 0.0"),
+    (dict(dt=-1e-3), "dt must be a positive number"),
+    (dict(duration=-1.0), "duration must be a positive number"),
+    (dict(dt=0.5, duration=2.0), r"dt = 0.5 s is too large: .* RK4 needs dt < "),
+    (dict(x0=np.zeros(5)), "x0 must be 12 finite numbers"),
+    (dict(x0=np.full(12, np.nan)), "x0 must be 12 finite numbers"),
+    (dict(params=np.ones(14) * -1), "m = -1.0 must be > 0"),
+    (dict(trajectory="spiral"), "unknown trajectory 'spiral'"),
+    (dict(path="fast"), "path must be 'compiled' or 'python'"),
+    (dict(cog=[(1.0, (0.02, 0, 0), 0.0), (0.5, (0.0, 0, 0), 0.0)]), "must be in time order"),
+    (dict(cog=[(0.5, (0.2, 0.0, 0.3), 0.0)]), "cog change 0"),
+])
+def test_bad_input(kwargs, message):
+    with pytest.raises(quadcog.InputError, match=message):
+        simulate(FeedbackLinearization(), **{"trajectory": "hover", "duration": 2.0, **kwargs})
+
+
+def test_bad_trajectory_and_disturbance_values():
+    with pytest.raises(quadcog.InputError, match="circle radius must be a positive number"):
+        quadcog.Circle(radius=-1)
+    with pytest.raises(quadcog.InputError, match="disturbance duration must be > 0"):
+        Disturbance(t=1.0, duration=0.0)
+    with pytest.raises(quadcog.InputError, match="hover position must be 3 finite numbers"):
+        quadcog.Hover(position=(0, 0))
+
+
+def test_callable_trajectory_derivatives():
+    traj = quadcog.FromCallable(lambda t: np.array([np.sin(t), 0.0, 1.0 + 0.1 * t]))
+    ref = traj.sample([0.3, 1.0])
+    assert_close(ref[:, 3], np.cos([0.3, 1.0]), 1e-6, "velocity")
+    assert_close(ref[:, 6], -np.sin([0.3, 1.0]), 1e-5, "acceleration")
+    assert_close(ref[:, 9], -np.cos([0.3, 1.0]), 1e-4, "jerk")
+    res = simulate(FeedbackLinearization(), traj, duration=2.0)
+    assert res.metrics.rms_position_error_tail < 0.05
+
+
+def test_result_plot_and_progress(tmp_path):
+    seen = []
+    res = simulate(AdaptiveFeedbackLinearization(), "hover", duration=2.0,
+                   cog=CogProfile.step(0.5, (0.03, 0.0, 0.0)), progress=seen.append)
+    assert seen and seen[-1] == 1.0 and all(b >= a for a, b in zip(seen, seen[1:]))
+    out = tmp_path / "flight.png"
+    res.plot(out)
+    assert out.stat().st_size > 10_000
