@@ -34,6 +34,8 @@ FUNCTION_SPECS = (
                  "x_dot = f(x) + g(x) U, the 12-state vector field"),
     FunctionSpec("mass_matrix", (_P,), (("M", lambda d: d.body.M),),
                  "M, the 6x6 mass and inertia matrix about O"),
+    FunctionSpec("inverse_mass_matrix", (_P,), (("M_inv", lambda d: d.M_inv),),
+                 "M^{-1} by block elimination (Schur complement I_G)"),
     FunctionSpec("coriolis", (_X, _P), (("C", lambda d: d.body.C),),
                  "C(nu), the skew-symmetric Coriolis-centripetal matrix"),
     FunctionSpec("damping", (_P,), (("D", lambda d: d.body.D),),

@@ -29,6 +29,7 @@ class DerivedModel:
     A: sp.Matrix
     B: sp.Matrix
     I_G_inv: dict                          # placeholder symbol -> definition in p
+    M_inv: sp.Matrix                       # 6x6 inverse mass matrix by block elimination
     xdot_general: sp.Matrix                # truth model: products of inertia, external wrench
     I_G_inv_general: dict                  # placeholders for that model
     timings: dict = field(default_factory=dict)
@@ -59,7 +60,8 @@ def derive_model(log=None):
     Phi = stage("regressor", regressor, body)
     outputs = stage("lie derivatives", output_derivatives, f, G, placeholders)
     A, B = stage("linearization", linearization, xdot)
-    return DerivedModel(R, Q, J, body, f, G, xdot, Phi, outputs, A, B, placeholders,
+    M_inv = solve_accelerations(body, sp.eye(6))
+    return DerivedModel(R, Q, J, body, f, G, xdot, Phi, outputs, A, B, placeholders, M_inv,
                         *general, timings)
 
 

@@ -54,6 +54,7 @@ def closed_loop_step(controller, options):
     x_next, U_app = rk4_step_expression(controller.model, x, U, truth_parameters(P, row),
                                         row[TABLE["wrench"]], dt, options)
     X_next = ca.vertcat(x_next, controller.project(c + dt * c_dot)) if nc else x_next
+    X_next, U_app = ca.cse([X_next, U_app])    # the RK4 stages share parameter-only terms
     return ca.Function("closed_loop_step", [X, P, row], [X_next, U_app],
                        ["X", "P", "row"], ["X_next", "U_applied"])
 

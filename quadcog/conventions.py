@@ -16,6 +16,7 @@ R_G = slice(IDX["x_G"], IDX["z_G"] + 1)
 FUNCTIONS = {
     "dynamics": ((("x", 12), ("U", 4), ("p", 14)), (("xdot", (12,)),)),
     "mass_matrix": ((("p", 14),), (("M", (6, 6)),)),
+    "inverse_mass_matrix": ((("p", 14),), (("M_inv", (6, 6)),)),
     "coriolis": ((("x", 12), ("p", 14)), (("C", (6, 6)),)),
     "damping": ((("p", 14),), (("D", (6, 6)),)),
     "gravity": ((("x", 12), ("p", 14)), (("g_G", (6,)),)),

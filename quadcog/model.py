@@ -101,6 +101,10 @@ class Model:
         """M (6, 6), the mass and inertia matrix about O, for parameters p (14,)."""
         return self._call("mass_matrix", (p,), out)
 
+    def inverse_mass_matrix(self, p, out=None):
+        """M^{-1} (6, 6) for parameters p (14,), by block elimination (no 6x6 solve)."""
+        return self._call("inverse_mass_matrix", (p,), out)
+
     def coriolis(self, x, p, out=None):
         """C(nu) (6, 6), skew-symmetric, at state x (12,), parameters p (14,)."""
         return self._call("coriolis", (x, p), out)

@@ -1,6 +1,7 @@
 """Closed-loop simulation: a Python step loop (any controller) and a one-call compiled path
 (the closed-loop step mapaccum'd over chunks of steps, compiled), plus batches."""
 from dataclasses import dataclass
+import math
 import time
 
 import casadi as ca
@@ -41,7 +42,12 @@ def _compiled(key, build):
 
 
 def _controller_key(controller):
-    return (type(controller).__name__, controller.function().serialize())
+    """What identifies a controller's compiled code: its law, serialized once."""
+    key = getattr(controller, "_cache_key", None)
+    if key is None:
+        key = controller._cache_key = (type(controller).__name__,
+                                       controller.function().serialize())
+    return key
 
 
 def _check_time(duration, dt):
@@ -101,6 +107,11 @@ def _yaw_T(psi):
 
 def _first_divergence(x, err, limits):
     """(index, cause) of the first diverged sample, or (None, None)."""
+    with np.errstate(invalid="ignore"):
+        quick = (np.max(err) <= limits.max_position_error
+                 and np.max(np.abs(x[:, 3:5])) <= limits.max_tilt)
+    if quick:            # every comparison with NaN is False, so quick is False then
+        return None, None
     finite = np.isfinite(x).all(axis=1) & np.isfinite(err)
     tilt = np.max(np.abs(x[:, 3:5]), axis=1)
     causes = [(~finite, "non-finite state"),
@@ -162,24 +173,50 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=1e-3, params=None
     return _result(controller, X, U, table, P, duration, limits, path, elapsed)
 
 
+def chunk_function(controller, options, n=CHUNK):
+    """Compiled Function (X0, P, rows 27 x n) -> (X 15 x n, U 4 x n): n closed-loop steps.
+
+    P is shared by all steps (mapaccum alone would expect one copy per step)."""
+    def build():
+        step = closed_loop_step(controller, options)
+        acc = step.mapaccum("closed_loop_steps", n)
+        X0, P = ca.MX.sym("X0", step.size1_in(0)), ca.MX.sym("P", 14)
+        rows = ca.MX.sym("rows", TABLE_SIZE, n)
+        Xs, Us = acc(X0, ca.repmat(P, 1, n), rows)
+        return ca.Function("closed_loop_chunk", [X0, P, rows], [Xs, Us],
+                           ["X0", "P", "rows"], ["X", "U"])
+    return _compiled(("chunk", _controller_key(controller), options, n), build)
+
+
+def _padded(table):
+    """The table with rows appended (copies of the last) up to a whole number of chunks."""
+    n_rows = -(-(table.shape[0] - 1) // CHUNK) * CHUNK + 1
+    if n_rows == table.shape[0]:
+        return table
+    return np.vstack([table, np.repeat(table[-1:], n_rows - table.shape[0], axis=0)])
+
+
 def _run_compiled(controller, P, table, x0, options, limits, progress):
-    key = ("chunk", _controller_key(controller), options, CHUNK)
-    chunk = _compiled(key, lambda: closed_loop_step(controller, options).mapaccum(
-        "closed_loop_chunk", CHUNK))
+    chunk = chunk_function(controller, options)
     n_steps = table.shape[0] - 1
-    X = np.empty((n_steps + 1, 12 + controller.n_state))
-    U = np.empty((n_steps + 1, 4))
+    rows = _padded(table)
+    n_pad = rows.shape[0] - 1
+    # C-ordered (steps, k) blocks are exactly CasADi's column-major (k, steps) matrices:
+    # the compiled function reads the table and writes X and U in place, without copies.
+    X = np.empty((n_pad + 1, 12 + controller.n_state))
+    U = np.empty((n_pad + 1, 4))
     X[0] = np.concatenate([x0, controller.initial_state()])
+    P = np.ascontiguousarray(P, dtype=float)
+    buf, evaluate = chunk.buffer()
+    buf.set_arg(1, memoryview(P))
     k = 0
-    Pdm = ca.DM(P)
     while k < n_steps:
+        buf.set_arg(0, memoryview(X[k]))
+        buf.set_arg(2, memoryview(rows[k:k + CHUNK]))
+        buf.set_res(0, memoryview(X[k + 1:k + 1 + CHUNK]))
+        buf.set_res(1, memoryview(U[k:k + CHUNK]))
+        evaluate()
         m = min(CHUNK, n_steps - k)
-        rows = table[k:k + CHUNK]
-        if rows.shape[0] < CHUNK:
-            rows = np.vstack([rows, np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)])
-        Xc, Uc = chunk(X[k], Pdm, rows.T)
-        X[k + 1:k + 1 + m] = np.array(Xc).T[:m]
-        U[k:k + m] = np.array(Uc).T[:m]
         seg = slice(k, k + m + 1)
         err = np.linalg.norm(X[seg, :3] - table[seg, TABLE["ref"]][:, :3], axis=1)
         idx, _ = _first_divergence(X[seg, :12], err, limits)
@@ -190,7 +227,7 @@ def _run_compiled(controller, P, table, x0, options, limits, progress):
             stop = seg.start + idx
             return X[:stop + 1], U[:stop + 1]
     U[n_steps] = U[n_steps - 1]
-    return X, U
+    return X[:n_steps + 1], U[:n_steps + 1]
 
 
 def _run_python(controller, P, table, x0, options, limits, progress, is_law):
@@ -210,6 +247,8 @@ def _run_python(controller, P, table, x0, options, limits, progress, is_law):
     px, pU, pP, pw, pdt = plant.inputs
     x_next, U_app = plant.outputs
     ref_slice, w_slice = TABLE["ref"], TABLE["wrench"]
+    refs = table[:, ref_slice]
+    max_err2, max_tilt = limits.max_position_error ** 2, limits.max_tilt
     report_every = max(1, n_steps // 100)
     for k in range(n_steps):
         row = table[k]
@@ -217,7 +256,7 @@ def _run_python(controller, P, table, x0, options, limits, progress, is_law):
         if law is not None:
             t_in[0] = row[0]
             x_in[:] = x
-            ref_in[:] = row[ref_slice]
+            ref_in[:] = refs[k]
             if nc:
                 c_in[:] = X[k, 12:]
             law()
@@ -237,9 +276,11 @@ def _run_python(controller, P, table, x0, options, limits, progress, is_law):
         U[k] = U_app
         if nc:
             X[k + 1, 12:] = controller.project_numpy(X[k, 12:] + row[1] * cdot_out)
-        err = np.linalg.norm(X[k + 1, :3] - table[k + 1, ref_slice][:3])
-        idx, _ = _first_divergence(X[k + 1:k + 2, :12], np.array([err]), limits)
-        if idx is not None:
+        # scalar checks (NaN fails every comparison); _result names the cause precisely
+        r = refs[k + 1]
+        dx, dy, dz = x_next[0] - r[0], x_next[1] - r[1], x_next[2] - r[2]
+        if not (dx * dx + dy * dy + dz * dz <= max_err2 and abs(x_next[3]) <= max_tilt
+                and abs(x_next[4]) <= max_tilt and math.isfinite(float(x_next.sum()))):
             return X[:k + 2], U[:k + 2]
         if progress and k % report_every == 0:
             progress(k / n_steps)

@@ -32,6 +32,7 @@ extern "C" {
 /* Add prefix to internal symbols */
 #define casadi_f0 CASADI_PREFIX(f0)
 #define casadi_f1 CASADI_PREFIX(f1)
+#define casadi_f10 CASADI_PREFIX(f10)
 #define casadi_f2 CASADI_PREFIX(f2)
 #define casadi_f3 CASADI_PREFIX(f3)
 #define casadi_f4 CASADI_PREFIX(f4)
@@ -828,8 +829,391 @@ CASADI_SYMBOL_EXPORT int mass_matrix_work_bytes(casadi_int *sz_arg, casadi_int* 
   return 0;
 }
 
-/* coriolis:(x[12],p[14])->(C[6x6]) */
+/* inverse_mass_matrix:(p[14])->(M_inv[6x6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36;
+  a00=arg[0]? arg[0][0] : 0;
+  a01=(1./a00);
+  a02=arg[0]? arg[0][13] : 0;
+  a03=(a02*a00);
+  a04=arg[0]? arg[0][12] : 0;
+  a05=casadi_sq(a02);
+  a06=(a02*a05);
+  a07=(a04*a06);
+  a08=casadi_sq(a00);
+  a07=(a07*a08);
+  a09=casadi_sq(a04);
+  a10=(a04*a09);
+  a11=(a02*a10);
+  a11=(a11*a08);
+  a07=(a07+a11);
+  a11=(a04*a02);
+  a12=arg[0]? arg[0][11] : 0;
+  a13=casadi_sq(a12);
+  a14=(a11*a13);
+  a14=(a14*a08);
+  a07=(a07+a14);
+  a14=arg[0]? arg[0][2] : 0;
+  a11=(a11*a14);
+  a11=(a11*a00);
+  a07=(a07-a11);
+  a11=arg[0]? arg[0][3] : 0;
+  a15=(a14*a11);
+  a16=arg[0]? arg[0][4] : 0;
+  a17=(a15*a16);
+  a18=casadi_sq(a13);
+  a19=(a14*a18);
+  a19=(a19*a08);
+  a17=(a17+a19);
+  a19=casadi_sq(a09);
+  a20=(a11*a19);
+  a20=(a20*a08);
+  a17=(a17+a20);
+  a20=casadi_sq(a05);
+  a21=(a16*a20);
+  a21=(a21*a08);
+  a17=(a17+a21);
+  a21=(a14*a13);
+  a22=(a21*a09);
+  a22=(a22*a08);
+  a17=(a17+a22);
+  a21=(a21*a05);
+  a21=(a21*a08);
+  a17=(a17+a21);
+  a21=(a11*a13);
+  a21=(a21*a09);
+  a21=(a21*a08);
+  a17=(a17+a21);
+  a21=(a11*a09);
+  a21=(a21*a05);
+  a21=(a21*a08);
+  a17=(a17+a21);
+  a21=(a16*a13);
+  a21=(a21*a05);
+  a21=(a21*a08);
+  a17=(a17+a21);
+  a21=(a16*a09);
+  a21=(a21*a05);
+  a21=(a21*a08);
+  a17=(a17+a21);
+  a21=(a15*a00);
+  a22=(a21*a13);
+  a17=(a17-a22);
+  a21=(a21*a09);
+  a17=(a17-a21);
+  a21=(a14*a16);
+  a22=(a21*a00);
+  a23=(a22*a13);
+  a17=(a17-a23);
+  a22=(a22*a05);
+  a17=(a17-a22);
+  a22=(a11*a16);
+  a23=(a22*a00);
+  a24=(a23*a09);
+  a17=(a17-a24);
+  a23=(a23*a05);
+  a17=(a17-a23);
+  a07=(a07/a17);
+  a23=(a07*a04);
+  a19=(a19*a08);
+  a21=(a21+a19);
+  a19=(a13*a09);
+  a19=(a19*a08);
+  a21=(a21+a19);
+  a24=(a09*a05);
+  a24=(a24*a08);
+  a21=(a21+a24);
+  a14=(a14*a00);
+  a25=(a14*a13);
+  a21=(a21-a25);
+  a26=(a14*a09);
+  a21=(a21-a26);
+  a26=(a16*a00);
+  a27=(a26*a09);
+  a21=(a21-a27);
+  a27=(a26*a05);
+  a21=(a21-a27);
+  a21=(a21/a17);
+  a28=(a21*a02);
+  a29=(a23-a28);
+  a30=(a03*a29);
+  a31=(a04*a00);
+  a20=(a20*a08);
+  a15=(a15+a20);
+  a20=(a13*a05);
+  a20=(a20*a08);
+  a15=(a15+a20);
+  a15=(a15+a24);
+  a15=(a15-a25);
+  a14=(a14*a05);
+  a15=(a15-a14);
+  a14=(a11*a00);
+  a25=(a14*a09);
+  a15=(a15-a25);
+  a24=(a14*a05);
+  a15=(a15-a24);
+  a15=(a15/a17);
+  a24=(a15*a04);
+  a32=(a07*a02);
+  a33=(a24-a32);
+  a34=(a31*a33);
+  a30=(a30-a34);
+  a30=(a30/a00);
+  a30=(a01-a30);
+  if (res[0]!=0) res[0][0]=a30;
+  a30=(a12*a00);
+  a34=(a30*a33);
+  a06=(a12*a06);
+  a06=(a06*a08);
+  a35=(a12*a13);
+  a36=(a02*a35);
+  a36=(a36*a08);
+  a06=(a06+a36);
+  a36=(a12*a02);
+  a09=(a36*a09);
+  a09=(a09*a08);
+  a06=(a06+a09);
+  a36=(a36*a11);
+  a36=(a36*a00);
+  a06=(a06-a36);
+  a06=(a06/a17);
+  a36=(a06*a04);
+  a10=(a12*a10);
+  a10=(a10*a08);
+  a35=(a04*a35);
+  a35=(a35*a08);
+  a10=(a10+a35);
+  a35=(a12*a04);
+  a05=(a35*a05);
+  a05=(a05*a08);
+  a10=(a10+a05);
+  a35=(a35*a16);
+  a35=(a35*a00);
+  a10=(a10-a35);
+  a10=(a10/a17);
+  a35=(a10*a02);
+  a16=(a36-a35);
+  a05=(a03*a16);
+  a34=(a34-a05);
+  a34=(a34/a00);
+  a34=(-a34);
+  if (res[0]!=0) res[0][1]=a34;
+  a34=(a31*a16);
+  a05=(a30*a29);
+  a34=(a34-a05);
+  a34=(a34/a00);
+  a34=(-a34);
+  if (res[0]!=0) res[0][2]=a34;
+  if (res[0]!=0) res[0][3]=a16;
+  if (res[0]!=0) res[0][4]=a29;
+  if (res[0]!=0) res[0][5]=a33;
+  a33=(a07*a12);
+  a29=(a35-a33);
+  a16=(a03*a29);
+  a34=(a06*a02);
+  a05=(a15*a12);
+  a11=(a34-a05);
+  a09=(a31*a11);
+  a16=(a16-a09);
+  a16=(a16/a00);
+  a16=(-a16);
+  if (res[0]!=0) res[0][6]=a16;
+  a16=(a30*a11);
+  a18=(a18*a08);
+  a22=(a22+a18);
+  a22=(a22+a19);
+  a22=(a22+a20);
+  a14=(a14*a13);
+  a22=(a22-a14);
+  a22=(a22-a25);
+  a26=(a26*a13);
+  a22=(a22-a26);
+  a22=(a22-a27);
+  a22=(a22/a17);
+  a02=(a22*a02);
+  a17=(a06*a12);
+  a27=(a02-a17);
+  a26=(a03*a27);
+  a16=(a16-a26);
+  a16=(a16/a00);
+  a16=(a01-a16);
+  if (res[0]!=0) res[0][7]=a16;
+  a16=(a31*a27);
+  a26=(a30*a29);
+  a16=(a16-a26);
+  a16=(a16/a00);
+  a16=(-a16);
+  if (res[0]!=0) res[0][8]=a16;
+  if (res[0]!=0) res[0][9]=a27;
+  if (res[0]!=0) res[0][10]=a29;
+  if (res[0]!=0) res[0][11]=a11;
+  a11=(a21*a12);
+  a29=(a10*a04);
+  a27=(a11-a29);
+  a16=(a03*a27);
+  a26=(a33-a36);
+  a13=(a31*a26);
+  a16=(a16-a13);
+  a16=(a16/a00);
+  a16=(-a16);
+  if (res[0]!=0) res[0][12]=a16;
+  a16=(a30*a26);
+  a12=(a10*a12);
+  a04=(a22*a04);
+  a13=(a12-a04);
+  a03=(a03*a13);
+  a16=(a16-a03);
+  a16=(a16/a00);
+  a16=(-a16);
+  if (res[0]!=0) res[0][13]=a16;
+  a31=(a31*a13);
+  a30=(a30*a27);
+  a31=(a31-a30);
+  a31=(a31/a00);
+  a01=(a01-a31);
+  if (res[0]!=0) res[0][14]=a01;
+  if (res[0]!=0) res[0][15]=a13;
+  if (res[0]!=0) res[0][16]=a27;
+  if (res[0]!=0) res[0][17]=a26;
+  a35=(a35*a00);
+  a36=(a36*a00);
+  a26=(a35-a36);
+  a26=(a26/a00);
+  a26=(-a26);
+  if (res[0]!=0) res[0][18]=a26;
+  a17=(a17*a00);
+  a02=(a02*a00);
+  a17=(a17-a02);
+  a17=(a17/a00);
+  a17=(-a17);
+  if (res[0]!=0) res[0][19]=a17;
+  a04=(a04*a00);
+  a12=(a12*a00);
+  a04=(a04-a12);
+  a04=(a04/a00);
+  a04=(-a04);
+  if (res[0]!=0) res[0][20]=a04;
+  if (res[0]!=0) res[0][21]=a22;
+  if (res[0]!=0) res[0][22]=a10;
+  if (res[0]!=0) res[0][23]=a06;
+  a28=(a28*a00);
+  a23=(a23*a00);
+  a28=(a28-a23);
+  a28=(a28/a00);
+  a28=(-a28);
+  if (res[0]!=0) res[0][24]=a28;
+  a33=(a33*a00);
+  a35=(a33-a35);
+  a35=(a35/a00);
+  a35=(-a35);
+  if (res[0]!=0) res[0][25]=a35;
+  a29=(a29*a00);
+  a11=(a11*a00);
+  a29=(a29-a11);
+  a29=(a29/a00);
+  a29=(-a29);
+  if (res[0]!=0) res[0][26]=a29;
+  if (res[0]!=0) res[0][27]=a10;
+  if (res[0]!=0) res[0][28]=a21;
+  if (res[0]!=0) res[0][29]=a07;
+  a32=(a32*a00);
+  a24=(a24*a00);
+  a32=(a32-a24);
+  a32=(a32/a00);
+  a32=(-a32);
+  if (res[0]!=0) res[0][30]=a32;
+  a05=(a05*a00);
+  a34=(a34*a00);
+  a05=(a05-a34);
+  a05=(a05/a00);
+  a05=(-a05);
+  if (res[0]!=0) res[0][31]=a05;
+  a36=(a36-a33);
+  a36=(a36/a00);
+  a36=(-a36);
+  if (res[0]!=0) res[0][32]=a36;
+  if (res[0]!=0) res[0][33]=a06;
+  if (res[0]!=0) res[0][34]=a07;
+  if (res[0]!=0) res[0][35]=a15;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inverse_mass_matrix(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f2(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int inverse_mass_matrix_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void inverse_mass_matrix_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void inverse_mass_matrix_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void inverse_mass_matrix_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int inverse_mass_matrix_n_in(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_int inverse_mass_matrix_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real inverse_mass_matrix_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inverse_mass_matrix_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "p";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inverse_mass_matrix_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "M_inv";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inverse_mass_matrix_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s2;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inverse_mass_matrix_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s3;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int inverse_mass_matrix_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inverse_mass_matrix_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* coriolis:(x[12],p[14])->(C[6x6]) */
+static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20;
   a00=0.;
@@ -940,7 +1324,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int coriolis(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f2(arg, res, iw, w, mem);
+  return casadi_f3(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int coriolis_checkout(void) {
@@ -1013,7 +1397,7 @@ CASADI_SYMBOL_EXPORT int coriolis_work_bytes(casadi_int *sz_arg, casadi_int* sz_
 }
 
 /* damping:(p[14])->(D[6x6]) */
-static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a0, a1;
   a0=arg[0]? arg[0][5] : 0;
   if (res[0]!=0) res[0][0]=a0;
@@ -1062,7 +1446,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int damping(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f3(arg, res, iw, w, mem);
+  return casadi_f4(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int damping_checkout(void) {
@@ -1133,7 +1517,7 @@ CASADI_SYMBOL_EXPORT int damping_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
 }
 
 /* gravity:(x[12],p[14])->(g_G[6]) */
-static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
   a0=arg[1]? arg[1][1] : 0;
   a1=arg[1]? arg[1][0] : 0;
@@ -1183,7 +1567,7 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int gravity(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f4(arg, res, iw, w, mem);
+  return casadi_f5(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int gravity_checkout(void) {
@@ -1256,7 +1640,7 @@ CASADI_SYMBOL_EXPORT int gravity_work_bytes(casadi_int *sz_arg, casadi_int* sz_r
 }
 
 /* regressor:(x[12],vartheta[6],p[14])->(Phi[6x3]) */
-static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24;
@@ -1369,7 +1753,7 @@ static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int regressor(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f5(arg, res, iw, w, mem);
+  return casadi_f6(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int regressor_checkout(void) {
@@ -1444,7 +1828,7 @@ CASADI_SYMBOL_EXPORT int regressor_work_bytes(casadi_int *sz_arg, casadi_int* sz
 }
 
 /* decoupling:(x[12],p[14])->(alpha[4x4]) */
-static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
@@ -1777,7 +2161,7 @@ static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int decoupling(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f6(arg, res, iw, w, mem);
+  return casadi_f7(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int decoupling_checkout(void) {
@@ -1850,7 +2234,7 @@ CASADI_SYMBOL_EXPORT int decoupling_work_bytes(casadi_int *sz_arg, casadi_int* s
 }
 
 /* drift:(x[12],p[14])->(b[4]) */
-static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
@@ -2296,7 +2680,7 @@ static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int drift(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f7(arg, res, iw, w, mem);
+  return casadi_f8(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int drift_checkout(void) {
@@ -2369,7 +2753,7 @@ CASADI_SYMBOL_EXPORT int drift_work_bytes(casadi_int *sz_arg, casadi_int* sz_res
 }
 
 /* linearization:(x[12],U[4],p[14])->(A[12x12],B[12x4]) */
-static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
@@ -3428,7 +3812,7 @@ static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int linearization(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f8(arg, res, iw, w, mem);
+  return casadi_f9(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int linearization_checkout(void) {
@@ -3505,7 +3889,7 @@ CASADI_SYMBOL_EXPORT int linearization_work_bytes(casadi_int *sz_arg, casadi_int
 }
 
 /* truth_dynamics:(x[12],U[4],p[14],I_products[3],wrench[6])->(xdot[12]) */
-static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
@@ -4301,7 +4685,7 @@ static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int truth_dynamics(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return casadi_f9(arg, res, iw, w, mem);
+  return casadi_f10(arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int truth_dynamics_checkout(void) {

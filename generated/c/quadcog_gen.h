@@ -54,6 +54,24 @@ int mass_matrix_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define mass_matrix_SZ_RES 1
 #define mass_matrix_SZ_IW 0
 #define mass_matrix_SZ_W 0
+int inverse_mass_matrix(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int inverse_mass_matrix_checkout(void);
+void inverse_mass_matrix_release(int mem);
+void inverse_mass_matrix_incref(void);
+void inverse_mass_matrix_decref(void);
+casadi_int inverse_mass_matrix_n_in(void);
+casadi_int inverse_mass_matrix_n_out(void);
+casadi_real inverse_mass_matrix_default_in(casadi_int i);
+const char* inverse_mass_matrix_name_in(casadi_int i);
+const char* inverse_mass_matrix_name_out(casadi_int i);
+const casadi_int* inverse_mass_matrix_sparsity_in(casadi_int i);
+const casadi_int* inverse_mass_matrix_sparsity_out(casadi_int i);
+int inverse_mass_matrix_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int inverse_mass_matrix_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define inverse_mass_matrix_SZ_ARG 1
+#define inverse_mass_matrix_SZ_RES 1
+#define inverse_mass_matrix_SZ_IW 0
+#define inverse_mass_matrix_SZ_W 0
 int coriolis(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int coriolis_checkout(void);
 void coriolis_release(int mem);

@@ -60,13 +60,13 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         v = self.commanded_acceleration(e, e_dot, y_ddot_d)
         U = ca.solve(f("decoupling")(x, p_hat), v - f("drift")(x, p_hat))
         nu = x[6:12]
-        M_hat = f("mass_matrix")(p_hat)
+        M_inv = f("inverse_mass_matrix")(p_hat)
         n_hat = f("coriolis")(x, p_hat) @ nu + f("damping")(p_hat) @ nu + f("gravity")(x, p_hat)
-        nu_dot_star = ca.solve(M_hat, ca.DM(B_U) @ U - n_hat)
+        nu_dot_star = M_inv @ (ca.DM(B_U) @ U - n_hat)
         Phi = f("regressor")(x, nu_dot_star, p_hat)
         _, y_dot = kinematics(self.model, x, p_hat)
         H = ca.jacobian(y_dot, x)[:, 6:12]
-        B = ca.vertcat(ca.SX.zeros(4, 6), H @ ca.solve(M_hat, ca.SX.eye(6)))
+        B = ca.vertcat(ca.SX.zeros(4, 6), H @ M_inv)
         return U, ca.vertcat(e, e_dot), Phi, B
 
     def expression(self, t, x, ref, c):

@@ -55,8 +55,9 @@ class Controller:
             t, x = ca.SX.sym("t"), ca.SX.sym("x", 12)
             ref, c = ca.SX.sym("ref", REF_SIZE), ca.SX.sym("c", self.n_state)
             U, c_dot = self.expression(t, x, ref, c)
-            self._function = ca.Function(f"{self.name}_law", [t, x, ref, c],
-                                         [U, ca.SX(c_dot) if self.n_state else ca.SX(0, 1)],
+            # the generated functions share trigonometry and I_G^{-1}: merge it once here
+            U, c_dot = ca.cse([ca.SX(U), ca.SX(c_dot) if self.n_state else ca.SX(0, 1)])
+            self._function = ca.Function(f"{self.name}_law", [t, x, ref, c], [U, c_dot],
                                          ["t", "x", "ref", "c"], ["U", "c_dot"])
         return self._function
 
