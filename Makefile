@@ -37,5 +37,9 @@ tour: compile
 test: $(STAMP)
 	$(PY) -m pytest
 
+# Timing tables (no assertions); writes bench/results.md.
+bench: compile
+	$(PY) bench/run.py
+
 clean:
 	rm -rf $(VENV) .pytest_cache quadcog.egg-info

@@ -374,7 +374,8 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-
         return ca.Function("monitored_last", [Z, P, rows], [acc(Z, P, rows)[:, -1]])
 
     last = _compiled(key, build)
-    mapped = last.map("batch", "thread", B, [2], []) if threads > 1 else last.map(B)
+    # the step table (input 2) is shared by all flights: reduce_in, not B copies
+    mapped = last.map("batch", "thread" if threads > 1 else "serial", B, [2], [])
     nc = controller.n_state
     Z = np.zeros((12 + nc + 4, B))
     Z[:12] = x0[:, None]
@@ -389,8 +390,7 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-
             pad = np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)
             pad[:, TABLE["dt"]] = 0.0
             rows = np.vstack([rows, pad])
-        Z = np.array(mapped(Z, params.T, rows.T) if threads > 1
-                     else mapped(Z, params.T, np.tile(rows.T, (1, 1))))
+        Z = np.array(mapped(Z, params.T, rows.T))
         k += min(CHUNK, n - k)
         if progress:
             progress(k / n)
