@@ -1,5 +1,6 @@
-"""The `quadcog` command."""
+"""The `quadcog` command: tour, run, paper, analyze."""
 import argparse
+from pathlib import Path
 import sys
 
 from .errors import QuadcogError
@@ -9,11 +10,30 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="quadcog", description="quadrotor with a moving CoG")
     sub = ap.add_subparsers(dest="command", required=True)
     sub.add_parser("tour", help="evaluate the generated functions at hover and print them")
+    run = sub.add_parser("run", help="run one scenario file (TOML)")
+    run.add_argument("scenario", type=Path, help="scenario file, see README 'Scenario files'")
+    run.add_argument("--out", type=Path, required=True, help="folder for metrics, CSV, plots")
+    paper = sub.add_parser("paper", help="reproduce the paper's figures and claims")
+    paper.add_argument("--out", type=Path, required=True, help="output folder")
+    analyze = sub.add_parser("analyze", help="PD design, zero dynamics, adaptive design, "
+                                             "failure map")
+    analyze.add_argument("--out", type=Path, required=True, help="output folder")
+    analyze.add_argument("--grid", type=int, default=41,
+                         help="failure-map points per axis (default 41)")
     args = ap.parse_args(argv)
     try:
         if args.command == "tour":
             from .tour import tour
             tour()
+        elif args.command == "run":
+            from .scenario import run_file
+            run_file(args.scenario, args.out)
+        elif args.command == "paper":
+            from .paper import run_paper
+            run_paper(args.out)
+        elif args.command == "analyze":
+            from .analysis import analyze
+            analyze(args.out, grid=args.grid)
     except QuadcogError as e:
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2
