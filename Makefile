@@ -1,12 +1,14 @@
-# quadcog: `make tour` (set up, derive if stale, compile, show) and `make test`.
+# quadcog: `make paper` (set up, derive if stale, compile, reproduce the paper) and `make test`.
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour test bench clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze test bench clean
 
-all: tour
+OUT ?= out
+
+all: paper
 
 # Create the virtual environment and install quadcog with its test/plot extras.
 $(STAMP): pyproject.toml
@@ -33,6 +35,14 @@ compile: derive-if-stale
 
 tour: compile
 	$(PY) -m quadcog tour
+
+# The main job: the paper's figures and claims, the analysis, then the report.
+paper: compile
+	$(PY) -m quadcog paper --out $(OUT)/paper
+	$(PY) -m quadcog analyze --out $(OUT)/analysis
+
+analyze: compile
+	$(PY) -m quadcog analyze --out $(OUT)/analysis
 
 test: $(STAMP)
 	$(PY) -m pytest

@@ -4,14 +4,20 @@ import time
 
 
 class ProgressBar:
-    """Call with a fraction in [0, 1]; prints at most every 0.2 s, finishes on close()."""
+    """Call with a fraction in [0, 1]; prints at most every 0.2 s, finishes on close().
+    On a stream that is not a terminal (a log, CI) it prints only the final line."""
 
     def __init__(self, label, stream=None, width=30):
         self.label, self.stream, self.width = label, stream or sys.stderr, width
         self._last = 0.0
         self._t0 = time.perf_counter()
+        self._live = getattr(self.stream, "isatty", lambda: False)()
+        self._fraction = 0.0
 
     def __call__(self, fraction):
+        self._fraction = fraction
+        if not self._live:
+            return
         now = time.perf_counter()
         if now - self._last < 0.2 and fraction < 1:
             return
@@ -22,6 +28,8 @@ class ProgressBar:
         self.stream.flush()
 
     def close(self):
-        self(1.0)
+        """Print the final state of the bar and end the line."""
+        self._live, self._last = True, 0.0
+        self(self._fraction)
         self.stream.write("\n")
         self.stream.flush()

@@ -23,7 +23,8 @@ class Metrics:
 
 def position_metrics(t, x, ref, duration, tail_fraction=0.25):
     """Metrics of the position error ||p - p_ref|| sampled at ``t``."""
-    e = np.linalg.norm(x[:, :3] - ref[:, :3], axis=1)
+    with np.errstate(over="ignore", invalid="ignore"):     # a diverged run's last sample
+        e = np.linalg.norm(x[:, :3] - ref[:, :3], axis=1)
     tail = t >= (1 - tail_fraction) * duration - 1e-12
     rms_tail = float(np.sqrt(np.mean(e[tail] ** 2))) if tail.any() else float("nan")
     return dict(rms_position_error=float(np.sqrt(np.mean(e ** 2))),

@@ -1,0 +1,293 @@
+"""Scenario files (TOML): parse, validate with messages naming file and key, run, write results.
+
+A scenario names a controller, a trajectory, CoG changes, disturbances, vehicle overrides,
+controller parameters and truth-model switches; `quadcog run FILE --out DIR` writes
+metrics.json, trajectory.csv and flight.png. The keys are documented in README.md.
+"""
+from dataclasses import dataclass, field
+import csv
+import json
+import math
+from pathlib import Path
+import tomllib
+
+import numpy as np
+
+from .controllers import BY_NAME
+from .conventions import PARAM_NAMES, STATE_NAMES
+from .errors import InputError
+from .params import default_parameters
+from .plant import TruthOptions
+from .progress import ProgressBar
+from .simulate import Limits, simulate
+from .timeline import CogChange, CogProfile, Disturbance
+from .trajectory import Circle, Figure8, Helix, Hover
+
+
+class ScenarioError(InputError):
+    """A scenario file is malformed: the message names the file, the key and what was expected."""
+
+
+NUMBER = (int, float)
+TRAJECTORIES = {
+    "hover": (Hover, {"position": "vec3", "yaw": NUMBER}),
+    "circle": (Circle, {"center": "vec3", "radius": NUMBER, "period": NUMBER, "yaw": NUMBER}),
+    "figure8": (Figure8, {"center": "vec3", "size": NUMBER, "period": NUMBER, "yaw": NUMBER}),
+    "helix": (Helix, {"center": "vec3", "radius": NUMBER, "period": NUMBER,
+                      "climb_rate": NUMBER, "yaw": NUMBER}),
+}
+CONTROLLER_PARAMS = {
+    "pd": {"poles_z": "vec", "poles_psi": "vec", "poles_x": "vec", "poles_y": "vec",
+           "max_tilt": NUMBER},
+    "fl": {"poles_z": "vec", "poles_attitude": "vec", "poles_psi": "vec",
+           "poles_position": "vec", "max_tilt": NUMBER},
+}
+CONTROLLER_PARAMS["adaptive"] = dict(CONTROLLER_PARAMS["fl"], gamma="number_or_vec3",
+                                     projection_radius="number_or_false", Q_scale=NUMBER)
+TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "dt": NUMBER,
+       "path": str, "trajectory": dict, "cog": list, "disturbance": list, "vehicle": dict,
+       "controller_params": dict, "truth": dict, "limits": dict, "initial_offset": "vec3"}
+TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "max_rotor_thrust": NUMBER}
+LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}
+COG = {"t": NUMBER, "r": "vec3", "ramp": NUMBER}
+DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3"}
+
+
+@dataclass
+class Scenario:
+    """A validated scenario, ready to run."""
+    name: str
+    controller: str
+    duration: float
+    dt: float = 1e-3
+    description: str = ""
+    path: str = "compiled"
+    trajectory: object = field(default_factory=Hover)
+    cog: CogProfile = field(default_factory=CogProfile)
+    disturbances: list = field(default_factory=list)
+    vehicle: dict = field(default_factory=dict)
+    controller_params: dict = field(default_factory=dict)
+    truth: TruthOptions = field(default_factory=TruthOptions)
+    limits: Limits = field(default_factory=Limits)
+    initial_offset: tuple = (0.0, 0.0, 0.0)
+    source: str = "<scenario>"
+
+    def make_controller(self):
+        params = dict(self.controller_params)
+        nominal = default_parameters(**{k: v for k, v in self.vehicle.items()
+                                        if k not in ("x_G", "y_G", "z_G")})
+        if "Q_scale" in params:
+            params["Q"] = np.eye(8) * params.pop("Q_scale")
+        if params.get("projection_radius") is False:
+            params["projection_radius"] = None
+        return BY_NAME[self.controller](nominal=nominal, **params)
+
+    def run(self, progress=None):
+        """Simulate; returns a quadcog SimulationResult."""
+        params = default_parameters(**self.vehicle)
+        x0 = None
+        if any(self.initial_offset):
+            ref0 = self.trajectory(0.0)
+            x0 = np.zeros(12)
+            x0[:3] = ref0[:3] + np.asarray(self.initial_offset)
+            x0[5] = ref0[12]
+        return simulate(self.make_controller(), self.trajectory, duration=self.duration,
+                        dt=self.dt, params=params, cog=self.cog, disturbances=self.disturbances,
+                        truth=self.truth, x0=x0, path=self.path, limits=self.limits,
+                        progress=progress)
+
+
+def _type_name(kind):
+    return {str: "a string", bool: "true or false", dict: "a table", list: "an array of tables",
+            "vec3": "an array of 3 numbers", "vec": "an array of numbers",
+            "number_or_vec3": "a number or an array of 3 numbers",
+            "number_or_false": "a number or false"}.get(
+        kind, "a number" if kind == NUMBER else str(kind))
+
+
+def _check(value, kind, where):
+    def is_num(v):
+        return isinstance(v, NUMBER) and not isinstance(v, bool) and math.isfinite(v)
+    ok = {
+        "vec3": lambda v: isinstance(v, list) and len(v) == 3 and all(map(is_num, v)),
+        "vec": lambda v: isinstance(v, list) and len(v) > 0 and all(map(is_num, v)),
+        "number_or_vec3": lambda v: is_num(v) or (isinstance(v, list) and len(v) == 3
+                                                  and all(map(is_num, v))),
+        "number_or_false": lambda v: v is False or is_num(v),
+    }
+    if kind in ok:
+        good = ok[kind](value)
+    elif kind == NUMBER:
+        good = is_num(value)
+    else:
+        good = isinstance(value, kind)
+    if not good:
+        raise ScenarioError(f"{where}: expected {_type_name(kind)}, got {value!r}")
+    return value
+
+
+def _table(data, schema, where):
+    for key, value in data.items():
+        if key not in schema:
+            raise ScenarioError(f"{where}: unknown key {key!r}; expected one of "
+                                f"{', '.join(sorted(schema))}")
+        _check(value, schema[key], f"{where}.{key}" if where.count(":") else f"{where} {key!r}")
+    return data
+
+
+def parse(data, source="<scenario>"):
+    """A Scenario from a parsed TOML dict; ScenarioError names ``source``, the key and the
+    expectation."""
+    w = lambda key: f"{source}: key {key!r}"
+    for key, value in data.items():
+        if key not in TOP:
+            raise ScenarioError(f"{source}: unknown key {key!r}; expected one of "
+                                f"{', '.join(sorted(TOP))}")
+        _check(value, TOP[key], w(key))
+    for key in ("name", "controller", "duration"):
+        if key not in data:
+            raise ScenarioError(f"{source}: missing key {key!r}")
+    if data["controller"] not in BY_NAME:
+        raise ScenarioError(f"{w('controller')}: expected one of {', '.join(BY_NAME)}, got "
+                            f"{data['controller']!r}")
+    for key in ("duration", "dt"):
+        if key in data and data[key] <= 0:
+            raise ScenarioError(f"{w(key)}: expected a positive number of seconds, got "
+                                f"{data[key]!r}")
+    if data.get("path", "compiled") not in ("compiled", "python"):
+        raise ScenarioError(f"{w('path')}: expected 'compiled' or 'python', got "
+                            f"{data['path']!r}")
+    traj = dict(data.get("trajectory", {"kind": "hover"}))
+    kind = traj.pop("kind", None)
+    if kind not in TRAJECTORIES:
+        raise ScenarioError(f"{w('trajectory.kind')}: expected one of "
+                            f"{', '.join(TRAJECTORIES)}, got {kind!r}")
+    cls, schema = TRAJECTORIES[kind]
+    for key, value in traj.items():
+        if key not in schema:
+            raise ScenarioError(f"{w('trajectory.' + key)}: unknown for kind {kind!r}; "
+                                f"expected one of {', '.join(sorted(schema))}")
+        _check(value, schema[key], w(f"trajectory.{key}"))
+    changes, last = [], -math.inf
+    for i, entry in enumerate(data.get("cog", [])):
+        where = f"cog[{i}]"
+        for key, value in entry.items():
+            if key not in COG:
+                raise ScenarioError(f"{w(where + '.' + key)}: unknown; expected one of t, r, ramp")
+            _check(value, COG[key], w(f"{where}.{key}"))
+        for key in ("t", "r"):
+            if key not in entry:
+                raise ScenarioError(f"{w(where)}: missing key {key!r}")
+        if entry["t"] < 0 or entry.get("ramp", 0.0) < 0:
+            raise ScenarioError(f"{w(where)}: t and ramp must be >= 0 s, got t = {entry['t']}, "
+                                f"ramp = {entry.get('ramp', 0.0)}")
+        if entry["t"] < last:
+            raise ScenarioError(f"{w(where + '.t')}: expected entries in time order; "
+                                f"t = {entry['t']} s starts before the previous change ends "
+                                f"at {last} s")
+        last = entry["t"] + entry.get("ramp", 0.0)
+        changes.append(CogChange(float(entry["t"]), tuple(entry["r"]),
+                                 float(entry.get("ramp", 0.0))))
+    pulses = []
+    for i, entry in enumerate(data.get("disturbance", [])):
+        where = f"disturbance[{i}]"
+        for key, value in entry.items():
+            if key not in DISTURBANCE:
+                raise ScenarioError(f"{w(where + '.' + key)}: unknown; expected one of "
+                                    f"{', '.join(DISTURBANCE)}")
+            _check(value, DISTURBANCE[key], w(f"{where}.{key}"))
+        try:
+            pulses.append(Disturbance(**entry))
+        except (TypeError, InputError) as e:
+            raise ScenarioError(f"{w(where)}: {e}") from None
+    vehicle = data.get("vehicle", {})
+    for key, value in vehicle.items():
+        if key not in PARAM_NAMES:
+            raise ScenarioError(f"{w('vehicle.' + key)}: unknown parameter; expected one of "
+                                f"{', '.join(PARAM_NAMES)}")
+        _check(value, NUMBER, w(f"vehicle.{key}"))
+    cparams = data.get("controller_params", {})
+    schema = CONTROLLER_PARAMS[data["controller"]]
+    for key, value in cparams.items():
+        if key not in schema:
+            raise ScenarioError(f"{w('controller_params.' + key)}: unknown for controller "
+                                f"{data['controller']!r}; expected one of "
+                                f"{', '.join(sorted(schema))}")
+        _check(value, schema[key], w(f"controller_params.{key}"))
+    truth = data.get("truth", {})
+    for key, value in truth.items():
+        if key not in TRUTH:
+            raise ScenarioError(f"{w('truth.' + key)}: unknown; expected one of "
+                                f"{', '.join(TRUTH)}")
+        _check(value, TRUTH[key], w(f"truth.{key}"))
+    limits = data.get("limits", {})
+    for key, value in limits.items():
+        if key not in LIMITS:
+            raise ScenarioError(f"{w('limits.' + key)}: unknown; expected one of "
+                                f"{', '.join(LIMITS)}")
+        _check(value, LIMITS[key], w(f"limits.{key}"))
+    try:
+        default_parameters(**vehicle)             # admissible vehicle, checked now
+        return Scenario(
+            name=data["name"], controller=data["controller"], duration=float(data["duration"]),
+            dt=float(data.get("dt", 1e-3)), description=data.get("description", ""),
+            path=data.get("path", "compiled"), trajectory=cls(**traj),
+            cog=CogProfile(changes), disturbances=pulses, vehicle=dict(vehicle),
+            controller_params=dict(cparams), truth=TruthOptions(**truth),
+            limits=Limits(limits.get("max_position_error", 10.0),
+                          math.radians(limits.get("max_tilt_deg", 85.0))),
+            initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source)
+    except InputError as e:
+        raise ScenarioError(f"{source}: {e}") from None
+
+
+def load_scenario(path):
+    """Read and validate a scenario file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ScenarioError(f"{path}: no such scenario file")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as e:
+        raise ScenarioError(f"{path}: not valid TOML ({e})") from None
+    return parse(data, str(path))
+
+
+def write_outputs(result, scenario, out):
+    """metrics.json, trajectory.csv and flight.png of one run into folder ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    metrics = result.metrics.as_dict()
+    metrics.update(name=scenario.name, controller=scenario.controller,
+                   duration=scenario.duration, dt=scenario.dt,
+                   simulated_until=float(result.t[-1]), wall_time_s=result.info.get("seconds"))
+    (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    header = (["t"] + list(STATE_NAMES) + ["U1", "U2", "U3", "U4"]
+              + [f"ref_{n}" for n in ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az",
+                                      "jx", "jy", "jz", "yaw", "yaw_rate")]
+              + ["r_hat_x", "r_hat_y", "r_hat_z", "r_G_x", "r_G_y", "r_G_z"])
+    data = np.hstack([result.t[:, None], result.x, result.U, result.ref, result.r_hat,
+                      result.r_G])
+    with open(out / "trajectory.csv", "w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(header)
+        writer.writerows(np.round(data, 10).tolist())
+    result.plot(out / "flight.png", title=f"{scenario.name} ({scenario.controller})")
+    return metrics
+
+
+def run_file(path, out, progress=True):
+    """`quadcog run`: load, simulate with a progress bar, write the outputs; returns metrics."""
+    scenario = load_scenario(path)
+    bar = ProgressBar(f"{scenario.name}") if progress else None
+    try:
+        result = scenario.run(progress=bar)
+    finally:
+        if bar:
+            bar.close()
+    metrics = write_outputs(result, scenario, out)
+    status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_cause']})"
+              if metrics["diverged"] else
+              f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")
+    print(f"{scenario.name}: {status}; wrote {out}/metrics.json, trajectory.csv, flight.png")
+    return metrics

@@ -1,0 +1,52 @@
+"""The paper's claims as assertions (thresholds justified in README, "The paper's claims")."""
+import json
+
+import numpy as np
+import pytest
+
+from quadcog.paper import run_paper
+
+
+@pytest.fixture(scope="module")
+def summary(tmp_path_factory):
+    out = tmp_path_factory.mktemp("paper")
+    rows = run_paper(out, progress=False)
+    return {r["scenario"]: r for r in rows}, out
+
+
+def test_balanced_pd_and_fl_track(summary):
+    rows, _ = summary
+    for name in ("fig3a", "fig3b"):
+        assert not rows[name]["diverged"]
+        assert rows[name]["rms_position_error_tail"] < 0.05, rows[name]
+
+
+def test_pd_and_fl_fail_after_a_cog_step(summary):
+    rows, _ = summary
+    for name in ("fig4", "fig5"):
+        r = rows[name]
+        assert r["diverged"] or r["rms_position_error_tail"] > 0.5, r
+        # say plainly when the "failure" is a standing error rather than a crash
+        assert (r["holds"] == "partly") == (not r["diverged"])
+
+
+@pytest.mark.parametrize("name", ["fig6", "fig7", "fig8"])
+def test_adaptive_recovers_and_estimates(summary, name):
+    r = summary[0][name]
+    assert not r["diverged"] and r["rms_position_error_tail"] < 0.10, r
+    r_hat, r_G = np.array(r["r_hat_final"][:2]), np.array(r["r_G_final"][:2])
+    assert np.all(np.abs(r_hat - r_G) <= np.maximum(0.1 * np.abs(r_G), 0.003)), (r_hat, r_G)
+
+
+def test_outputs_written(summary):
+    rows, out = summary
+    data = json.loads((out / "summary.json").read_text())
+    assert [d["figure"] for d in data] == ["Fig. 3(a)", "Fig. 3(b)", "Fig. 4", "Fig. 5",
+                                           "Fig. 6", "Fig. 7", "Fig. 8"]
+    md = (out / "summary.md").read_text()
+    assert "partly" in md and "standing position error" in md
+    assert (out / "cog_step_comparison.png").stat().st_size > 10_000
+    for name in rows:
+        assert (out / name / "flight.png").is_file() and (out / name / "trajectory.csv").is_file()
+    tex = (out / "report_fragment.tex").read_text()
+    assert "\\includegraphics" in tex and "paper/fig6/flight.png" in tex

@@ -1,0 +1,117 @@
+"""Scenario files: every key validated with the file, the key and what was expected."""
+import json
+from pathlib import Path
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from quadcog.paper import CLAIMS, scenario_path
+from quadcog.scenario import ScenarioError, load_scenario, parse, run_file
+
+ROOT = Path(__file__).resolve().parent.parent
+BASE = {"name": "t", "controller": "fl", "duration": 1.0}
+
+
+def test_builtin_scenarios_parse():
+    for claim in CLAIMS:
+        s = load_scenario(scenario_path(claim.scenario))
+        assert s.name == claim.scenario and s.duration > 0
+
+
+@pytest.mark.parametrize("data, message", [
+    (dict(BASE, colour="red"), "unknown key 'colour'; expected one of"),
+    (dict(BASE, duration="long"), "key 'duration': expected a number, got 'long'"),
+    (dict(BASE, duration=-2.0), "key 'duration': expected a positive number of seconds"),
+    (dict(BASE, controller="lqr"), "key 'controller': expected one of pd, fl, adaptive"),
+    ({"name": "t", "controller": "fl"}, "missing key 'duration'"),
+    (dict(BASE, trajectory={"kind": "square"}), "trajectory.kind': expected one of hover"),
+    (dict(BASE, trajectory={"kind": "circle", "radius": "big"}),
+     "trajectory.radius': expected a number"),
+    (dict(BASE, trajectory={"kind": "hover", "radius": 1.0}), "unknown for kind 'hover'"),
+    (dict(BASE, trajectory={"kind": "circle", "radius": -1.0}), "circle radius must be a positive"),
+    (dict(BASE, cog=[{"t": 2.0, "r": [0.01, 0, 0]}, {"t": 1.0, "r": [0, 0, 0]}]),
+     "cog\\[1\\].t': expected entries in time order"),
+    (dict(BASE, cog=[{"t": 1.0, "r": [0.01, 0]}]), "cog\\[0\\].r': expected an array of 3"),
+    (dict(BASE, cog=[{"t": 1.0}]), "cog\\[0\\]': missing key 'r'"),
+    (dict(BASE, cog=[{"t": 1.0, "r": [0, 0, 0], "speed": 2}]), "cog\\[0\\].speed': unknown"),
+    (dict(BASE, disturbance=[{"t": 1.0, "duration": -1.0}]), "disturbance duration must be > 0"),
+    (dict(BASE, vehicle={"mass": 1.0}), "vehicle.mass': unknown parameter"),
+    (dict(BASE, vehicle={"m": -1.0}), "m = -1.0 must be > 0"),
+    (dict(BASE, controller_params={"gamma": 0.1}), "unknown for controller 'fl'"),
+    (dict(BASE, truth={"parallel_axis": "yes"}), "truth.parallel_axis': expected true or false"),
+    (dict(BASE, limits={"max_tilt": 1.0}), "limits.max_tilt': unknown"),
+])
+def test_scenario_errors(data, message):
+    with pytest.raises(ScenarioError, match=message) as e:
+        parse(data, "my.toml")
+    assert str(e.value).startswith("my.toml")
+
+
+def test_bad_file(tmp_path):
+    p = tmp_path / "bad.toml"
+    p.write_text("name = \n")
+    with pytest.raises(ScenarioError, match="bad.toml: not valid TOML"):
+        load_scenario(p)
+    with pytest.raises(ScenarioError, match="no such scenario file"):
+        load_scenario(tmp_path / "missing.toml")
+
+
+def test_run_command_writes_outputs(tmp_path):
+    src = tmp_path / "s.toml"
+    src.write_text("""
+name = "demo"
+controller = "adaptive"
+duration = 3.0
+[trajectory]
+kind = "helix"
+radius = 0.5
+period = 6.0
+climb_rate = 0.1
+[[cog]]
+t = 0.5
+r = [0.02, 0.0, 0.0]
+ramp = 0.5
+[[disturbance]]
+t = 1.0
+duration = 0.2
+force = [0.3, 0.0, 0.0]
+moment = [0.0, 0.0, 0.0]
+[vehicle]
+m = 0.7
+[controller_params]
+gamma = 0.01
+projection_radius = false
+[truth]
+parallel_axis = true
+rotor_saturation = true
+""")
+    out = tmp_path / "out"
+    res = subprocess.run([sys.executable, "-m", "quadcog", "run", str(src), "--out", str(out)],
+                         cwd=ROOT, capture_output=True, text=True, timeout=300,
+                         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                              "HOME": str(Path.home())})
+    assert res.returncode == 0, res.stderr
+    m = json.loads((out / "metrics.json").read_text())
+    for key in ("diverged", "diverged_at", "diverged_cause", "rms_position_error",
+                "max_position_error", "final_position_error", "rms_position_error_tail",
+                "r_hat_final", "r_G_final"):
+        assert key in m, key
+    assert m["r_G_final"] == [0.02, 0.0, 0.0] and not m["diverged"]
+    rows = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)
+    header = (out / "trajectory.csv").read_text().splitlines()[0].split(",")
+    assert rows.shape == (3001, len(header)) and header[:4] == ["t", "x", "y", "z"]
+    assert (out / "flight.png").stat().st_size > 10_000
+    assert "demo" in res.stderr          # the progress bar's final line
+
+
+def test_run_command_error_names_file(tmp_path):
+    src = tmp_path / "broken.toml"
+    src.write_text('name = "x"\ncontroller = "fl"\nduration = -1.0\n')
+    res = subprocess.run([sys.executable, "-m", "quadcog", "run", str(src), "--out",
+                          str(tmp_path / "o")], cwd=ROOT, capture_output=True, text=True,
+                         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                              "HOME": str(Path.home())})
+    assert res.returncode == 2
+    assert "broken.toml: key 'duration': expected a positive number" in res.stderr
