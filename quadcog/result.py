@@ -18,6 +18,7 @@ class Metrics:
     r_G_final: list | None = None
 
     def as_dict(self):
+        """The metrics as a plain dict (the keys of metrics.json)."""
         return dict(self.__dict__)
 
 
@@ -50,6 +51,7 @@ class SimulationResult:
 
     @property
     def diverged(self):
+        """True when the run stopped early (see metrics.diverged_at, diverged_cause)."""
         return self.metrics.diverged
 
     def plot(self, path=None, title=None):
