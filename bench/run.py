@@ -72,6 +72,21 @@ def bench_single_call():
            f"{t_lam / t_fast:.0f}x", "<= 0.3 us, >= 50x lambdify")
 
 
+def bench_controllers():
+    print("controller laws: compiled single call (FastCall.eval)")
+    ref = quadcog.Circle()(1.0)
+    x = np.zeros(12)
+    x[:3] = ref[:3] + 0.05
+    for ctl in (quadcog.CascadePD(), quadcog.FeedbackLinearization(),
+                AdaptiveFeedbackLinearization()):
+        law = ctl.compiled()
+        law.inputs[1][:], law.inputs[2][:] = x, ref
+        t = per_call(law.eval, 100000)
+        record(f"controller: {ctl.name}", f"{t * 1e6:.2f}", "us", "", "~1 us",
+               f"{ctl.function().n_instructions()} instructions"
+               + (" (law + r_hat_dot)" if ctl.n_state else ""))
+
+
 def bench_flight():
     print("20 s adaptive-FL flight at 1 kHz (CoG step [6, 6, 0] cm at 1 s)")
     ctl = AdaptiveFeedbackLinearization()
@@ -200,6 +215,7 @@ def main():
     print(f"quadcog bench on {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, CasADi {ca.__version__}, Python {platform.python_version()}")
     bench_single_call()
+    bench_controllers()
     ctl, step = bench_flight()
     bench_op_estimate(ctl, step)
     bench_batch(args.flights)
