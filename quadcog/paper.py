@@ -6,8 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .scenario import load_scenario, write_outputs
-from .progress import ProgressBar
+from .scenario import load_scenario, run_with_progress, write_outputs
 
 TRACKS = 0.05        # m: tail RMS under which a balanced run "tracks" (Fig. 3)
 FAILS = 0.50         # m: tail RMS over which (or diverged) a controller "fails" (Figs. 4, 5)
@@ -137,12 +136,7 @@ def run_paper(out, progress=True):
     rows, results = [], {}
     for claim in CLAIMS:
         scenario = load_scenario(scenario_path(claim.scenario))
-        bar = ProgressBar(f"{claim.figure:<9s} {scenario.name}") if progress else None
-        try:
-            result = scenario.run(progress=bar)
-        finally:
-            if bar:
-                bar.close()
+        result = run_with_progress(scenario, f"{claim.figure:<9s} {scenario.name}", progress)
         results[claim.scenario] = result
         m = write_outputs(result, scenario, out / claim.scenario)
         holds, note = verdict(claim, m)

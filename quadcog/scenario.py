@@ -126,30 +126,65 @@ def _check(value, kind, where):
     return value
 
 
-def _table(data, schema, where):
-    for key, value in data.items():
+def _validate(table, schema, source, prefix="", what=""):
+    """Check every key of ``table`` against ``schema`` (key -> expected type)."""
+    for key, value in table.items():
+        name = f"{source}: key {prefix + key!r}"
         if key not in schema:
-            raise ScenarioError(f"{where}: unknown key {key!r}; expected one of "
+            raise ScenarioError(f"{name}: unknown{what}; expected one of "
                                 f"{', '.join(sorted(schema))}")
-        _check(value, schema[key], f"{where}.{key}" if where.count(":") else f"{where} {key!r}")
-    return data
+        _check(value, schema[key], name)
+
+
+def _entries(data, key, schema, source, required):
+    """Validate an array of tables; yields (where, entry) pairs."""
+    for i, entry in enumerate(data.get(key, [])):
+        where = f"{key}[{i}]"
+        _validate(entry, schema, source, where + ".")
+        for name in required:
+            if name not in entry:
+                raise ScenarioError(f"{source}: key {where!r}: missing key {name!r}")
+        yield where, entry
+
+
+def _cog_changes(data, source):
+    changes, last = [], -math.inf
+    for where, entry in _entries(data, "cog", COG, source, ("t", "r")):
+        t, ramp = entry["t"], entry.get("ramp", 0.0)
+        if t < 0 or ramp < 0:
+            raise ScenarioError(f"{source}: key {where!r}: t and ramp must be >= 0 s, got "
+                                f"t = {t}, ramp = {ramp}")
+        if t < last:
+            raise ScenarioError(f"{source}: key {where + '.t'!r}: expected entries in time "
+                                f"order; t = {t} s starts before the previous change ends at "
+                                f"{last} s")
+        last = t + ramp
+        changes.append(CogChange(float(t), tuple(entry["r"]), float(ramp)))
+    return CogProfile(changes)
+
+
+def _disturbances(data, source):
+    pulses = []
+    for where, entry in _entries(data, "disturbance", DISTURBANCE, source, ("t", "duration")):
+        try:
+            pulses.append(Disturbance(**entry))
+        except InputError as e:
+            raise ScenarioError(f"{source}: key {where!r}: {e}") from None
+    return pulses
 
 
 def parse(data, source="<scenario>"):
     """A Scenario from a parsed TOML dict; ScenarioError names ``source``, the key and the
     expectation."""
-    w = lambda key: f"{source}: key {key!r}"
-    for key, value in data.items():
-        if key not in TOP:
-            raise ScenarioError(f"{source}: unknown key {key!r}; expected one of "
-                                f"{', '.join(sorted(TOP))}")
-        _check(value, TOP[key], w(key))
+    _validate(data, TOP, source)
     for key in ("name", "controller", "duration"):
         if key not in data:
             raise ScenarioError(f"{source}: missing key {key!r}")
-    if data["controller"] not in BY_NAME:
+    w = lambda key: f"{source}: key {key!r}"
+    controller = data["controller"]
+    if controller not in BY_NAME:
         raise ScenarioError(f"{w('controller')}: expected one of {', '.join(BY_NAME)}, got "
-                            f"{data['controller']!r}")
+                            f"{controller!r}")
     for key in ("duration", "dt"):
         if key in data and data[key] <= 0:
             raise ScenarioError(f"{w(key)}: expected a positive number of seconds, got "
@@ -163,77 +198,24 @@ def parse(data, source="<scenario>"):
         raise ScenarioError(f"{w('trajectory.kind')}: expected one of "
                             f"{', '.join(TRAJECTORIES)}, got {kind!r}")
     cls, schema = TRAJECTORIES[kind]
-    for key, value in traj.items():
-        if key not in schema:
-            raise ScenarioError(f"{w('trajectory.' + key)}: unknown for kind {kind!r}; "
-                                f"expected one of {', '.join(sorted(schema))}")
-        _check(value, schema[key], w(f"trajectory.{key}"))
-    changes, last = [], -math.inf
-    for i, entry in enumerate(data.get("cog", [])):
-        where = f"cog[{i}]"
-        for key, value in entry.items():
-            if key not in COG:
-                raise ScenarioError(f"{w(where + '.' + key)}: unknown; expected one of t, r, ramp")
-            _check(value, COG[key], w(f"{where}.{key}"))
-        for key in ("t", "r"):
-            if key not in entry:
-                raise ScenarioError(f"{w(where)}: missing key {key!r}")
-        if entry["t"] < 0 or entry.get("ramp", 0.0) < 0:
-            raise ScenarioError(f"{w(where)}: t and ramp must be >= 0 s, got t = {entry['t']}, "
-                                f"ramp = {entry.get('ramp', 0.0)}")
-        if entry["t"] < last:
-            raise ScenarioError(f"{w(where + '.t')}: expected entries in time order; "
-                                f"t = {entry['t']} s starts before the previous change ends "
-                                f"at {last} s")
-        last = entry["t"] + entry.get("ramp", 0.0)
-        changes.append(CogChange(float(entry["t"]), tuple(entry["r"]),
-                                 float(entry.get("ramp", 0.0))))
-    pulses = []
-    for i, entry in enumerate(data.get("disturbance", [])):
-        where = f"disturbance[{i}]"
-        for key, value in entry.items():
-            if key not in DISTURBANCE:
-                raise ScenarioError(f"{w(where + '.' + key)}: unknown; expected one of "
-                                    f"{', '.join(DISTURBANCE)}")
-            _check(value, DISTURBANCE[key], w(f"{where}.{key}"))
-        try:
-            pulses.append(Disturbance(**entry))
-        except (TypeError, InputError) as e:
-            raise ScenarioError(f"{w(where)}: {e}") from None
+    _validate(traj, schema, source, "trajectory.", f" for kind {kind!r}")
     vehicle = data.get("vehicle", {})
-    for key, value in vehicle.items():
-        if key not in PARAM_NAMES:
-            raise ScenarioError(f"{w('vehicle.' + key)}: unknown parameter; expected one of "
-                                f"{', '.join(PARAM_NAMES)}")
-        _check(value, NUMBER, w(f"vehicle.{key}"))
+    _validate(vehicle, dict.fromkeys(PARAM_NAMES, NUMBER), source, "vehicle.", " parameter")
     cparams = data.get("controller_params", {})
-    schema = CONTROLLER_PARAMS[data["controller"]]
-    for key, value in cparams.items():
-        if key not in schema:
-            raise ScenarioError(f"{w('controller_params.' + key)}: unknown for controller "
-                                f"{data['controller']!r}; expected one of "
-                                f"{', '.join(sorted(schema))}")
-        _check(value, schema[key], w(f"controller_params.{key}"))
-    truth = data.get("truth", {})
-    for key, value in truth.items():
-        if key not in TRUTH:
-            raise ScenarioError(f"{w('truth.' + key)}: unknown; expected one of "
-                                f"{', '.join(TRUTH)}")
-        _check(value, TRUTH[key], w(f"truth.{key}"))
-    limits = data.get("limits", {})
-    for key, value in limits.items():
-        if key not in LIMITS:
-            raise ScenarioError(f"{w('limits.' + key)}: unknown; expected one of "
-                                f"{', '.join(LIMITS)}")
-        _check(value, LIMITS[key], w(f"limits.{key}"))
+    _validate(cparams, CONTROLLER_PARAMS[controller], source, "controller_params.",
+              f" for controller {controller!r}")
+    truth, limits = data.get("truth", {}), data.get("limits", {})
+    _validate(truth, TRUTH, source, "truth.")
+    _validate(limits, LIMITS, source, "limits.")
+    cog, pulses = _cog_changes(data, source), _disturbances(data, source)
     try:
         default_parameters(**vehicle)             # admissible vehicle, checked now
         return Scenario(
-            name=data["name"], controller=data["controller"], duration=float(data["duration"]),
+            name=data["name"], controller=controller, duration=float(data["duration"]),
             dt=float(data.get("dt", 1e-3)), description=data.get("description", ""),
-            path=data.get("path", "compiled"), trajectory=cls(**traj),
-            cog=CogProfile(changes), disturbances=pulses, vehicle=dict(vehicle),
-            controller_params=dict(cparams), truth=TruthOptions(**truth),
+            path=data.get("path", "compiled"), trajectory=cls(**traj), cog=cog,
+            disturbances=pulses, vehicle=dict(vehicle), controller_params=dict(cparams),
+            truth=TruthOptions(**truth),
             limits=Limits(limits.get("max_position_error", 10.0),
                           math.radians(limits.get("max_tilt_deg", 85.0))),
             initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source)
@@ -276,15 +258,20 @@ def write_outputs(result, scenario, out):
     return metrics
 
 
-def run_file(path, out, progress=True):
-    """`quadcog run`: load, simulate with a progress bar, write the outputs; returns metrics."""
-    scenario = load_scenario(path)
-    bar = ProgressBar(f"{scenario.name}") if progress else None
+def run_with_progress(scenario, label=None, progress=True):
+    """Run a scenario with a progress bar on stderr (or none); returns the result."""
+    bar = ProgressBar(label or scenario.name) if progress else None
     try:
-        result = scenario.run(progress=bar)
+        return scenario.run(progress=bar)
     finally:
         if bar:
             bar.close()
+
+
+def run_file(path, out, progress=True):
+    """`quadcog run`: load, simulate with a progress bar, write the outputs; returns metrics."""
+    scenario = load_scenario(path)
+    result = run_with_progress(scenario, progress=progress)
     metrics = write_outputs(result, scenario, out)
     status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_cause']})"
               if metrics["diverged"] else

@@ -21,7 +21,7 @@ def test_builtin_scenarios_parse():
 
 
 @pytest.mark.parametrize("data, message", [
-    (dict(BASE, colour="red"), "unknown key 'colour'; expected one of"),
+    (dict(BASE, colour="red"), "key 'colour': unknown; expected one of"),
     (dict(BASE, duration="long"), "key 'duration': expected a number, got 'long'"),
     (dict(BASE, duration=-2.0), "key 'duration': expected a positive number of seconds"),
     (dict(BASE, controller="lqr"), "key 'controller': expected one of pd, fl, adaptive"),
