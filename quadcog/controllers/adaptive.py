@@ -19,6 +19,13 @@ from .shaping import kinematics
 B_U = np.vstack([np.zeros((2, 4)), np.eye(4)])
 
 
+def admissible_estimate_radius(p, margin=0.95):
+    """min(arm length, margin * sqrt(min(Ixx, Iyy, Izz) / m)) in m: any r_hat in this ball
+    keeps the inertia about the estimated CoG positive definite (m |r|^2 < min I suffices)."""
+    p = np.asarray(p, dtype=float)
+    return float(min(ARM_LENGTH, margin * np.sqrt(np.min(p[2:5]) / p[0])))
+
+
 class AdaptiveFeedbackLinearization(FeedbackLinearization):
     """Feedback linearization with an online estimate r_hat (m) of the CoG offset.
 
@@ -26,8 +33,10 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         recovers a [6, 6, 0] cm step at hover (3.7 cm tail RMS, estimates within 1 %); 0.03
         leaves a 14 cm tail and 0.05 diverges (see README, "Choosing gamma").
     Q: the 8x8 positive definite matrix of the Lyapunov equation (default identity).
-    projection_radius: keep |r_hat| <= this radius (m) by projection (default: the arm length);
-        None switches projection off, which is the paper's law.
+    projection_radius: keep |r_hat| <= this radius (m) by projection. Default: the arm length,
+        but never beyond 95 % of sqrt(min(Ixx, Iyy, Izz) / m), inside which every estimate
+        keeps M_hat positive definite (9.6 cm for the default vehicle; beyond it M_hat turns
+        singular and the law blows up). None switches projection off: the paper's law.
     Other arguments as FeedbackLinearization.
     """
 
@@ -35,7 +44,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
     n_state = 3
 
     def __init__(self, nominal=None, model=None, gamma=0.01, Q=None,
-                 projection_radius=ARM_LENGTH, **kwargs):
+                 projection_radius="default", **kwargs):
         super().__init__(nominal, model, **kwargs)
         gamma = np.broadcast_to(np.asarray(gamma, dtype=float), (3,)).copy()
         if not np.all(np.isfinite(gamma)) or np.any(gamma <= 0):
@@ -45,6 +54,8 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         if Q.shape != (8, 8) or not np.allclose(Q, Q.T) or np.linalg.eigvalsh(Q)[0] <= 0:
             raise InputError(f"Q must be a symmetric positive definite 8x8 matrix, got {Q}")
         self.Q = Q
+        if isinstance(projection_radius, str) and projection_radius == "default":
+            projection_radius = admissible_estimate_radius(self.nominal)
         if projection_radius is not None and not projection_radius > 0:
             raise InputError(f"projection_radius must be > 0 m or None, got {projection_radius}")
         self.projection_radius = projection_radius
