@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze test bench clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench clean
 
 OUT ?= out
 
@@ -36,10 +36,26 @@ compile: derive-if-stale
 tour: compile
 	$(PY) -m quadcog tour
 
-# The main job: the paper's figures and claims, the analysis, then the report.
+TEXLIVE := texlive-latex-base texlive-latex-recommended poppler-utils
+
+# The main job: the paper's figures and claims, the analysis, then the report (the PDF when
+# pdflatex is there; otherwise it says how to install it, and the rest is kept).
 paper: compile
 	$(PY) -m quadcog paper --out $(OUT)/paper
 	$(PY) -m quadcog analyze --out $(OUT)/analysis
+	@if command -v pdflatex >/dev/null; then $(MAKE) --no-print-directory report; else \
+	  echo "note: pdflatex not found, so no PDF report; install TeX Live (as root):"; \
+	  echo "  apt-get update && apt-get install -y --no-install-recommends $(TEXLIVE)"; \
+	  echo "then run: make report"; fi
+
+# The derived report as a PDF: check the generated functions' identities at 200 random points
+# (the table in the PDF is filled in from this run), then build generated/report.tex with
+# pdflatex into out/report/report.pdf, with out/paper/ when `quadcog paper` has run.
+report: $(STAMP)
+	@command -v pdflatex >/dev/null || { echo "pdflatex not found; install TeX Live (as root):"; \
+	  echo "  apt-get update && apt-get install -y --no-install-recommends $(TEXLIVE)"; exit 1; }
+	$(PY) -m derive.verify --out $(OUT)/report/verification.tex --points 200
+	$(PY) -m derive.build_report --out $(OUT)/report --paper $(OUT)/paper
 
 analyze: compile
 	$(PY) -m quadcog analyze --out $(OUT)/analysis

@@ -101,7 +101,7 @@ def _comparison_plot(results, out):
 
 def _tex(s):
     return (s.replace("\\", "/").replace("%", r"\%").replace("_", r"\_").replace("#", r"\#")
-            .replace("&", r"\&"))
+            .replace("&", r"\&").replace("<", r"$<$").replace(">", r"$>$"))
 
 
 def _fragment(rows):
@@ -118,11 +118,11 @@ def _fragment(rows):
     lines += [r"\bottomrule", r"\end{tabular}", r"\end{center}", ""]
     for r in rows:
         lines.append(rf"\paragraph{{{r['figure']}}} {_tex(r['note'])}.")
-    lines.append(r"\begin{figure}[p]\centering"
+    lines.append(r"\begin{figure}[htbp]\centering"
                  r"\includegraphics[width=0.8\linewidth]{paper/cog_step_comparison.png}"
                  r"\caption{Position error through a CoG step at hover (Figs.~4--6).}\end{figure}")
     for r in rows:
-        lines.append(rf"\begin{{figure}}[p]\centering\includegraphics[width=0.75\linewidth]"
+        lines.append(rf"\begin{{figure}}[htbp]\centering\includegraphics[width=0.6\linewidth]"
                      rf"{{paper/{r['scenario']}/flight.png}}\caption{{{r['figure']}: "
                      rf"{_tex(r['claim'])}.}}\end{{figure}}")
     return "\n".join(lines) + "\n"

@@ -105,6 +105,12 @@ def _yaw_T(psi):
     return np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
 
 
+def _position_error(X, rows):
+    """|p - p_ref| per sample (N,); a diverged sample may overflow to inf, quietly."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.linalg.norm(X[:, :3] - rows[:, TABLE["ref"]][:, :3], axis=1)
+
+
 def _first_divergence(x, err, limits):
     """(index, cause) of the first diverged sample, or (None, None)."""
     with np.errstate(invalid="ignore"):
@@ -218,7 +224,7 @@ def _run_compiled(controller, P, table, x0, options, limits, progress):
         evaluate()
         m = min(CHUNK, n_steps - k)
         seg = slice(k, k + m + 1)
-        err = np.linalg.norm(X[seg, :3] - table[seg, TABLE["ref"]][:, :3], axis=1)
+        err = _position_error(X[seg], table[seg])
         idx, _ = _first_divergence(X[seg, :12], err, limits)
         k += m
         if progress:
@@ -295,7 +301,7 @@ def _result(controller, X, U, table, P, duration, limits, path, elapsed):
     t = table[:n, TABLE["t"]]
     ref = table[:n, TABLE["ref"]]
     r_G = table[:n, TABLE["s"], None] * P[11:14] + table[:n, TABLE["r_table"]]
-    err = np.linalg.norm(X[:, :3] - ref[:, :3], axis=1)
+    err = _position_error(X, table[:n])
     idx, cause = _first_divergence(X[:, :12], err, limits)
     if idx is not None and not np.isfinite(X[idx]).all():
         keep = idx              # never hand out NaN arrays: drop the non-finite sample
@@ -405,7 +411,7 @@ def _batch_result(Z, n, table, nc, seconds, limits):
     Z = Z.copy()
     sumsq, emax, sumsq_tail, div_at = Z[nX], Z[nX + 1], Z[nX + 2], Z[nX + 3]
     running = div_at < 0
-    e_final = np.linalg.norm(Z[:3] - table[n, TABLE["ref"]][:3, None], axis=0)
+    e_final = _position_error(Z[:3].T, table[n][None, :])
     for b in np.flatnonzero(running):
         idx, _ = _first_divergence(Z[None, :12, b], e_final[b:b + 1], limits)
         if idx is not None:

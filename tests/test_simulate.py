@@ -88,7 +88,7 @@ def test_user_python_controller():
 @pytest.mark.parametrize("path", ["python", "compiled"])
 def test_divergence_detected_and_named(path):
     cog = CogProfile.step(0.2, (0.06, 0.06, 0.0))
-    res = simulate(AdaptiveFeedbackLinearization(gamma=0.2), "hover", duration=10.0, cog=cog,
+    res = simulate(AdaptiveFeedbackLinearization(gamma=0.2, projection_radius=None), "hover", duration=10.0, cog=cog,
                    path=path)
     m = res.metrics
     assert m.diverged and 0.2 < m.diverged_at < 10.0
@@ -135,7 +135,7 @@ def test_batch_agrees_with_single_flights():
 
 
 def test_batch_reports_divergence():
-    ctl = AdaptiveFeedbackLinearization(gamma=0.2)
+    ctl = AdaptiveFeedbackLinearization(gamma=0.2, projection_radius=None)
     base = quadcog.default_parameters()
     params = np.array([base, quadcog.with_cog(base, (0.06, 0.06, 0.0))])
     res = simulate_batch(ctl, params, "hover", duration=5.0, cog_shape=lambda t: float(t >= 0.2))
