@@ -119,12 +119,15 @@ def _fragment(rows):
     for r in rows:
         lines.append(rf"\paragraph{{{r['figure']}}} {_tex(r['note'])}.")
     lines.append(r"\begin{figure}[htbp]\centering"
-                 r"\includegraphics[width=0.8\linewidth]{paper/cog_step_comparison.png}"
+                 r"\includegraphics[width=0.7\linewidth]{paper/cog_step_comparison.png}"
                  r"\caption{Position error through a CoG step at hover (Figs.~4--6).}\end{figure}")
-    for r in rows:
-        lines.append(rf"\begin{{figure}}[htbp]\centering\includegraphics[width=0.6\linewidth]"
-                     rf"{{paper/{r['scenario']}/flight.png}}\caption{{{r['figure']}: "
-                     rf"{_tex(r['claim'])}.}}\end{{figure}}")
+    for pair in (rows[i:i + 2] for i in range(0, len(rows), 2)):     # two flights per float
+        lines.append(r"\begin{figure}[htbp]\centering")
+        for r in pair:
+            lines.append(rf"\begin{{minipage}}[t]{{0.48\linewidth}}\centering"
+                         rf"\includegraphics[width=\linewidth]{{paper/{r['scenario']}/flight.png}}"
+                         rf"\caption{{{r['figure']}: {_tex(r['claim'])}.}}\end{{minipage}}\hfill")
+        lines.append(r"\end{figure}")
     return "\n".join(lines) + "\n"
 
 
