@@ -203,21 +203,16 @@ def markdown(s):
                "offsets where the closed-loop Jacobian at the step has |lambda| dt > 2.5, so a "
                "diverged run there could be the fixed-step integrator's fault rather than the "
                "controller's (none here).\n")
-    pr = fm.get("adaptive_projection_rerun")
+    pr = fm.get("adaptive_vs_projection")
     if pr:
         out.append(
-            f"Why adaptive FL diverges at the rim: near the admissible boundary the estimate "
-            f"r_hat, on its way to the true r_G, can overshoot out of the admissible set "
-            f"(|r_hat| > {fm['admissible_radius']:.4f} m in the rotor plane; in the run at "
-            f"(3.4, -9.35) cm |r_hat| reached 0.1055 m one step before U blew up), because its "
-            f"projection ball has radius {pr['default_radius']:g} m (the arm length), larger "
-            f"than the admissible radius; M_hat is then singular or indefinite and U blows up. "
-            f"Re-running the {pr['n_points']} offsets adaptive FL failed with "
-            f"projection_radius = {pr['radius']:g} m: {pr['n_diverged']} diverge, "
-            f"{pr['n_failed']} still fail the {fm['threshold']:g} m threshold (tail RMS "
-            f"{_f(pr['min_tail_rms'])}..{_f(pr['max_tail_rms'])} m: the estimate cannot reach "
-            f"an r_G outside its ball). A projection radius below sqrt(min(Ixx, Iyy) / m) turns "
-            f"divergence into a bounded error.\n")
+            f"Where adaptive FL fails: {pr['n_failed']} offsets, |r_G| from "
+            f"{pr['min_failed_radius']:.4f} to {pr['max_failed_radius']:.4f} m; "
+            f"{pr['n_beyond']} of them lie beyond its projection radius "
+            f"{pr['radius']:.4f} m, which the estimate cannot leave, so a bounded error remains "
+            f"there. The radius is capped inside the admissible set because an estimate "
+            f"outside it makes M_hat singular: with the arm length (0.17 m) as the radius, the "
+            f"law diverged at the rim of this map.\n")
     return "\n".join(out)
 
 
