@@ -19,7 +19,7 @@ from .errors import InputError
 from .params import default_parameters
 from .plant import TruthOptions
 from .progress import ProgressBar
-from .simulate import Limits, simulate
+from .simulate import Limits, simulate, start_at_reference
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, Helix, Hover
 
@@ -87,10 +87,8 @@ class Scenario:
         params = default_parameters(**self.vehicle)
         x0 = None
         if any(self.initial_offset):
-            ref0 = self.trajectory(0.0)
-            x0 = np.zeros(12)
-            x0[:3] = ref0[:3] + np.asarray(self.initial_offset)
-            x0[5] = ref0[12]
+            x0 = start_at_reference(self.trajectory(0.0))
+            x0[:3] += np.asarray(self.initial_offset)
         return simulate(self.make_controller(), self.trajectory, duration=self.duration,
                         dt=self.dt, params=params, cog=self.cog, disturbances=self.disturbances,
                         truth=self.truth, x0=x0, path=self.path, limits=self.limits,

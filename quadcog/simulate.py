@@ -74,7 +74,8 @@ def check_step_size(controller, x0, ref0, P, dt, options):
                          f"magnitude {fastest:.3g} 1/s, and RK4 needs dt < {RK4_LIMIT / fastest:.3g} s")
 
 
-def _prepare(controller, trajectory, duration, dt, params, cog, disturbances, x0):
+def _prepare(trajectory, duration, dt, params, cog, disturbances, x0):
+    """Validate the run's inputs and tabulate them: (trajectory, P, step table, x0)."""
     _check_time(duration, dt)
     trajectory = as_trajectory(trajectory)
     P = default_parameters() if params is None else check_parameters(params, "params")
@@ -90,19 +91,20 @@ def _prepare(controller, trajectory, duration, dt, params, cog, disturbances, x0
                          f"params with the CoG of cog change {i} (r = {list(change.r)} m)")
     table = step_table(times, dt, refs, r_tab, wrench_table(disturbances, times),
                        tail_from=0.75 * duration)
-    if x0 is None:
-        x0 = np.zeros(12)
-        x0[:3], x0[5] = refs[0, POS], refs[0, YAW]
-        x0[6:9] = _yaw_T(refs[0, YAW]) @ refs[0, VEL]
-    x0 = np.asarray(x0, dtype=float)
+    x0 = start_at_reference(refs[0]) if x0 is None else np.asarray(x0, dtype=float)
     if x0.shape != (12,) or not np.isfinite(x0).all():
         raise InputError(f"x0 must be 12 finite numbers, got {x0!r}")
     return trajectory, P, table, x0
 
 
-def _yaw_T(psi):
-    c, s = np.cos(psi), np.sin(psi)
-    return np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+def start_at_reference(ref):
+    """The state (12,) on the reference row ``ref`` (14,): its position and heading, level,
+    moving with its velocity (expressed in body axes)."""
+    x0 = np.zeros(12)
+    x0[:3], x0[5] = ref[POS], ref[YAW]
+    c, s = np.cos(ref[YAW]), np.sin(ref[YAW])
+    x0[6:9] = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]]) @ ref[VEL]
+    return x0
 
 
 def _position_error(X, rows):
@@ -165,8 +167,7 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=1e-3, params=None
     if not is_law and not (path == "python" and callable(controller)):
         raise InputError("controller must be a quadcog Controller, or a callable U = ctrl(t, x) "
                          f"with path='python'; got {controller!r}")
-    trajectory, P, table, x0 = _prepare(controller if is_law else None, trajectory, duration,
-                                        dt, params, cog, disturbances, x0)
+    trajectory, P, table, x0 = _prepare(trajectory, duration, dt, params, cog, disturbances, x0)
     if check_dt and is_law:
         check_step_size(controller, x0, table[0, TABLE["ref"]], truth_parameters(P, table[0]),
                         dt, options)
@@ -366,9 +367,7 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-
     table = step_table(times, dt, refs, np.zeros((n + 1, 3)), wrench_table(disturbances, times),
                        tail_from=0.75 * duration)
     table[:, TABLE["s"]] = s
-    x0 = np.zeros(12)
-    x0[:3], x0[5] = refs[0, POS], refs[0, YAW]
-    x0[6:9] = _yaw_T(refs[0, YAW]) @ refs[0, VEL]
+    x0 = start_at_reference(refs[0])
     B = params.shape[0]
     key = ("batch", _controller_key(controller), options, limits, CHUNK)
 
