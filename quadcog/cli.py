@@ -22,6 +22,12 @@ def main(argv=None):
                          help="failure-map points per axis (default 41)")
     args = ap.parse_args(argv)
     try:
+        if getattr(args, "out", None) is not None:
+            try:
+                args.out.mkdir(parents=True, exist_ok=True)
+            except OSError as e:
+                raise QuadcogError(f"--out {args.out}: cannot create the folder "
+                                   f"({e.strerror})") from None
         if args.command == "tour":
             from .tour import tour
             tour()
@@ -36,6 +42,9 @@ def main(argv=None):
             analyze(args.out, grid=args.grid)
     except QuadcogError as e:
         print(f"quadcog: error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"quadcog: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
         return 2
     return 0
 

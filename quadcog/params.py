@@ -67,7 +67,8 @@ def check_parameters(p, name="p"):
     eig = np.linalg.eigvalsh(inertia_about_cog(p))
     if eig[0] <= 0:
         raise ParameterError(
-            f"{name}: r_G = {p[R_G].tolist()} m is too far from O for m = {p[IDX['m']]} kg and "
-            f"I_O = diag{tuple(p[IDX['Ixx']:IDX['Izz'] + 1])}: the inertia about the CoG has "
+            f"{name}: r_G = {p[R_G].tolist()} m is too far from O for m = {p[IDX['m']]:g} kg and "
+            f"I_O = diag({', '.join(f'{v:g}' for v in p[IDX['Ixx']:IDX['Izz'] + 1])}): the "
+            f"inertia about the CoG has "
             f"eigenvalue {eig[0]:.3g} (expected > 0), so M is not positive definite")
     return p

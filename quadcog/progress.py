@@ -13,9 +13,10 @@ class ProgressBar:
         self._t0 = time.perf_counter()
         self._live = getattr(self.stream, "isatty", lambda: False)()
         self._fraction = 0.0
+        self._called = False
 
     def __call__(self, fraction):
-        self._fraction = fraction
+        self._fraction, self._called = fraction, True
         if not self._live:
             return
         now = time.perf_counter()
@@ -28,7 +29,9 @@ class ProgressBar:
         self.stream.flush()
 
     def close(self):
-        """Print the final state of the bar and end the line."""
+        """Print the final state of the bar and end the line (nothing if never called)."""
+        if not self._called:
+            return
         self._live, self._last = True, 0.0
         self(self._fraction)
         self.stream.write("\n")

@@ -208,6 +208,9 @@ def parse(data, source="<scenario>"):
     cog, pulses = _cog_changes(data, source), _disturbances(data, source)
     try:
         default_parameters(**vehicle)             # admissible vehicle, checked now
+    except InputError as e:
+        raise ScenarioError(f"{source}: key 'vehicle': {e}") from None
+    try:
         return Scenario(
             name=data["name"], controller=controller, duration=float(data["duration"]),
             dt=float(data.get("dt", 1e-3)), description=data.get("description", ""),
@@ -224,12 +227,18 @@ def parse(data, source="<scenario>"):
 def load_scenario(path):
     """Read and validate a scenario file."""
     path = Path(path)
+    if path.is_dir():
+        raise ScenarioError(f"{path}: is a folder, not a scenario file")
     if not path.is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise ScenarioError(f"{path}: not valid TOML ({e})") from None
+    except UnicodeDecodeError as e:
+        raise ScenarioError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
+    except OSError as e:
+        raise ScenarioError(f"{path}: cannot be read ({e.strerror})") from None
     return parse(data, str(path))
 
 
@@ -269,7 +278,12 @@ def run_with_progress(scenario, label=None, progress=True):
 def run_file(path, out, progress=True):
     """`quadcog run`: load, simulate with a progress bar, write the outputs; returns metrics."""
     scenario = load_scenario(path)
-    result = run_with_progress(scenario, progress=progress)
+    try:
+        result = run_with_progress(scenario, progress=progress)
+    except ScenarioError:
+        raise
+    except InputError as e:                 # e.g. dt too large for the closed loop
+        raise ScenarioError(f"{scenario.source}: {e}") from None
     metrics = write_outputs(result, scenario, out)
     status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_cause']})"
               if metrics["diverged"] else

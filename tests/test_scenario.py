@@ -115,3 +115,32 @@ def test_run_command_error_names_file(tmp_path):
                               "HOME": str(Path.home())})
     assert res.returncode == 2
     assert "broken.toml: key 'duration': expected a positive number" in res.stderr
+
+
+def test_unreadable_inputs(tmp_path):
+    folder = tmp_path / "dir.toml"
+    folder.mkdir()
+    with pytest.raises(ScenarioError, match="is a folder, not a scenario file"):
+        load_scenario(folder)
+    latin = tmp_path / "latin.toml"
+    latin.write_bytes(b'name = "\xff"\n')
+    with pytest.raises(ScenarioError, match="latin.toml: not UTF-8 text"):
+        load_scenario(latin)
+
+
+def test_cli_bad_out_folder(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    res = subprocess.run([sys.executable, "-m", "quadcog", "run", str(scenario_path("fig3a")),
+                          "--out", str(blocker / "sub")], cwd=ROOT, capture_output=True,
+                         text=True, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                                         "HOME": str(Path.home())})
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert "--out" in res.stderr and "cannot create the folder" in res.stderr
+
+
+def test_run_time_error_names_the_file(tmp_path):
+    src = tmp_path / "coarse.toml"
+    src.write_text('name = "c"\ncontroller = "fl"\nduration = 2.0\ndt = 0.5\n')
+    with pytest.raises(ScenarioError, match=r"coarse.toml: dt = 0.5 s is too large"):
+        run_file(src, tmp_path / "o", progress=False)
