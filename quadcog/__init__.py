@@ -14,7 +14,8 @@ from .controllers import (AdaptiveFeedbackLinearization, CascadePD, Controller,
                           FeedbackLinearization, make_controller)
 from .plant import TruthOptions, mixer_matrix
 from .result import Metrics, SimulationResult
-from .simulate import BatchResult, Limits, simulate, simulate_batch
+from .batch import BatchResult, simulate_batch
+from .simulate import Limits, simulate
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
 

@@ -1,5 +1,6 @@
-"""Closed-loop simulation: a Python step loop (any controller) and a one-call compiled path
-(the closed-loop step mapaccum'd over chunks of steps, compiled), plus batches."""
+"""Closed-loop simulation of one flight: a Python step loop (any controller) and a one-call
+compiled path (the closed-loop step mapaccum'd over chunks of steps, compiled). Batches of
+flights are in ``quadcog.batch``."""
 from dataclasses import dataclass
 import math
 import time
@@ -7,7 +8,7 @@ import time
 import casadi as ca
 import numpy as np
 
-from .closed_loop import (TABLE, TABLE_SIZE, closed_loop_step, monitored_step, step_table,
+from .closed_loop import (TABLE, TABLE_SIZE, closed_loop_step, step_table,
                           truth_parameters)
 from .compiled import compile_function
 from .controllers.base import Controller
@@ -322,111 +323,3 @@ def _result(controller, X, U, table, P, duration, limits, path, elapsed):
     name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))
     return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,
                             controller=name, path=path, info={"seconds": elapsed})
-
-
-@dataclass
-class BatchResult:
-    """Metrics of many flights (arrays with one entry per flight, lengths in m, times in s)."""
-    rms_position_error: np.ndarray
-    max_position_error: np.ndarray
-    rms_position_error_tail: np.ndarray
-    final_position_error: np.ndarray
-    diverged: np.ndarray
-    diverged_at: np.ndarray           # NaN where the flight did not diverge
-    final_state: np.ndarray           # (B, 12 + n_state)
-    seconds: float
-
-
-def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-3,
-                   cog_shape=None, disturbances=(), truth=None, limits=None, threads=2,
-                   progress=None):
-    """Fly one controller over many truth parameter sets ``params`` (B, 14) in parallel.
-
-    Flight b's CoG at time t is ``cog_shape(t) * r_G(params[b])``: cog_shape is a function of
-    time, a CogProfile whose x component is used as the shape, or None (the CoG is there from
-    t = 0). Keeps metrics, not trajectories. ``threads`` CasADi threads share the flights.
-    """
-    options = truth or TruthOptions()
-    limits = limits or Limits()
-    params = np.atleast_2d(np.asarray(params, dtype=float))
-    if params.ndim != 2 or params.shape[1] != 14:
-        raise InputError(f"params must have shape (B, 14), got {params.shape}")
-    for b, p in enumerate(params):
-        check_parameters(p, f"params[{b}]")
-    _check_time(duration, dt)
-    traj = as_trajectory(trajectory)
-    n = int(round(duration / dt))
-    times = np.arange(n + 1) * dt
-    refs = traj.sample(times)
-    if cog_shape is None:
-        s = np.ones_like(times)
-    elif isinstance(cog_shape, CogProfile):
-        s = cog_shape.sample(times)[:, 0]
-    else:
-        s = np.array([float(cog_shape(t)) for t in times])
-    table = step_table(times, dt, refs, np.zeros((n + 1, 3)), wrench_table(disturbances, times),
-                       tail_from=0.75 * duration)
-    table[:, TABLE["s"]] = s
-    x0 = start_at_reference(refs[0])
-    B = params.shape[0]
-    key = ("batch", _controller_key(controller), options, limits, CHUNK)
-
-    def build():
-        step = monitored_step(controller, options, limits)
-        acc = step.mapaccum("monitored_chunk", CHUNK)
-        Z, P, rows = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("P", 14), \
-            ca.MX.sym("rows", TABLE_SIZE, CHUNK)
-        return ca.Function("monitored_last", [Z, P, rows], [acc(Z, P, rows)[:, -1]])
-
-    last = _compiled(key, build)
-    # the step table (input 2) is shared by all flights: reduce_in, not B copies
-    mapped = last.map("batch", "thread" if threads > 1 else "serial", B, [2], [])
-    nc = controller.n_state
-    Z = np.zeros((12 + nc + 4, B))
-    Z[:12] = x0[:, None]
-    Z[12:12 + nc] = controller.initial_state()[:, None]
-    Z[-1] = -1.0
-    t0 = time.perf_counter()
-    k = 0
-    while k < n:
-        rows = table[k:k + CHUNK]
-        if rows.shape[0] < CHUNK:
-            # pad with rows that change nothing: dt = 0 and no contribution to the sums
-            pad = np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)
-            pad[:, TABLE["dt"]] = 0.0
-            rows = np.vstack([rows, pad])
-        Z = np.array(mapped(Z, params.T, rows.T))
-        k += min(CHUNK, n - k)
-        if progress:
-            progress(k / n)
-    seconds = time.perf_counter() - t0
-    return _batch_result(Z, n, table, nc, seconds, limits)
-
-
-def _batch_result(Z, n, table, nc, seconds, limits):
-    """Metrics over the samples t_0 .. t_n, as for a single flight: the steps accumulated
-    t_0 .. t_{n-1}; the final state is added here."""
-    nX = 12 + nc
-    Z = Z.copy()
-    sumsq, emax, sumsq_tail, div_at = Z[nX], Z[nX + 1], Z[nX + 2], Z[nX + 3]
-    running = div_at < 0
-    e_final = _position_error(Z[:3].T, table[n][None, :])
-    for b in np.flatnonzero(running):
-        idx, _ = _first_divergence(Z[None, :12, b], e_final[b:b + 1], limits)
-        if idx is not None:
-            div_at[b] = table[n, TABLE["t"]]
-            continue
-        sumsq[b] += e_final[b] ** 2
-        sumsq_tail[b] += e_final[b] ** 2
-        emax[b] = max(emax[b], e_final[b])
-    n_tail = int(table[:n, TABLE["tail"]].sum()) + 1
-    diverged = div_at >= 0
-    dt = table[0, TABLE["dt"]]
-    samples = np.where(diverged, np.maximum(np.round(div_at / dt), 1), n + 1)
-    rms = np.sqrt(sumsq / samples)
-    return BatchResult(rms_position_error=rms, max_position_error=emax,
-                       rms_position_error_tail=np.where(diverged, np.inf,
-                                                        np.sqrt(sumsq_tail / max(n_tail, 1))),
-                       final_position_error=e_final,
-                       diverged=diverged, diverged_at=np.where(diverged, div_at, np.nan),
-                       final_state=Z[:nX].T, seconds=seconds)

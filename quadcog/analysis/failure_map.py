@@ -9,7 +9,8 @@ from ..controllers import AdaptiveFeedbackLinearization, CascadePD, FeedbackLine
 from ..controllers.adaptive import admissible_estimate_radius
 from ..errors import ParameterError
 from ..params import ARM_LENGTH, check_parameters, default_parameters, inertia_about_cog, with_cog
-from ..simulate import RK4_LIMIT, simulate_batch
+from ..batch import simulate_batch
+from ..simulate import RK4_LIMIT
 from ..trajectory import Hover
 
 THRESHOLD = 0.5          # m: tail RMS above this (or a diverged run) counts as a failure
