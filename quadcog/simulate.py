@@ -19,7 +19,7 @@ from .params import check_parameters, default_parameters, with_cog
 from .plant import TruthOptions, plant_step_function
 from .result import Metrics, SimulationResult, position_metrics
 from .timeline import CogProfile, wrench_table
-from .trajectory import POS, VEL, YAW, as_trajectory
+from .trajectory import POS, REF_SIZE, VEL, YAW, as_trajectory
 
 CHUNK = 1000          # steps per compiled call
 RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region with margin
@@ -59,16 +59,24 @@ def _check_time(duration, dt):
         raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
 
 
+def _closed_loop_jacobian(controller):
+    """Function (x, ref, P) -> d/dx f(x, U(t=0, x, ref, c0)), built once per controller."""
+    J = getattr(controller, "_closed_loop_jacobian", None)
+    if J is None:
+        x, ref, P = ca.SX.sym("x", 12), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("P", 14)
+        U, _ = controller.function()(0.0, x, ref, controller.initial_state())
+        f = controller.model.casadi_function("truth_dynamics")
+        J = ca.Function("closed_loop_jacobian", [x, ref, P],
+                        [ca.jacobian(f(x, U, P, ca.DM.zeros(3), ca.DM.zeros(6)), x)])
+        controller._closed_loop_jacobian = J
+    return J
+
+
 def check_step_size(controller, x0, ref0, P, dt, options):
     """Raise InputError if RK4 with step dt is unstable for the closed loop at the start.
 
     The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from CasADi AD."""
-    x = ca.SX.sym("x", 12)
-    c0 = controller.initial_state()
-    U, _ = controller.function()(0.0, x, ref0, c0)
-    f = controller.model.casadi_function("truth_dynamics")
-    J = ca.Function("J", [x], [ca.jacobian(f(x, U, P, ca.DM.zeros(3), ca.DM.zeros(6)), x)])
-    lam = np.linalg.eigvals(np.array(J(x0)))
+    lam = np.linalg.eigvals(np.array(_closed_loop_jacobian(controller)(x0, ref0, P)))
     fastest = float(np.max(np.abs(lam)))
     if fastest * dt > RK4_LIMIT:
         raise InputError(f"dt = {dt} s is too large: the closed loop has an eigenvalue of "
