@@ -13,7 +13,7 @@ import tomllib
 
 import numpy as np
 
-from .controllers import BY_NAME
+from .controllers import BY_NAME, make_controller
 from .conventions import PARAM_NAMES, STATE_NAMES
 from .errors import InputError
 from .params import default_parameters
@@ -80,7 +80,7 @@ class Scenario:
             params["Q"] = np.eye(8) * params.pop("Q_scale")
         if params.get("projection_radius") is False:
             params["projection_radius"] = None
-        return BY_NAME[self.controller](nominal=nominal, **params)
+        return make_controller(self.controller, nominal=nominal, **params)
 
     def run(self, progress=None):
         """Simulate; returns a quadcog SimulationResult."""
