@@ -1,5 +1,6 @@
 """Lie derivatives for the outputs y = h(x) = [z, phi, theta, psi]; relative degree,
-decoupling matrix alpha = L_g L_f h and drift b = L_f^2 h (paper sec. 3.2, MODEL.md item 4)."""
+decoupling matrix alpha = L_g L_f h and drift b = L_f^2 h (paper sec. 3.2,
+docs/model.md sec. 2.4)."""
 from dataclasses import dataclass
 import random
 

@@ -17,7 +17,8 @@ NU_DOT = sp.Matrix(sp.symbols("udot vdot wdot pdot qdot rdot", real=True))
 
 @dataclass(frozen=True)
 class RigidBody:
-    """The terms of M nu_dot + C(nu) nu + D nu + g_G(eta) = B_u U (MODEL.md, paper eq. 3)."""
+    """The terms of M nu_dot + C(nu) nu + D nu + g_G(eta) = B_u U (docs/model.md sec. 1.3;
+    paper eq. 3)."""
 
     newton_euler: sp.Matrix   # left-hand side of the two axioms, 6x1, in nu_dot and nu
     M: sp.Matrix              # 6x6 mass matrix
@@ -26,7 +27,7 @@ class RigidBody:
     g_G: sp.Matrix            # 6x1 gravity forces and moments
     B_u: sp.Matrix            # 6x4 input matrix
     f_G: sp.Matrix            # 3x1 weight in body axes
-    I_O: sp.Matrix            # 3x3 inertia about O (held constant, MODEL.md)
+    I_O: sp.Matrix            # 3x3 inertia about O (held constant, docs/model.md sec. 1.3)
     I_G: sp.Matrix            # 3x3 inertia about the CoG, I_O - m (|r|^2 I - r r^T)
 
 
@@ -68,7 +69,7 @@ def rigid_body(R, I_O=None):
     D = sp.diag(c_x, c_y, c_z, c_phi, c_theta, c_psi)
     f_G = R.T * sp.Matrix([0, 0, -m * g])
     g_G = -sp.Matrix.vstack(f_G, r_G.cross(f_G))
-    # Thrust U1 along body z at O, moments U2..U4 about O (MODEL.md item 2).
+    # Thrust U1 along body z at O, moments U2..U4 about O (docs/model.md sec. 2.2).
     B_u = sp.Matrix.vstack(sp.zeros(2, 4), sp.eye(4))
     I_G = (I_O - m * ((r_G.T * r_G)[0] * sp.eye(3) - r_G * r_G.T)).applyfunc(sp.expand)
     body = RigidBody(lhs, M, C, D, g_G, B_u, f_G, I_O, I_G)

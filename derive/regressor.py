@@ -1,4 +1,4 @@
-"""The regressor Phi = d/dr_G [M vartheta + C(nu) nu + g_G(eta)] (MODEL.md item 5)."""
+"""The regressor Phi = d/dr_G [M vartheta + C(nu) nu + g_G(eta)] (docs/model.md sec. 3.1)."""
 from .symbols import nu, r_G, vartheta
 
 

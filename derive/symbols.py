@@ -1,4 +1,4 @@
-"""The symbols of the model, in the order fixed by MODEL.md (the public contract)."""
+"""The symbols of the model, in the order of the public contract (docs/model.md sec. 1.2)."""
 import sympy as sp
 
 # State x = [eta1, eta2, nu1, nu2].
@@ -28,8 +28,8 @@ params = sp.Matrix([m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x
 PARAM_NAMES = ("m", "g", "Ixx", "Iyy", "Izz", "c_x", "c_y", "c_z",
                "c_phi", "c_theta", "c_psi", "x_G", "y_G", "z_G")
 
-# Products of inertia about O, for the truth model whose I_O changes with r_G (MODEL.md
-# item 9); the controller's model keeps I_O diagonal.
+# Products of inertia about O, for the truth model whose I_O changes with r_G (docs/model.md
+# sec. 5); the controller's model keeps I_O diagonal.
 Ixy, Ixz, Iyz = sp.symbols("I_xy I_xz I_yz", real=True)
 I_products = sp.Matrix([Ixy, Ixz, Iyz])
 

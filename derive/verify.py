@@ -21,13 +21,12 @@ import casadi as ca
 import numpy as np
 
 import quadcog
-from quadcog.conventions import FUNCTIONS, IDX
+from quadcog.conventions import (B_U, FUNCTIONS, IDX, OUTPUT_ROWS, hover_trim,
+                                 rotation_matrix)
 from quadcog.sampling import random_points
 
 ROOT = Path(__file__).resolve().parent.parent
 SEED = 20110828
-B_U = np.vstack([np.zeros((2, 4)), np.eye(4)])
-OUT_ROWS = [2, 3, 4, 5]            # z, phi, theta, psi in x
 
 
 def relative_error(actual, expected):
@@ -39,13 +38,6 @@ def relative_error(actual, expected):
 
 def skew(a):
     return np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-
-
-def rotation(phi, theta, psi):
-    c, s = np.cos, np.sin
-    return (np.array([[c(psi), -s(psi), 0], [s(psi), c(psi), 0], [0, 0, 1]])
-            @ np.array([[c(theta), 0, s(theta)], [0, 1, 0], [-s(theta), 0, c(theta)]])
-            @ np.array([[1, 0, 0], [0, c(phi), -s(phi)], [0, s(phi), c(phi)]]))
 
 
 def euler_rate_map(phi, theta):
@@ -73,7 +65,7 @@ class Context:
         f = model.casadi_function("dynamics")
         x, U, p = ca.SX.sym("x", 12), ca.SX.sym("U", 4), ca.SX.sym("p", 14)
         xdot = f(x, U, p)
-        y_dot = xdot[OUT_ROWS]
+        y_dot = xdot[list(OUTPUT_ROWS)]
         y_ddot = ca.jtimes(y_dot, x, xdot)
         self.outputs = ca.Function("outputs", [x, U, p], [ca.jacobian(y_dot, U), y_ddot,
                                                           ca.jacobian(y_ddot, U)])
@@ -147,7 +139,7 @@ def _alpha_H(c, pt):
     x, U, p, _ = pt
     phi, theta, psi = x[3:6]
     H = np.zeros((4, 6))
-    H[0, :3], H[1:, 3:] = rotation(phi, theta, psi)[2], euler_rate_map(phi, theta)
+    H[0, :3], H[1:, 3:] = rotation_matrix(phi, theta, psi)[2], euler_rate_map(phi, theta)
     expected = H @ c.model.inverse_mass_matrix(p) @ B_U
     return relative_error(c.model.decoupling(x, p), expected)
 
@@ -175,7 +167,7 @@ def _truth_axioms(c, pt):
     nu1, nu2 = x[6:9], x[9:12]
     a, al = np.split(c.model.truth_dynamics(x, U, p, [Ixy, Ixz, Iyz],
                                             np.concatenate([F_ground, M_body]))[6:], 2)
-    R = rotation(*x[3:6])
+    R = rotation_matrix(*x[3:6])
     f_G = R.T @ np.array([0, 0, -m * g])
     force = f_G + [0, 0, U[0]] - damping[:3] * nu1 + R.T @ F_ground
     moment = np.cross(r, f_G) + U[1:] - damping[3:] * nu2 + M_body
@@ -189,11 +181,9 @@ def _truth_axioms(c, pt):
 
 def _hover_trim(c, pt):
     x, U, p, _ = pt
-    m, g, (x_G, y_G, _) = p[0], p[1], p[11:14]
     x0 = np.zeros(12)
     x0[:3], x0[5] = x[:3], x[5]                     # any position and heading, level, at rest
-    trim = [m * g, m * g * y_G, -m * g * x_G, 0]
-    return relative_error(c.model.dynamics(x0, trim, p), np.zeros(12))
+    return relative_error(c.model.dynamics(x0, hover_trim(p), p), np.zeros(12))
 
 
 def _zero_dynamics(c, pt):
@@ -234,24 +224,24 @@ def _min_eig(c, pt):
 
 
 CHECKS = (
-    Check("Structure (MODEL.md)", r"$M = M^T$", 1e-15,
+    Check("Structure", r"$M = M^T$", 1e-15,
           lambda c, pt: relative_error(c.model.mass_matrix(pt[2]), c.model.mass_matrix(pt[2]).T)),
-    Check("Structure (MODEL.md)", r"$M > 0$: smallest eigenvalue (kg\,m$^2$)", 0.0, _min_eig,
+    Check("Structure", r"$M > 0$: smallest eigenvalue (kg\,m$^2$)", 0.0, _min_eig,
           "min"),
-    Check("Structure (MODEL.md)", r"$M = [mI, -mS(r_G);\ mS(r_G), I_O]$", 1e-14,
+    Check("Structure", r"$M = [mI, -mS(r_G);\ mS(r_G), I_O]$", 1e-14,
           _mass_matrix_definition),
-    Check("Structure (MODEL.md)", r"$M^{-1}M = I$ (\code{inverse\_mass\_matrix})", 1e-12,
+    Check("Structure", r"$M^{-1}M = I$ (\code{inverse\_mass\_matrix})", 1e-12,
           lambda c, pt: relative_error(c.model.inverse_mass_matrix(pt[2])
                                        @ c.model.mass_matrix(pt[2]), np.eye(6))),
-    Check("Structure (MODEL.md)", r"$C(\nu) + C(\nu)^T = 0$", 1e-14,
+    Check("Structure", r"$C(\nu) + C(\nu)^T = 0$", 1e-14,
           lambda c, pt: relative_error(c.model.coriolis(pt[0], pt[2])
                                        + c.model.coriolis(pt[0], pt[2]).T, np.zeros((6, 6)))),
-    Check("Structure (MODEL.md)", r"$D = \operatorname{diag}(c)$", 1e-15,
+    Check("Structure", r"$D = \operatorname{diag}(c)$", 1e-15,
           lambda c, pt: relative_error(c.model.damping(pt[2]), np.diag(pt[2][5:11]))),
-    Check("Structure (MODEL.md)",
+    Check("Structure",
           r"$M\dot\nu + C\nu + D\nu + g_G = B_u U$, $\dot\nu$ from \code{dynamics}", 1e-11,
           _equations_of_motion),
-    Check("Structure (MODEL.md)", r"$F_z$ row with $y_G(rq + \dot p)$ (item 1)", 1e-11, _z_row),
+    Check("Structure", r"$F_z$ row with $y_G(rq + \dot p)$ (item 1)", 1e-11, _z_row),
     Check("Regressor", r"$M\vartheta + C\nu + g_G - (\cdot)|_{r_G = 0} = \Phi r_G$ (item 5)",
           1e-12, _regressor_identity),
     Check("Regressor", r"$\Phi$ independent of $r_G$", 1e-13, _regressor_independent),

@@ -4,7 +4,10 @@
 ``coriolis``, ``damping``, ``gravity``, ``regressor``, ``decoupling``, ``drift``,
 ``linearization``) as fast numpy callables. This package never imports SymPy.
 """
-from .conventions import FUNCTIONS, INPUT_NAMES, OUTPUT_NAMES, PARAM_NAMES, STATE_NAMES
+from . import config
+from .catalog import scenario_names, scenario_path, shipped_scenarios
+from .conventions import (B_U, FUNCTIONS, INPUT_NAMES, OUTPUT_NAMES, OUTPUT_ROWS, PARAM_NAMES,
+                          STATE_NAMES, hover_trim, rotation_matrix)
 from .errors import (CompileError, EulerSingularityError, GeneratedFilesError, InputError,
                      ParameterError, QuadcogError, QuadcogWarning)
 from .model import Linearization, Model, load

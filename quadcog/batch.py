@@ -6,12 +6,14 @@ import time
 import casadi as ca
 import numpy as np
 
+from . import config
 from .closed_loop import TABLE, TABLE_SIZE, monitored_step, step_table
 from .errors import InputError
 from .params import check_parameters
 from .plant import TruthOptions
 from .simulate import (CHUNK, Limits, _check_time, _compiled, _controller_key,
-                       _first_divergence, _position_error, start_at_reference)
+                       _first_divergence, _position_error, start_at_reference,
+                       tail_start)
 from .timeline import CogProfile, wrench_table
 from .trajectory import as_trajectory
 
@@ -29,7 +31,7 @@ class BatchResult:
     seconds: float
 
 
-def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-3,
+def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=None,
                    cog_shape=None, disturbances=(), truth=None, limits=None, threads=2,
                    progress=None):
     """Fly one controller over many truth parameter sets ``params`` (B, 14) in parallel.
@@ -40,6 +42,7 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-
     """
     options = truth or TruthOptions()
     limits = limits or Limits()
+    dt = config.get("simulate.dt", dt)
     params = np.atleast_2d(np.asarray(params, dtype=float))
     if params.ndim != 2 or params.shape[1] != 14:
         raise InputError(f"params must have shape (B, 14), got {params.shape}")
@@ -57,7 +60,7 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=1e-
     else:
         s = np.array([float(cog_shape(t)) for t in times])
     table = step_table(times, dt, refs, np.zeros((n + 1, 3)), wrench_table(disturbances, times),
-                       tail_from=0.75 * duration)
+                       tail_from=tail_start(duration))
     table[:, TABLE["s"]] = s
     x0 = start_at_reference(refs[0])
     B = params.shape[0]

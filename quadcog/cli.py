@@ -1,4 +1,4 @@
-"""The `quadcog` command: tour, run, paper, analyze."""
+"""The `quadcog` command: tour, scenarios, run, paper, analyze."""
 import argparse
 from pathlib import Path
 import sys
@@ -10,8 +10,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="quadcog", description="quadrotor with a moving CoG")
     sub = ap.add_subparsers(dest="command", required=True)
     sub.add_parser("tour", help="evaluate the generated functions at hover and print them")
-    run = sub.add_parser("run", help="run one scenario file (TOML)")
-    run.add_argument("scenario", type=Path, help="scenario file, see README 'Scenario files'")
+    sub.add_parser("scenarios", help="list the shipped scenarios with their descriptions")
+    run = sub.add_parser("run", help="run one scenario: a file (TOML) or a shipped name")
+    run.add_argument("scenario", help="scenario file (see README 'Scenario files') or the name "
+                                      "of a shipped one (`quadcog scenarios` lists them)")
     run.add_argument("--out", type=Path, required=True, help="folder for metrics, CSV, plots")
     paper = sub.add_parser("paper", help="reproduce the paper's figures and claims")
     paper.add_argument("--out", type=Path, required=True, help="output folder")
@@ -31,6 +33,12 @@ def main(argv=None):
         if args.command == "tour":
             from .tour import tour
             tour()
+        elif args.command == "scenarios":
+            from .catalog import shipped_scenarios
+            scenarios = shipped_scenarios()
+            width = max(map(len, scenarios), default=0)
+            for name, description in scenarios.items():
+                print(f"{name:<{width}}  {description}")
         elif args.command == "run":
             from .scenario import run_file
             run_file(args.scenario, args.out)

@@ -1,11 +1,12 @@
 """`quadcog paper`: the paper's figures as scenarios, each claim as numbers and a verdict."""
 from dataclasses import dataclass
-from importlib import resources
 import json
 from pathlib import Path
 
 import numpy as np
 
+from . import config
+from .catalog import scenario_path
 from .scenario import load_scenario, run_with_progress, write_outputs
 
 TRACKS = 0.05        # m: tail RMS under which a balanced run "tracks" (Fig. 3)
@@ -37,11 +38,6 @@ CLAIMS = (
     Claim("Fig. 8", "fig8", "Adaptive FL is robust to disturbance forces and moments while the "
           "CoG changes", "recovers"),
 )
-
-
-def scenario_path(name):
-    """Path of a built-in scenario file (copy it to edit it)."""
-    return Path(str(resources.files("quadcog") / "scenarios" / f"{name}.toml"))
 
 
 def _estimate_ok(m):
@@ -155,8 +151,8 @@ def run_paper(out, progress=True):
     md = ["# The paper's claims, reproduced", "",
           f"Thresholds: tracks = tail RMS < {100 * TRACKS:.0f} cm; fails = tail RMS > "
           f"{100 * FAILS:.0f} cm or diverged; recovers = tail RMS < {100 * RECOVERS:.0f} cm with "
-          "x_G, y_G estimates within 10 % (or 3 mm for a zero component). Tail = last 25 % of "
-          "the run.", "",
+          "x_G, y_G estimates within 10 % (or 3 mm for a zero component). Tail = last "
+          f"{100 * config.defaults['metrics.tail_fraction']:g} % of the run.", "",
           "| figure | claim | controller | RMS (m) | max (m) | tail RMS (m) | diverged | holds | "
           "note |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:

@@ -1,12 +1,13 @@
-"""Parameter vectors p (MODEL.md order), the default vehicle, and admissibility checks."""
+"""Parameter vectors p (order: docs/model.md sec. 1.2), the default vehicle (sec. 6), and
+admissibility checks (sec. 1.4)."""
 import numpy as np
 
 from .conventions import IDX, N_PARAM, PARAM_NAMES, R_G
 from .errors import InputError, ParameterError
 
-# AscTec Hummingbird as in the ETH RotorS simulator (MODEL.md). The drag coefficients are
-# this project's own choice (the paper gives no numbers): small linear drag, so that the
-# zero dynamics decay slowly (c_x / m = 0.15 1/s).
+# AscTec Hummingbird as in the ETH RotorS simulator (docs/model.md sec. 6). The drag
+# coefficients are this project's own choice (the paper gives no numbers): small linear
+# drag, so that the zero dynamics decay slowly (c_x / m = 0.15 1/s).
 HUMMINGBIRD = {
     "m": 0.68, "g": 9.81, "Ixx": 0.007, "Iyy": 0.007, "Izz": 0.012,
     "c_x": 0.1, "c_y": 0.1, "c_z": 0.1, "c_phi": 0.001, "c_theta": 0.001, "c_psi": 0.001,

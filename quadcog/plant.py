@@ -24,7 +24,7 @@ MAX_ROTOR_THRUST = THRUST_CONSTANT * MAX_ROTOR_SPEED ** 2     # N, about 6.0 N p
 
 @dataclass(frozen=True)
 class TruthOptions:
-    """Effects the controller's model leaves out (MODEL.md item 9).
+    """Effects the controller's model leaves out (docs/model.md sec. 5).
 
     parallel_axis: I_O = I_G + m (|r_G|^2 I - r_G r_G^T) follows the moving mass, I_G being
         the diagonal of p (the inertia about the CoG when r_G = 0).

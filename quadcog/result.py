@@ -3,10 +3,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import config
+
 
 @dataclass
 class Metrics:
-    """Position-error metrics in m; ``diverged_at`` in s or None; the tail is the last 25 %."""
+    """Position-error metrics in m; ``diverged_at`` in s or None; the tail is the last
+    ``quadcog.config.defaults["metrics.tail_fraction"]`` of the run (25 %)."""
     rms_position_error: float
     max_position_error: float
     final_position_error: float
@@ -22,8 +25,10 @@ class Metrics:
         return dict(self.__dict__)
 
 
-def position_metrics(t, x, ref, duration, tail_fraction=0.25):
-    """Metrics of the position error ||p - p_ref|| sampled at ``t``."""
+def position_metrics(t, x, ref, duration, tail_fraction=None):
+    """Metrics of the position error ||p - p_ref|| sampled at ``t``; the tail is the last
+    ``tail_fraction`` of ``duration`` (default: ``config.defaults["metrics.tail_fraction"]``)."""
+    tail_fraction = config.get("metrics.tail_fraction", tail_fraction)
     with np.errstate(over="ignore", invalid="ignore"):     # a diverged run's last sample
         e = np.linalg.norm(x[:, :3] - ref[:, :3], axis=1)
     tail = t >= (1 - tail_fraction) * duration - 1e-12

@@ -13,6 +13,8 @@ import tomllib
 
 import numpy as np
 
+from . import config
+from .catalog import scenario_path
 from .controllers import BY_NAME, make_controller
 from .conventions import PARAM_NAMES, STATE_NAMES
 from .errors import InputError
@@ -59,7 +61,7 @@ class Scenario:
     name: str
     controller: str
     duration: float
-    dt: float = 1e-3
+    dt: float = field(default_factory=lambda: config.defaults["simulate.dt"])
     description: str = ""
     path: str = "compiled"
     trajectory: object = field(default_factory=Hover)
@@ -213,20 +215,22 @@ def parse(data, source="<scenario>"):
     try:
         return Scenario(
             name=data["name"], controller=controller, duration=float(data["duration"]),
-            dt=float(data.get("dt", 1e-3)), description=data.get("description", ""),
+            dt=float(data.get("dt", config.defaults["simulate.dt"])), description=data.get("description", ""),
             path=data.get("path", "compiled"), trajectory=cls(**traj), cog=cog,
             disturbances=pulses, vehicle=dict(vehicle), controller_params=dict(cparams),
             truth=TruthOptions(**truth),
-            limits=Limits(limits.get("max_position_error", 10.0),
-                          math.radians(limits.get("max_tilt_deg", 85.0))),
+            limits=Limits(
+                limits.get("max_position_error", config.defaults["limits.max_position_error"]),
+                math.radians(limits.get("max_tilt_deg", config.defaults["limits.max_tilt_deg"]))),
             initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source)
     except InputError as e:
         raise ScenarioError(f"{source}: {e}") from None
 
 
 def load_scenario(path):
-    """Read and validate a scenario file."""
-    path = Path(path)
+    """Read and validate a scenario: a file path or the name of a shipped scenario ("fig6";
+    see ``quadcog.catalog.scenario_path``)."""
+    path = scenario_path(path)
     if path.is_dir():
         raise ScenarioError(f"{path}: is a folder, not a scenario file")
     if not path.is_file():

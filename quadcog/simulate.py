@@ -1,17 +1,19 @@
 """Closed-loop simulation of one flight: a Python step loop (any controller) and a one-call
 compiled path (the closed-loop step mapaccum'd over chunks of steps, compiled). Batches of
 flights are in ``quadcog.batch``."""
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import math
 import time
 
 import casadi as ca
 import numpy as np
 
+from . import config
 from .closed_loop import (TABLE, TABLE_SIZE, closed_loop_step, step_table,
                           truth_parameters)
 from .compiled import compile_function
 from .controllers.base import Controller
+from .conventions import rotation_matrix
 from .errors import EulerSingularityError, InputError
 from .fastcall import FastCall
 from .model import load
@@ -28,9 +30,11 @@ RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region wi
 @dataclass(frozen=True)
 class Limits:
     """When a run counts as diverged: position error over ``max_position_error`` (m) or
-    |phi| or |theta| over ``max_tilt`` (rad)."""
-    max_position_error: float = 10.0
-    max_tilt: float = np.radians(85.0)
+    |phi| or |theta| over ``max_tilt`` (rad). Defaults: ``quadcog.config.defaults``."""
+    max_position_error: float = field(
+        default_factory=lambda: config.defaults["limits.max_position_error"])
+    max_tilt: float = field(
+        default_factory=lambda: math.radians(config.defaults["limits.max_tilt_deg"]))
 
 
 _compiled_cache = {}
@@ -99,11 +103,16 @@ def _prepare(trajectory, duration, dt, params, cog, disturbances, x0):
         check_parameters(with_cog(P, P[11:14] + np.asarray(change.r)),
                          f"params with the CoG of cog change {i} (r = {list(change.r)} m)")
     table = step_table(times, dt, refs, r_tab, wrench_table(disturbances, times),
-                       tail_from=0.75 * duration)
+                       tail_from=tail_start(duration))
     x0 = start_at_reference(refs[0]) if x0 is None else np.asarray(x0, dtype=float)
     if x0.shape != (12,) or not np.isfinite(x0).all():
         raise InputError(f"x0 must be 12 finite numbers, got {x0!r}")
     return trajectory, P, table, x0
+
+
+def tail_start(duration):
+    """Time (s) from which the tail metrics count: the last ``metrics.tail_fraction``."""
+    return (1 - config.defaults["metrics.tail_fraction"]) * duration
 
 
 def start_at_reference(ref):
@@ -111,8 +120,7 @@ def start_at_reference(ref):
     moving with its velocity (expressed in body axes)."""
     x0 = np.zeros(12)
     x0[:3], x0[5] = ref[POS], ref[YAW]
-    c, s = np.cos(ref[YAW]), np.sin(ref[YAW])
-    x0[6:9] = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]]) @ ref[VEL]
+    x0[6:9] = rotation_matrix(0.0, 0.0, ref[YAW]).T @ ref[VEL]
     return x0
 
 
@@ -152,14 +160,15 @@ def _singularity_check(t, x):
             f"kinematics (Q(eta2)) are singular there; lower Limits.max_tilt below 90 deg")
 
 
-def simulate(controller, trajectory="hover", duration=10.0, dt=1e-3, params=None, cog=None,
+def simulate(controller, trajectory="hover", duration=10.0, dt=None, params=None, cog=None,
              disturbances=(), truth=None, x0=None, path="compiled", limits=None,
              progress=None, check_dt=True):
     """Fly one closed-loop run and return a SimulationResult.
 
     controller: a quadcog Controller, or (path="python" only) a callable U = ctrl(t, x).
     trajectory: a Trajectory, 'hover' | 'circle' | 'figure8' | 'helix', or a callable
-        (see quadcog.trajectory). duration, dt: seconds (fixed-step RK4, default 1 ms).
+        (see quadcog.trajectory). duration, dt: seconds (fixed-step RK4; dt defaults to
+        ``quadcog.config.defaults["simulate.dt"]``, 1 ms).
     params: the truth parameters p (14,) (default vehicle); the CoG of the run is
         r_G(params) + cog(t). cog: a CogProfile or a list of (t, r, ramp) changes.
     disturbances: Disturbance pulses. truth: TruthOptions (parallel axis, rotor saturation).
@@ -170,6 +179,7 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=1e-3, params=None
     """
     options = truth or TruthOptions()
     limits = limits or Limits()
+    dt = config.get("simulate.dt", dt)
     if path not in ("compiled", "python"):
         raise InputError(f"path must be 'compiled' or 'python', got {path!r}")
     is_law = isinstance(controller, Controller)

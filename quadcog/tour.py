@@ -1,18 +1,9 @@
 """`quadcog tour`: the generated functions evaluated at hover, as a first look."""
 import numpy as np
 
-from .conventions import IDX, R_G
+from .conventions import R_G, hover_trim
 from .model import load
 from .params import default_parameters
-
-
-def hover_trim(p):
-    """U (4,) holding a level hover with the CoG at r_G (MODEL.md item 7):
-    [m g, m g y_G, -m g x_G, 0]."""
-    p = np.asarray(p, dtype=float)
-    mg = p[IDX["m"]] * p[IDX["g"]]
-    x_G, y_G, _ = p[R_G]
-    return np.array([mg, mg * y_G, -mg * x_G, 0.0])
 
 
 def tour(print_=print):

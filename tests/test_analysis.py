@@ -109,7 +109,7 @@ def test_zero_dynamics_do_not_change_with_r_G(y0):
         assert np.allclose(zd["eigenvalues"], ref["eigenvalues"], atol=1e-10)
         assert np.allclose(zd["zeta_eq"], ref["zeta_eq"], atol=1e-10)
         assert np.max(np.abs(zd["dzeta_dot_dr"])) < 1e-10
-        # ... while the holding moments do change (MODEL.md item 7 at level; a pure z_G
+        # ... while the holding moments do change (docs/model.md sec. 3.3 at level; a pure z_G
         # offset needs no moment at level, and one of m g z_G sin(tilt) tilted)
         if r[0] or r[1]:
             assert np.max(np.abs(zd["U_hold"][1:3] - ref["U_hold"][1:3])) > 0.05

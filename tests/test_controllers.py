@@ -5,11 +5,11 @@ import pytest
 from scipy.linalg import solve_continuous_lyapunov
 
 import quadcog
+from quadcog.conventions import B_U
 from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile,
                      FeedbackLinearization, simulate)
 from conftest import assert_close
 
-B_U = np.vstack([np.zeros((2, 4)), np.eye(4)])
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +68,7 @@ def _tilt(a, psi, g, max_tilt):
 
 def test_adaptive_update_by_hand(model, controllers):
     """r_hat_dot = -Gamma Phi^T B^T P e_s and alpha_hat U + b_hat = v, all rebuilt in numpy
-    from MODEL.md item 6 at 200 random states and estimates (hover reference)."""
+    from docs/model.md sec. 3.2 at 200 random states and estimates (hover reference)."""
     ctl = controllers["adaptive"]
     law = ctl.compiled()
     rng = np.random.default_rng(7)
@@ -128,7 +128,7 @@ def test_adaptive_update_by_hand(model, controllers):
 
 
 def test_error_dynamics_identity(model, controllers):
-    """MODEL.md item 6: y_ddot - v = H M^{-1} Phi(nu, eta, nu_dot_star) (r_hat - r) exactly."""
+    """docs/model.md sec. 3.2: y_ddot - v = H M^{-1} Phi(nu, eta, nu_dot_star) (r_hat - r) exactly."""
     ctl = controllers["adaptive"]
     rng = np.random.default_rng(8)
     for k in range(200):

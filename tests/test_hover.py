@@ -1,8 +1,8 @@
-"""MODEL.md item 7: U = [m g, m g y_G, -m g x_G, 0] holds a level hover with an offset CoG."""
+"""docs/model.md sec. 3.3: U = [m g, m g y_G, -m g x_G, 0] holds a level hover with an offset CoG."""
 import numpy as np
 
 from conftest import assert_close
-from quadcog.tour import hover_trim
+from quadcog.conventions import hover_trim
 
 
 def test_hover_trim_zero_acceleration(model, points):

@@ -1,7 +1,7 @@
 """Independent check of ``quadcog``'s exported dynamics with Kane's method.
 
 The project derives its equations of motion in ``derive/`` as a Newton-Euler model
-``M nu_dot + C(nu) nu + D nu + g_G(eta) = B_u U`` with hand-built matrices (MODEL.md).
+``M nu_dot + C(nu) nu + D nu + g_G(eta) = B_u U`` with hand-built matrices (docs/model.md sec. 1.3).
 This file re-derives the same physical system from scratch with
 ``sympy.physics.mechanics.KanesMethod`` and compares the state derivative numerically with
 ``quadcog.load().dynamics`` at a few hundred random, admissible points. It imports nothing
@@ -31,7 +31,7 @@ Acceptance criterion (per component of x_dot, at every point):
 relative error ``|a - b| / (1 + |b|)``, its component and the index of the worst point.
 
 A negative control re-introduces the paper's z-row typo (``y_G (r q - p_dot)`` instead of
-``y_G (r q + p_dot)``, MODEL.md item 1) into the Kane reference and checks that the same
+``y_G (r q + p_dot)``, docs/model.md sec. 2.1) into the Kane reference and checks that the same
 comparison then fails, so the comparison is sensitive to that error.
 """
 import time
@@ -46,7 +46,7 @@ import quadcog
 N_POINTS = 250
 SEED = 20240611
 RTOL = 1e-9
-# Parameter order of the public contract (MODEL.md), written out here on purpose.
+# Parameter order of the public contract (docs/model.md sec. 1.2), written out here on purpose.
 PARAM_ORDER = ("m", "g", "Ixx", "Iyy", "Izz", "c_x", "c_y", "c_z",
                "c_phi", "c_theta", "c_psi", "x_G", "y_G", "z_G")
 STATE_ORDER = ("x", "y", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")

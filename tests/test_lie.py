@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import quadcog
+from quadcog.conventions import B_U, OUTPUT_ROWS
 from conftest import assert_close
 
-OUT_ROWS = [2, 3, 4, 5]
 
 
 @pytest.fixture(scope="module")
@@ -16,7 +16,7 @@ def output_acceleration(model):
     f = model.casadi_function("dynamics")
     x, U, p = ca.SX.sym("x", 12), ca.SX.sym("U", 4), ca.SX.sym("p", 14)
     xdot = f(x, U, p)
-    y_dot = xdot[OUT_ROWS]
+    y_dot = xdot[list(OUTPUT_ROWS)]
     y_ddot = ca.jtimes(y_dot, x, xdot)
     return ca.Function("yfun", [x, U, p], [ca.jacobian(y_dot, U), y_ddot, ca.jacobian(y_ddot, U)])
 
@@ -39,8 +39,7 @@ def test_decoupling_and_drift(model, output_acceleration, points):
 
 
 def test_decoupling_matches_H_Minv_Bu(model, points):
-    """MODEL.md item 4: alpha = H M^{-1} B_u with H = blockdiag(row 3 of R, Q)."""
-    B_u = np.vstack([np.zeros((2, 4)), np.eye(4)])
+    """docs/model.md sec. 2.4: alpha = H M^{-1} B_u with H = blockdiag(row 3 of R, Q)."""
     for k, (x, U, p, _) in enumerate(points):
         phi, th, psi = x[3:6]
         R_row3 = [-np.sin(th), np.sin(phi) * np.cos(th), np.cos(phi) * np.cos(th)]
@@ -49,7 +48,7 @@ def test_decoupling_matches_H_Minv_Bu(model, points):
                       [0, np.sin(phi) / np.cos(th), np.cos(phi) / np.cos(th)]])
         H = np.zeros((4, 6))
         H[0, :3], H[1:, 3:] = R_row3, Q
-        expected = H @ np.linalg.solve(model.mass_matrix(p), B_u)
+        expected = H @ np.linalg.solve(model.mass_matrix(p), B_U)
         assert_close(model.decoupling(x, p), expected, 1e-10, "alpha = H M^-1 B_u", k)
 
 

@@ -1,4 +1,4 @@
-"""MODEL.md item 5: M(r) v + C(nu, r) nu + g(eta, r) - (same at r = 0) = Phi(nu, eta, v) r."""
+"""docs/model.md sec. 3.1: M(r) v + C(nu, r) nu + g(eta, r) - (same at r = 0) = Phi(nu, eta, v) r."""
 import numpy as np
 
 import quadcog

@@ -3,6 +3,7 @@ import json
 from pathlib import Path
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import pytest
@@ -144,3 +145,34 @@ def test_run_time_error_names_the_file(tmp_path):
     src.write_text('name = "c"\ncontroller = "fl"\nduration = 2.0\ndt = 0.5\n')
     with pytest.raises(ScenarioError, match=r"coarse.toml: dt = 0.5 s is too large"):
         run_file(src, tmp_path / "o", progress=False)
+
+
+def test_shipped_scenarios_by_name(tmp_path, monkeypatch):
+    from quadcog.catalog import scenario_path, shipped_scenarios
+    listed = shipped_scenarios()
+    # every figure of the paper ships, with its description read from the file
+    assert {c.scenario for c in CLAIMS} <= set(listed)
+    for name, description in listed.items():
+        assert description and load_scenario(name).name == name
+    assert scenario_path("fig6.toml") == scenario_path("fig6")
+    # a folder called like a shipped scenario (e.g. an earlier --out fig6) does not shadow it
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fig6").mkdir()
+    assert scenario_path("fig6").is_file()
+    # an existing file wins over the shipped name
+    (tmp_path / "fig7").write_text('name = "mine"\ncontroller = "fl"\nduration = 1.0\n')
+    assert load_scenario("fig7").name == "mine"
+    with pytest.raises(ScenarioError, match=r"fig99: no such scenario file.*shipped: fig3a"):
+        load_scenario("fig99")
+
+
+def test_cli_scenarios_lists_names_and_descriptions():
+    res = subprocess.run([sys.executable, "-m", "quadcog", "scenarios"], cwd="/",
+                         capture_output=True, text=True,
+                         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                              "HOME": str(Path.home())})
+    assert res.returncode == 0, res.stderr
+    lines = dict(line.split(None, 1) for line in res.stdout.splitlines())
+    fig6 = tomllib.loads((ROOT / "quadcog" / "scenarios" / "fig6.toml").read_text())
+    assert lines["fig6"].strip() == fig6["description"]
+    assert set(lines) == {p.stem for p in (ROOT / "quadcog" / "scenarios").glob("*.toml")}

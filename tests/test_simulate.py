@@ -189,3 +189,29 @@ def test_result_plot_and_progress(tmp_path):
     out = tmp_path / "flight.png"
     res.plot(out)
     assert out.stat().st_size > 10_000
+
+
+def test_config_defaults_are_read_at_call_time():
+    """One place for the defaults: changing quadcog.config.defaults changes dt, the divergence
+    limits and the tail of the metrics wherever they are not given."""
+    from quadcog import config
+    from quadcog.result import position_metrics
+    t = np.linspace(0.0, 1.0, 11)
+    ref = np.zeros((11, 14))
+    x = np.zeros((11, 12))
+    x[:, 0] = t                       # error grows linearly: e = t
+    try:
+        config.defaults["metrics.tail_fraction"] = 0.5
+        config.defaults["limits.max_position_error"] = 3.0
+        config.defaults["limits.max_tilt_deg"] = 30.0
+        tail = position_metrics(t, x, ref, 1.0)["rms_position_error_tail"]
+        assert np.isclose(tail, np.sqrt(np.mean(t[5:] ** 2)))
+        assert quadcog.Limits().max_position_error == 3.0
+        assert np.isclose(quadcog.Limits().max_tilt, np.radians(30.0))
+        config.defaults["simulate.dt"] = 0.01
+        res = simulate(quadcog.FeedbackLinearization(), "hover", duration=0.5)
+        assert np.allclose(np.diff(res.t), 0.01)
+    finally:
+        config.reset_defaults()
+    assert np.isclose(position_metrics(t, x, ref, 1.0)["rms_position_error_tail"],
+                      np.sqrt(np.mean(t[8:] ** 2)))

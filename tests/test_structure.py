@@ -2,6 +2,7 @@
 import numpy as np
 
 from conftest import assert_close
+from quadcog.conventions import B_U
 
 
 def test_mass_matrix_symmetric_positive_definite(model, points):
@@ -32,19 +33,23 @@ def test_damping_diagonal(model, points):
         assert_close(model.damping(p), np.diag(p[5:11]), 0, "D", k)
 
 
+def test_input_matrix_is_the_derived_one(derived):
+    """The runtime's numpy B_U (quadcog.conventions) is the B_u of the SymPy derivation."""
+    assert np.array(derived.body.B_u, dtype=float).tolist() == B_U.tolist()
+
+
 def test_equations_of_motion_hold(model, points):
     """M nu_dot + C nu + D nu + g_G = B_u U with nu_dot from the exported dynamics."""
-    B_u = np.vstack([np.zeros((2, 4)), np.eye(4)])
     for k, (x, U, p, _) in enumerate(points):
         nu_dot = model.dynamics(x, U, p)[6:]
         nu = x[6:]
         lhs = (model.mass_matrix(p) @ nu_dot + model.coriolis(x, p) @ nu
                + model.damping(p) @ nu + model.gravity(x, p))
-        assert_close(lhs, B_u @ U, 1e-11, "equations of motion", k)
+        assert_close(lhs, B_U @ U, 1e-11, "equations of motion", k)
 
 
 def test_newton_euler_z_row_sign(model, points):
-    """MODEL.md item 1: the z force row has y_G (r q + p_dot), not the paper's (r q - p_dot)."""
+    """docs/model.md sec. 2.1: the z force row has y_G (r q + p_dot), not the paper's (r q - p_dot)."""
     for k, (x, U, p, _) in enumerate(points):
         m, (x_G, y_G, z_G) = p[0], p[11:14]
         u, v, w, P, Q, R = x[6:]

@@ -60,12 +60,12 @@ def _zd_summary(zd):
                  and held["max_spread"] < 1e-6)
     if unchanged:
         finding = ("the zero dynamics do NOT change with r_G (holding the outputs forces "
-                   "nu2 = 0, which removes every r_G term from the force rows; MODEL.md item 8 "
-                   "'With r_G != 0 they change' is wrong as stated). Eigenvalues stay {0, 0, -c_x/m, -c_y/m} for every admissible r_G, "
-                   "at level attitude and at any held tilt or heading")
+                   "nu2 = 0, which removes every r_G term from the force rows; "
+                   "docs/model.md sec. 4.1). Eigenvalues stay {0, 0, -c_x/m, -c_y/m} for "
+                   "every admissible r_G, at level attitude and at any held tilt or heading")
     else:
-        finding = ("the zero dynamics DO change with r_G (MODEL.md item 8 is right; the hand "
-                   "developer's hand analysis is not): see the numbers below")
+        finding = ("the zero dynamics DO change with r_G, contrary to docs/model.md sec. 4.1 "
+                   "(which must then be corrected): see the numbers below")
     explanation = (
         "Why: holding y constant forces nu2 = [p, q, r] = 0 and nu2_dot = 0 (Q(eta2) is "
         "invertible away from theta = +-pi/2). Every r_G term of the translational rows is "
@@ -77,18 +77,16 @@ def _zd_summary(zd):
         "R_32 = cos theta0 sin phi0), and U1 takes the w row. Physically: a body that does not "
         "rotate moves all its points alike, so where the mass sits does not matter for the "
         "translation. r_G only enters the moment rows, which fix U2..U4 (at level hover "
-        "U* = [m g, m g y_G, -m g x_G, 0], MODEL.md item 7). Other equilibria: level attitude "
-        "is the only equilibrium the outputs can hold with the position free; a held tilt "
+        "U* = [m g, m g y_G, -m g x_G, 0], docs/model.md sec. 3.3). Other equilibria: level "
+        "attitude is the only equilibrium the outputs can hold with the position free; a held tilt "
         "(phi0, theta0) != 0 has no equilibrium but a relative one, a steady drift at the "
         "velocity where drag balances the tilted thrust (u*, v* in the table, about 10 m/s for "
         "0.1 rad with this drag). Its linearization is again {0, 0, -c_x/m, -c_y/m}, also "
         "independent of r_G (and of the tilt, because the body-axis u and v rows do not "
         "contain w). What does depend on r_G: the input that holds the outputs, and the "
         "internal dynamics when the outputs move (nu2 != 0: the terms m (nu2_dot x r_G + "
-        "nu2 x (nu2 x r_G)) drive x, y), as the moving-output simulation shows. Suggested "
-        "wording for MODEL.md item 8: 'With r_G != 0 the zero dynamics are unchanged (nu2 = 0 "
-        "removes every r_G term from the force rows); r_G changes the input that holds the "
-        "outputs and the internal dynamics along moving outputs.'")
+        "nu2 x (nu2 x r_G)) drive x, y), as the moving-output simulation shows "
+        "(docs/model.md sec. 4.1).")
     slim = lambda d: {"max_spread": d["max_spread"],
                       "max_error_vs_analytic": d["max_error_vs_analytic"],
                       "duration": float(d["t"][-1]), "moving": d["moving"]}
@@ -130,7 +128,8 @@ def _adaptive_summary(design, study):
             f"phi_d = theta_d = 0) the error model is exact, but V still rises by "
             f"{100 * r['max_rise_relative']:.3g} % within {1000 * (r['t_max_rise'] - 1.0):.0f} ms "
             f"of the step. Second reason, the law's own approximation: the exact error model has "
-            f"B_true = [0; H M(r_G)^{{-1}}], the law uses M_hat = M(r_hat) (MODEL.md item 6), so "
+            f"B_true = [0; H M(r_G)^{{-1}}], the law uses M_hat = M(r_hat) (docs/model.md sec. 3.2, 4.2), "
+            f"so "
             f"V_dot = -e^T Q e + 2 e^T P (B_true - B) Phi r_tilde, and the second term is large "
             f"right after the step (the inertia about the CoG at [6, 6, 0] cm is 0.0021 kg m^2 "
             f"in one direction against the model's 0.007; positive part integrates to "

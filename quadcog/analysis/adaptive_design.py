@@ -111,7 +111,7 @@ def variants(t_step=STEP_TIME, r=STEP_R, gamma=0.01):
             "output regulation, oracle B": OracleOutputRegulationAdaptive(**kw, **oracle)}
 
 
-def lyapunov_study(duration=20.0, dt=1e-3, t_step=STEP_TIME, r=STEP_R, which=None,
+def lyapunov_study(duration=20.0, dt=None, t_step=STEP_TIME, r=STEP_R, which=None,
                    path="compiled"):
     """Fly the Fig. 6 scenario (hover, CoG step to r (m) at t_step (s)) with each variant and
     evaluate V. which: labels of ``variants`` to run (default all); duration, dt in s.

@@ -9,6 +9,7 @@ from ..controllers import AdaptiveFeedbackLinearization, CascadePD, FeedbackLine
 from ..controllers.adaptive import admissible_estimate_radius
 from ..errors import ParameterError
 from ..params import ARM_LENGTH, check_parameters, default_parameters, inertia_about_cog, with_cog
+from .. import config
 from ..batch import simulate_batch
 from ..simulate import RK4_LIMIT
 from ..trajectory import Hover
@@ -43,11 +44,13 @@ def admissibility(x_G, y_G, z_G=0.0, base=None):
     return adm, lam
 
 
-def rk4_stiffness(controller, params, dt=1e-3):
+def rk4_stiffness(controller, params, dt=None):
     """|lambda|_max dt of the closed-loop Jacobian at level hover (1 m, r_hat = 0) for each
     truth parameter row of params (B, 14), the CoG already moved: above quadcog.simulate's
     RK4_LIMIT (2.5) a fixed RK4 step of dt (s) is itself unstable, so a 'diverged' result there
-    says more about the integrator than about the controller. Returns (B,)."""
+    says more about the integrator than about the controller. dt defaults to
+    ``config.defaults["simulate.dt"]``. Returns (B,)."""
+    dt = config.get("simulate.dt", dt)
     x, P = ca.SX.sym("x", 12), ca.SX.sym("P", 14)
     ref = Hover()(0.0)
     U, _ = controller.function()(0.0, x, ref, controller.initial_state())
@@ -62,7 +65,8 @@ def rk4_stiffness(controller, params, dt=1e-3):
 
 def failure_map(grid=41, half_width=ARM_LENGTH, duration=20.0, t_step=1.0, threads=2,
                 controllers=None, threshold=THRESHOLD, progress=None):
-    """Tail RMS position error (last 25 % of the run, m) after a CoG step at hover.
+    """Tail RMS position error (m; the tail is the last ``config.defaults["metrics.tail_fraction"]``
+    of each run) after a CoG step at hover.
 
     grid: points per axis; the offsets are x_G, y_G = linspace(-half_width, half_width, grid)
     (m), z_G = 0. duration: s per flight (fixed RK4, dt = 1 ms); the CoG steps from 0 to
@@ -86,7 +90,8 @@ def failure_map(grid=41, half_width=ARM_LENGTH, duration=20.0, t_step=1.0, threa
     params = np.array([with_cog(base, (xs[j], ys[i], 0.0)) for i, j in idx]).reshape(-1, 14)
     out = {"x_G": xs, "y_G": ys, "admissible": adm, "lambda_min": lam,
            "n_points": int(adm.size), "n_admissible": int(adm.sum()), "duration": duration,
-           "t_step": t_step, "threshold": threshold, "controllers": {}}
+           "t_step": t_step, "threshold": threshold,
+           "tail_fraction": config.defaults["metrics.tail_fraction"], "controllers": {}}
     n_ctl = len(controllers)
     shape = lambda t: float(t >= t_step)
     for k, (name, ctl) in enumerate(controllers.items()):
@@ -205,7 +210,8 @@ def plot_failure_map(fm, path):
     leg = fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=9, frameon=True)
     leg.get_frame().set_facecolor("0.6")
     cb = fig.colorbar(mesh, cax=cax)
-    cb.set_label(f"tail RMS position error, last 25 % of {fm['duration']:g} s (m)")
+    cb.set_label(f"tail RMS position error, last {100 * fm['tail_fraction']:g} % of "
+                 f"{fm['duration']:g} s (m)")
     fig.suptitle(f"CoG step at hover at t = {fm['t_step']:g} s to ($x_G$, $y_G$, 0): "
                  f"{len(xs)} x {len(ys)} grid, arm = {xs[-1]:.0f} cm", y=0.99)
     fig.savefig(path, dpi=120)

@@ -187,7 +187,8 @@ def markdown(s):
                f"{fm['half_width']:g}]^2 m, {fm['duration']:g} s flights (batch path, 2 threads). "
                f"{fm['n_admissible']} of {fm['n_points']} offsets are admissible (the others make "
                "the inertia about the CoG indefinite: grey, not simulated; boundary |r_G| = "
-               f"{fm['admissible_radius']:.4f} m). Failure: tail RMS (last 25 %) > "
+               f"{fm['admissible_radius']:.4f} m). Failure: tail RMS (last "
+               f"{100 * fm['tail_fraction']:g} %) > "
                f"{fm['threshold']:g} m or diverged. `failure_map.png`, raw grid in "
                "`failure_map.npz` / `failure_map.json`.\n")
     rows = []

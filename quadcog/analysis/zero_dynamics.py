@@ -18,12 +18,11 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..conventions import IDX
+from ..conventions import IDX, OUTPUT_ROWS
 from ..model import load
 from ..params import check_parameters, default_parameters, with_cog
 
 ZETA_ROWS = [0, 1, 6, 7]           # x, y, u, v in the state
-OUTPUT_ROWS = [2, 3, 4, 5]         # z, phi, theta, psi
 ZETA_NAMES = ("x", "y", "u", "v")
 
 _cache = {}
@@ -57,7 +56,7 @@ def zero_dynamics_function(model=None):
     xdot = f(x, U, p)
     zeta_dot = xdot[ZETA_ROWS]
     w_rate = ca.jtimes(w_star, zeta, zeta_dot)
-    residual = ca.vertcat(xdot[OUTPUT_ROWS], alpha(x, p) @ U + drift(x, p),
+    residual = ca.vertcat(xdot[list(OUTPUT_ROWS)], alpha(x, p) @ U + drift(x, p),
                           xdot[8] - w_rate, ca.norm_2(xdot[9:12]))
     fn = ca.Function("zero_dynamics", [zeta, y0, p], [zeta_dot, U, residual],
                      ["zeta", "y0", "p"], ["zeta_dot", "U", "residual"])
@@ -151,8 +150,8 @@ def _output_tracking_law(model, kp, kd):
     f = model.casadi_function("dynamics")
     x, p = ca.SX.sym("x", 12), ca.SX.sym("p", 14)
     yd, ydd, yddd = ca.SX.sym("yd", 4), ca.SX.sym("ydd", 4), ca.SX.sym("yddd", 4)
-    y_dot = f(x, ca.SX.zeros(4), p)[OUTPUT_ROWS]
-    v = yddd - ca.DM(kp) * (x[OUTPUT_ROWS] - yd) - ca.DM(kd) * (y_dot - ydd)
+    y_dot = f(x, ca.SX.zeros(4), p)[list(OUTPUT_ROWS)]
+    v = yddd - ca.DM(kp) * (x[list(OUTPUT_ROWS)] - yd) - ca.DM(kd) * (y_dot - ydd)
     U = ca.solve(model.casadi_function("decoupling")(x, p),
                  v - model.casadi_function("drift")(x, p))
     return ca.Function("fl_true", [x, p, yd, ydd, yddd], [f(x, U, p)])

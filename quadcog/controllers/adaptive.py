@@ -1,4 +1,4 @@
-"""Adaptive feedback linearization (paper sec. 3.3, MODEL.md item 6).
+"""Adaptive feedback linearization (paper sec. 3.3, docs/model.md sec. 3.2).
 
 The feedback-linearizing law runs on the estimate r_hat: U solves alpha_hat U + b_hat = v.
 With nu_dot_star = M_hat^{-1} (B_u U - n_hat), the output error e_s = [e; e_dot] obeys
@@ -11,12 +11,11 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import solve_continuous_lyapunov
 
+from ..conventions import B_U
 from ..errors import InputError
 from ..params import ARM_LENGTH
 from .feedback_linearization import FeedbackLinearization
 from .shaping import kinematics
-
-B_U = np.vstack([np.zeros((2, 4)), np.eye(4)])
 
 
 def admissible_estimate_radius(p, margin=0.95):

@@ -3,10 +3,8 @@ and the exact output derivative y_dot = H(eta) nu taken from the generated dynam
 import casadi as ca
 import numpy as np
 
-from ..conventions import IDX
+from ..conventions import IDX, OUTPUT_ROWS
 from ..errors import InputError
-
-OUTPUT_ROWS = [2, 3, 4, 5]        # z, phi, theta, psi in the state
 
 
 def second_order_gains(poles, what):
@@ -46,7 +44,7 @@ def kinematics(model, x, p):
     """(eta_dot (6x1), y_dot (4x1)) at x: rows of the generated dynamics that do not depend
     on U or p (they are R nu1 and Q nu2)."""
     xdot = model.casadi_function("dynamics")(x, ca.SX.zeros(4), p)
-    return xdot[:6], xdot[OUTPUT_ROWS]
+    return xdot[:6], xdot[list(OUTPUT_ROWS)]
 
 
 def drag_over_mass(p):

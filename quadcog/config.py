@@ -1,0 +1,37 @@
+"""Default values of the simulation, in one place (the style of python-control's
+``control.config.defaults``).
+
+Functions whose argument is left at ``None`` read the value here when they are called, so
+changing an entry changes the default everywhere::
+
+    import quadcog
+    quadcog.config.defaults["simulate.dt"] = 5e-4
+    quadcog.config.reset_defaults()
+
+Keys:
+
+- ``simulate.dt``: RK4 step (s) of ``simulate``, ``simulate_batch`` and scenario files.
+- ``limits.max_position_error``: a run diverges when the position error exceeds this (m).
+- ``limits.max_tilt_deg``: ... or when |phi| or |theta| exceeds this (deg).
+- ``metrics.tail_fraction``: the tail metrics cover this last fraction of the run.
+"""
+
+_FACTORY = {
+    "simulate.dt": 1e-3,
+    "limits.max_position_error": 10.0,
+    "limits.max_tilt_deg": 85.0,
+    "metrics.tail_fraction": 0.25,
+}
+
+defaults = dict(_FACTORY)
+
+
+def reset_defaults():
+    """Restore every entry of ``defaults`` to its value at import."""
+    defaults.clear()
+    defaults.update(_FACTORY)
+
+
+def get(key, value=None):
+    """``value`` when it is given (not None), else ``defaults[key]``."""
+    return defaults[key] if value is None else value
