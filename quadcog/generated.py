@@ -7,11 +7,17 @@ import casadi as ca
 
 from .conventions import FUNCTIONS
 from .errors import GeneratedFilesError
-from .paths import generated_dir
+from .paths import generated_dir, shipped_generated_dir
 
 MANIFEST = "manifest.json"
 C_SOURCE = "c/quadcog_gen.c"
-_FIX = "run `make derive` to regenerate it"
+
+
+def _fix(folder):
+    """What to do about a bad generated folder: reinstall a package, re-derive a checkout."""
+    if Path(folder).resolve() == shipped_generated_dir().resolve():
+        return "reinstall quadcog (pip install --force-reinstall quadcog)"
+    return "run `make derive` to regenerate it"
 
 
 def _sha256(path):
@@ -23,12 +29,12 @@ def read_manifest(folder=None):
     folder = Path(folder or generated_dir())
     path = folder / MANIFEST
     if not path.is_file():
-        raise GeneratedFilesError(f"{path} is missing; {_FIX}")
+        raise GeneratedFilesError(f"{path} is missing; {_fix(folder)}")
     try:
         manifest = json.loads(path.read_text())
         manifest["files"], manifest["functions"]
     except (ValueError, KeyError, TypeError) as e:
-        raise GeneratedFilesError(f"{path} is corrupted ({e}); {_FIX}") from None
+        raise GeneratedFilesError(f"{path} is corrupted ({e}); {_fix(folder)}") from None
     return manifest
 
 
@@ -39,16 +45,16 @@ def verify(folder=None, only=None):
     missing = [f for f in FUNCTIONS if f not in manifest["functions"]]
     if missing:
         raise GeneratedFilesError(
-            f"{folder / MANIFEST} lists no function {missing[0]!r}; {_FIX}")
+            f"{folder / MANIFEST} lists no function {missing[0]!r}; {_fix(folder)}")
     for rel, digest in manifest["files"].items():
         if only is not None and rel not in only:
             continue
         path = folder / rel
         if not path.is_file():
-            raise GeneratedFilesError(f"{path} is missing; {_FIX}")
+            raise GeneratedFilesError(f"{path} is missing; {_fix(folder)}")
         if _sha256(path) != digest:
             raise GeneratedFilesError(
-                f"{path} does not match its SHA-256 in {MANIFEST} (edited or corrupted); {_FIX}")
+                f"{path} does not match its SHA-256 in {MANIFEST} (edited or corrupted); {_fix(folder)}")
     return manifest
 
 
@@ -61,4 +67,4 @@ def load_casadi_function(name, folder=None):
         return ca.Function.load(str(folder / rel))
     except RuntimeError as e:
         raise GeneratedFilesError(f"{folder / rel} cannot be loaded ({str(e).splitlines()[-1]}); "
-                                  f"{_FIX}") from None
+                                  f"{_fix(folder)}") from None

@@ -38,15 +38,16 @@ class Model:
     Methods take numpy arrays (vectors of shape (n,)) and return new arrays, matrices as
     2-D arrays; every argument is checked (shape, finiteness, admissible ``p``). Pass
     ``out=`` (arrays of the output shapes) to reuse memory, or use ``fast(name)`` for the
-    unchecked allocation-free path. ``backend`` is "c" (compiled generated/c) or
-    "casadi-vm" (CasADi's virtual machine, when there is no C compiler).
+    unchecked allocation-free path. ``backend`` is "c" (the generated C, compiled on the first
+    call of a method or of ``fast``) or "casadi-vm" (CasADi's virtual machine, when there is
+    no C compiler). ``casadi_function`` never compiles: simulations build their own code.
     """
 
-    def __init__(self, compiled, symbolic, backend, folder):
+    def __init__(self, library, folder):
         self.folder = folder                # the generated/ folder this model was loaded from
-        self._compiled = compiled           # name -> casadi.Function (external or VM)
-        self._symbolic = symbolic           # name -> casadi.Function (SX), for expressions
-        self.backend = backend
+        self._library = library             # the shared, lazily compiled functions
+        self._symbolic = {}                 # name -> casadi.Function (SX), for expressions
+        self.backend = library.backend
         self._calls = {}
         self._last_p = None
 
@@ -62,7 +63,7 @@ class Model:
         """A new FastCall (preallocated buffers) of the compiled function ``name``."""
         if name not in FUNCTIONS:
             raise InputError(f"unknown function {name!r}; expected one of {tuple(FUNCTIONS)}")
-        return FastCall(self._compiled[name])
+        return FastCall(self._library.functions()[name])
 
     def _call(self, name, args, out):
         spec_in, spec_out = FUNCTIONS[name]
@@ -141,34 +142,48 @@ class Model:
         return self._call("linearization", (x, U, p), out)
 
 
-def _compiled_functions(folder):
-    global _warned_no_compiler
-    cc = find_compiler()
-    if cc is None:
-        if not _warned_no_compiler:
+class _Library:
+    """The numeric functions of one generated folder, made on first use: the generated C
+    compiled into the cache, or CasADi's virtual machine without a compiler."""
+
+    def __init__(self, folder):
+        global _warned_no_compiler
+        self.folder = folder
+        self.cc = find_compiler()
+        self.backend = "c" if self.cc else "casadi-vm"
+        if self.cc is None and not _warned_no_compiler:
             warnings.warn("no C compiler found ($CC or `cc`): quadcog falls back to CasADi's "
                           "virtual machine, which is about 100x slower per call",
-                          QuadcogWarning, stacklevel=3)
+                          QuadcogWarning, stacklevel=4)
             _warned_no_compiler = True
-        return {n: load_casadi_function(n, folder) for n in FUNCTIONS}, "casadi-vm"
-    verify(folder, only={C_SOURCE})
-    lib = compile_library((folder / C_SOURCE).read_bytes(), "quadcog_gen", cc)
-    return {n: ca.external(n, str(lib)) for n in FUNCTIONS}, "c"
+        self._functions = None
+        self._lock = threading.Lock()
+
+    def functions(self):
+        """name -> casadi.Function (external C or VM), built once."""
+        with self._lock:
+            if self._functions is None:
+                if self.cc is None:
+                    self._functions = {n: load_casadi_function(n, self.folder) for n in FUNCTIONS}
+                else:
+                    verify(self.folder, only={C_SOURCE})
+                    lib = compile_library((self.folder / C_SOURCE).read_bytes(), "quadcog_gen",
+                                          self.cc)
+                    self._functions = {n: ca.external(n, str(lib)) for n in FUNCTIONS}
+        return self._functions
 
 
 def load(folder=None):
-    """The Model of generated/ (or ``folder``), compiled on first use and cached.
+    """The Model of generated/ (or ``folder``): every file checked against the manifest now;
+    the generated C is compiled (once, into the cache) when a method first needs it.
 
     Raises GeneratedFilesError naming the file when generated/ is missing, corrupted or
-    incomplete; run ``make derive`` then.
+    incomplete, and what to do about it.
     """
     folder = generated_dir() if folder is None else folder
     folder = Path(folder).resolve()
     with _cache_lock:
         if folder not in _cache:
             verify(folder)
-            compiled, backend = _compiled_functions(folder)
-            symbolic = {} if backend == "c" else dict(compiled)
-            _cache[folder] = (compiled, symbolic, backend)
-    compiled, symbolic, backend = _cache[folder]
-    return Model(compiled, dict(symbolic), backend, folder)
+            _cache[folder] = _Library(folder)
+    return Model(_cache[folder], folder)

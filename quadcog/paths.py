@@ -1,15 +1,25 @@
-"""Where generated/ and the compile cache are."""
+"""Where the generated code and the compile cache are."""
 import os
 from pathlib import Path
 
 GENERATED_ENV = "QUADCOG_GENERATED"
 CACHE_ENV = "QUADCOG_CACHE_DIR"
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def shipped_generated_dir():
+    """The copy of generated/ inside an installed package (wheel or sdist install)."""
+    return _PACKAGE / "_generated"
 
 
 def generated_dir():
-    """generated/ beside the package (a repository checkout), or $QUADCOG_GENERATED."""
+    """$QUADCOG_GENERATED when set; else the copy shipped inside the package (an installed
+    wheel); else generated/ beside the package (a checkout or an editable install)."""
     env = os.environ.get(GENERATED_ENV)
-    return Path(env) if env else Path(__file__).resolve().parent.parent / "generated"
+    if env:
+        return Path(env)
+    shipped = shipped_generated_dir()
+    return shipped if shipped.is_dir() else _PACKAGE.parent / "generated"
 
 
 def cache_dir():

@@ -9,7 +9,6 @@ the sphere, and each discrete update is scaled back onto it); without it this is
 """
 import casadi as ca
 import numpy as np
-from scipy.linalg import solve_continuous_lyapunov
 
 from ..conventions import B_U
 from ..errors import InputError
@@ -60,6 +59,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         self.projection_radius = projection_radius
         self.A_error = np.block([[np.zeros((4, 4)), np.eye(4)],
                                  [-np.diag(self.kp), -np.diag(self.kd)]])
+        from scipy.linalg import solve_continuous_lyapunov   # here: slow to import
         self.P = solve_continuous_lyapunov(self.A_error.T, -Q)
 
     def parts(self, x, ref, r_hat):

@@ -9,7 +9,6 @@ so all 12 closed-loop eigenvalues are exactly the chosen poles.
 """
 import casadi as ca
 import numpy as np
-from scipy.signal import place_poles
 
 from ..conventions import IDX
 from ..errors import InputError
@@ -41,6 +40,7 @@ class CascadePD(Controller):
         self.hover_input = np.array([p[IDX["m"]] * p[IDX["g"]], 0, 0, 0])
         A, B = self.model.linearization(np.zeros(12), self.hover_input, p)
         self.A, self.B = A, B
+        from scipy.signal import place_poles      # here: scipy.signal takes a second to import
         self.gains = {}
         K = np.zeros((4, 12))
         for loop, (states, inp) in LOOPS.items():
