@@ -23,7 +23,7 @@ from quadcog import (AdaptiveFeedbackLinearization, CogProfile, simulate,  # noq
                      simulate_batch)
 from quadcog.closed_loop import closed_loop_step  # noqa: E402
 from quadcog.compiled import compile_function  # noqa: E402
-from quadcog.plant import TruthOptions  # noqa: E402
+from quadcog.plant import Actuation, TruthOptions  # noqa: E402
 
 rows = []
 
@@ -159,7 +159,7 @@ def bench_op_estimate(ctl, measured_step):
     for c in ("arithmetic", "division", "trig"):
         record(f"rate: {c}", f"{rates[c] * 1e9:.2f}", "ns/op", "", "",
                "from 3 kernels of ~3000 ops, random DAGs")
-    step = closed_loop_step(ctl, TruthOptions())
+    step = closed_loop_step(ctl, Actuation.of(quadcog.HUMMINGBIRD, TruthOptions()))
     n = _op_classes(step)
     estimate = sum(n[c] * rates[c] for c in n)
     record("step: op counts", f"{n['arithmetic']} / {n['division']} / {n['trig']}",
@@ -173,9 +173,8 @@ def bench_batch(n_flights):
     print(f"{n_flights} adaptive flights of 20 s, batch")
     ctl = AdaptiveFeedbackLinearization()
     rng = np.random.default_rng(1)
-    base = quadcog.default_parameters()
-    params = np.array([quadcog.with_cog(base, rng.uniform(-0.06, 0.06, 2).tolist() + [0.0])
-                       for _ in range(n_flights)])
+    params = [quadcog.HUMMINGBIRD.with_cog(rng.uniform(-0.06, 0.06, 2).tolist() + [0.0])
+              for _ in range(n_flights)]
     shape = lambda t: float(t >= 1.0)
     simulate_batch(ctl, params[:2], "hover", duration=1.0, cog_shape=shape)    # compile
     r1 = simulate_batch(ctl, params, "hover", duration=20.0, cog_shape=shape, threads=1)

@@ -11,14 +11,15 @@ from .conventions import (B_U, FUNCTIONS, INPUT_NAMES, OUTPUT_NAMES, OUTPUT_ROWS
 from .errors import (CompileError, EulerSingularityError, GeneratedFilesError, InputError,
                      ParameterError, QuadcogError, QuadcogWarning)
 from .model import Linearization, Model, load
-from .params import (ARM_LENGTH, HUMMINGBIRD, check_parameters, default_parameters,
-                     inertia_about_cog, with_cog)
+from .params import check_parameters, inertia_about_cog, with_cog
+from .vehicle import (CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters, plus_layout,
+                      x_layout)
 from .controllers import (AdaptiveFeedbackLinearization, CascadePD, Controller,
                           FeedbackLinearization, make_controller)
-from .plant import TruthOptions, mixer_matrix
+from .plant import TruthOptions
 from .result import Metrics, SimulationResult
 from .batch import BatchResult, simulate_batch
-from .simulate import Limits, simulate
+from .simulation import Limits, simulate
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
 

@@ -9,13 +9,12 @@ import numpy as np
 from . import config
 from .closed_loop import TABLE, TABLE_SIZE, monitored_step, step_table
 from .errors import InputError
-from .params import check_parameters
-from .plant import TruthOptions
-from .simulate import (CHUNK, Limits, _check_time, _compiled, _controller_key,
-                       _first_divergence, _position_error, start_at_reference,
-                       tail_start)
+from .plant import Actuation, TruthOptions, initial_rotor_thrusts
+from .simulation import (CHUNK, Limits, _check_time, _compiled, _first_divergence,
+                         _position_error, start_at_reference, tail_start)
 from .timeline import CogProfile, wrench_table
 from .trajectory import as_trajectory
+from .vehicle import Vehicle
 
 
 @dataclass
@@ -27,27 +26,55 @@ class BatchResult:
     final_position_error: np.ndarray
     diverged: np.ndarray
     diverged_at: np.ndarray           # NaN where the flight did not diverge
-    final_state: np.ndarray           # (B, 12 + n_state)
+    final_state: np.ndarray           # (B, 12 + rotor states + n_state)
     seconds: float
 
 
-def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=None,
-                   cog_shape=None, disturbances=(), truth=None, limits=None, threads=2,
-                   progress=None):
-    """Fly one controller over many truth parameter sets ``params`` (B, 14) in parallel.
+def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=None,
+                   controller_model=None, cog_shape=None, disturbances=(), truth=None,
+                   limits=None, threads=2, progress=None):
+    """Fly one controller over many truth vehicles in parallel; keep metrics, not trajectories.
 
-    Flight b's CoG at time t is ``cog_shape(t) * r_G(params[b])``: cog_shape is a function of
-    time, a CogProfile whose x component is used as the shape, or None (the CoG is there from
-    t = 0). Keeps metrics, not trajectories. ``threads`` CasADi threads share the flights.
+    Parameters
+    ----------
+    controller : a quadcog Controller.
+    vehicles : a sequence of B truth Vehicles. They may differ in the 14 parameters
+        (``Vehicle.parameters()``); their rotors (layout, constants, limits, time constant) must
+        agree, since the compiled step holds them.
+    controller_model : the Vehicle the controller is designed for (one for all flights);
+        default: the vehicles with r_G = 0, which must then be one vehicle.
+    cog_shape : flight b's CoG at time t is ``cog_shape(t) * vehicles[b].r_G``: a function of
+        time, a CogProfile whose x component is used as the shape, or None (the CoG is there
+        from t = 0).
+    trajectory, duration, dt, disturbances, truth, limits, progress : as ``simulate``.
+    threads : CasADi threads sharing the flights.
+
+    Returns
+    -------
+    BatchResult.
     """
     options = truth or TruthOptions()
     limits = limits or Limits()
     dt = config.get("simulate.dt", dt)
-    params = np.atleast_2d(np.asarray(params, dtype=float))
-    if params.ndim != 2 or params.shape[1] != 14:
-        raise InputError(f"params must have shape (B, 14), got {params.shape}")
-    for b, p in enumerate(params):
-        check_parameters(p, f"params[{b}]")
+    vehicles = [vehicles] if isinstance(vehicles, Vehicle) else list(vehicles)
+    if not vehicles or not all(isinstance(v, Vehicle) for v in vehicles):
+        raise InputError("vehicles must be a non-empty sequence of quadcog Vehicles, got "
+                         f"{vehicles!r:.200}")
+    actuation = Actuation.of(vehicles[0], options)
+    for b, v in enumerate(vehicles):
+        if Actuation.of(v, options) != actuation:
+            raise InputError(f"vehicles[{b}] has other rotors than vehicles[0] (layout, "
+                             "constants, limits or motor time constant); a batch shares them")
+    if controller_model is None:
+        controller_model = vehicles[0].with_cog(np.zeros(3))
+        for b, v in enumerate(vehicles):
+            if v.with_cog(np.zeros(3)) != controller_model:
+                raise InputError(f"vehicles[{b}] differs from vehicles[0] in more than r_G: "
+                                 "pass controller_model (what the controller believes)")
+    elif not isinstance(controller_model, Vehicle):
+        raise InputError(f"controller_model must be a quadcog Vehicle, got {controller_model!r}")
+    controller = controller.for_vehicle(controller_model)
+    params = np.array([v.parameters() for v in vehicles])
     _check_time(duration, dt)
     traj = as_trajectory(trajectory)
     n = int(round(duration / dt))
@@ -64,10 +91,10 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=Non
     table[:, TABLE["s"]] = s
     x0 = start_at_reference(refs[0])
     B = params.shape[0]
-    key = ("batch", _controller_key(controller), options, limits, CHUNK)
+    key = ("batch", controller.cache_key(), actuation, limits, CHUNK)
 
     def build():
-        step = monitored_step(controller, options, limits)
+        step = monitored_step(controller, actuation, limits)
         acc = step.mapaccum("monitored_chunk", CHUNK)
         Z, P, rows = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("P", 14), \
             ca.MX.sym("rows", TABLE_SIZE, CHUNK)
@@ -76,10 +103,12 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=Non
     last = _compiled(key, build)
     # the step table (input 2) is shared by all flights: reduce_in, not B copies
     mapped = last.map("batch", "thread" if threads > 1 else "serial", B, [2], [])
-    nc = controller.n_state
-    Z = np.zeros((12 + nc + 4, B))
+    nc, nf = controller.n_state, actuation.n_rotor_states
+    Z = np.zeros((12 + nf + nc + 4, B))
     Z[:12] = x0[:, None]
-    Z[12:12 + nc] = controller.initial_state()[:, None]
+    for b, v in enumerate(vehicles):
+        Z[12:12 + nf, b] = initial_rotor_thrusts(v.with_cog(s[0] * v.r_G), actuation)
+    Z[12 + nf:12 + nf + nc] = controller.initial_state()[:, None]
     Z[-1] = -1.0
     t0 = time.perf_counter()
     k = 0
@@ -95,13 +124,13 @@ def simulate_batch(controller, params, trajectory="hover", duration=10.0, dt=Non
         if progress:
             progress(k / n)
     seconds = time.perf_counter() - t0
-    return _batch_result(Z, n, table, nc, seconds, limits)
+    return _batch_result(Z, n, table, nf + nc, seconds, limits)
 
 
-def _batch_result(Z, n, table, nc, seconds, limits):
+def _batch_result(Z, n, table, n_extra, seconds, limits):
     """Metrics over the samples t_0 .. t_n, as for a single flight: the steps accumulated
-    t_0 .. t_{n-1}; the final state is added here."""
-    nX = 12 + nc
+    t_0 .. t_{n-1}; the final state is added here. n_extra: states after x (rotors, controller)."""
+    nX = 12 + n_extra
     Z = Z.copy()
     sumsq, emax, sumsq_tail, div_at = Z[nX], Z[nX + 1], Z[nX + 2], Z[nX + 3]
     running = div_at < 0

@@ -44,27 +44,29 @@ def truth_parameters(P, row):
     return ca.vertcat(P[:IDX["x_G"]], r)
 
 
-def closed_loop_step(controller, options):
-    """CasADi Function step(X, P, row) -> (X_next, U_applied), X = [x (12); c (n_state)]."""
-    nc = controller.n_state
-    X, P, row = ca.SX.sym("X", 12 + nc), ca.SX.sym("P", 14), ca.SX.sym("row", TABLE_SIZE)
-    x, c = X[:12], X[12:]
+def closed_loop_step(controller, actuation):
+    """CasADi Function step(X, P, row) -> (X_next, U_applied), X = [x (12); f (rotor thrusts,
+    actuation.n_rotor_states); c (controller state, n_state)]."""
+    nc, nf = controller.n_state, actuation.n_rotor_states
+    X, P, row = ca.SX.sym("X", 12 + nf + nc), ca.SX.sym("P", 14), ca.SX.sym("row", TABLE_SIZE)
+    x, f, c = X[:12], X[12:12 + nf], X[12 + nf:]
     t, dt = row[TABLE["t"]], row[TABLE["dt"]]
     U, c_dot = controller.function()(t, x, row[TABLE["ref"]], c)
-    x_next, U_app = rk4_step_expression(controller.model, x, U, truth_parameters(P, row),
-                                        row[TABLE["wrench"]], dt, options)
-    X_next = ca.vertcat(x_next, controller.project(c + dt * c_dot)) if nc else x_next
+    x_next, f_next, U_app = rk4_step_expression(controller.model, x, f, U,
+                                                truth_parameters(P, row), row[TABLE["wrench"]],
+                                                dt, actuation)
+    X_next = ca.vertcat(x_next, f_next, controller.project(c + dt * c_dot) if nc else ca.SX(0, 1))
     X_next, U_app = ca.cse([X_next, U_app])    # the RK4 stages share parameter-only terms
     return ca.Function("closed_loop_step", [X, P, row], [X_next, U_app],
                        ["X", "P", "row"], ["X_next", "U_applied"])
 
 
-def monitored_step(controller, options, limits):
+def monitored_step(controller, actuation, limits):
     """Step with metric accumulators, for batches that keep no trajectory.
 
     State [X; sum e^2; max e; sum e^2 over the tail; diverged_at (-1: not)], where e is the
     position error at the start of each step. Once diverged, the state is frozen."""
-    step = closed_loop_step(controller, options)
+    step = closed_loop_step(controller, actuation)
     nX = step.size1_in(0)
     Z, P, row = ca.SX.sym("Z", nX + 4), ca.SX.sym("P", 14), ca.SX.sym("row", TABLE_SIZE)
     X, acc = Z[:nX], Z[nX:]

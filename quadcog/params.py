@@ -1,38 +1,10 @@
-"""Parameter vectors p (order: docs/model.md sec. 1.2), the default vehicle (sec. 6), and
-admissibility checks (sec. 1.4)."""
+"""Parameter vectors p (the 14 entries of the generated functions, order: docs/model.md sec.
+1.2) and their admissibility check (sec. 1.4). The vehicle they come from is
+``quadcog.vehicle.Vehicle``."""
 import numpy as np
 
 from .conventions import IDX, N_PARAM, PARAM_NAMES, R_G
 from .errors import InputError, ParameterError
-
-# AscTec Hummingbird as in the ETH RotorS simulator (docs/model.md sec. 6). The drag
-# coefficients are this project's own choice (the paper gives no numbers): small linear
-# drag, so that the zero dynamics decay slowly (c_x / m = 0.15 1/s).
-HUMMINGBIRD = {
-    "m": 0.68, "g": 9.81, "Ixx": 0.007, "Iyy": 0.007, "Izz": 0.012,
-    "c_x": 0.1, "c_y": 0.1, "c_z": 0.1, "c_phi": 0.001, "c_theta": 0.001, "c_psi": 0.001,
-    "x_G": 0.0, "y_G": 0.0, "z_G": 0.0,
-}
-ARM_LENGTH = 0.17                  # m, "+" layout
-THRUST_CONSTANT = 8.54858e-6       # N / (rad/s)^2
-MOMENT_CONSTANT = 0.016            # m (rotor drag moment = MOMENT_CONSTANT * thrust)
-MAX_ROTOR_SPEED = 838.0            # rad/s
-
-
-def default_parameters(**overrides):
-    """The default vehicle as a (14,) array, with entries replaced by name.
-
-    Example: ``default_parameters(x_G=0.03, m=0.8)``. Unknown names raise InputError.
-    """
-    values = dict(HUMMINGBIRD)
-    for name, value in overrides.items():
-        if name not in values:
-            raise InputError(f"unknown parameter {name!r}; expected one of {PARAM_NAMES}")
-        values[name] = float(value)
-    p = np.array([values[n] for n in PARAM_NAMES], dtype=float)
-    check_parameters(p)
-    return p
-
 
 def with_cog(p, r_G):
     """A copy of ``p`` (14,) with the CoG offset replaced by ``r_G`` (3,), in m."""

@@ -1,7 +1,8 @@
 """Scenario files (TOML): parse, validate with messages naming file and key, run, write results.
 
-A scenario names a controller, a trajectory, CoG changes, disturbances, vehicle overrides,
-controller parameters and truth-model switches; `quadcog run FILE --out DIR` writes
+A scenario names a controller, a trajectory, CoG changes, disturbances, the truth vehicle
+(``[vehicle]``) and what the controller believes (``[controller_model]``), controller
+parameters and truth-model switches; `quadcog run FILE --out DIR` writes
 metrics.json, trajectory.csv and flight.png. The keys are documented in README.md.
 """
 from dataclasses import dataclass, field
@@ -16,14 +17,14 @@ import numpy as np
 from . import config
 from .catalog import scenario_path
 from .controllers import BY_NAME, make_controller
-from .conventions import PARAM_NAMES, STATE_NAMES
+from .conventions import STATE_NAMES
 from .errors import InputError
-from .params import default_parameters
 from .plant import TruthOptions
 from .progress import ProgressBar
-from .simulate import Limits, simulate, start_at_reference
+from .simulation import Limits, simulate, start_at_reference
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, Helix, Hover
+from .vehicle import FIELD_NAMES, HUMMINGBIRD, PRESETS
 
 
 class ScenarioError(InputError):
@@ -48,8 +49,13 @@ CONTROLLER_PARAMS["adaptive"] = dict(CONTROLLER_PARAMS["fl"], gamma="number_or_v
                                      projection_radius="number_or_false", Q_scale=NUMBER)
 TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "dt": NUMBER,
        "path": str, "trajectory": dict, "cog": list, "disturbance": list, "vehicle": dict,
-       "controller_params": dict, "truth": dict, "limits": dict, "initial_offset": "vec3"}
-TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "max_rotor_thrust": NUMBER}
+       "controller_model": dict, "controller_params": dict, "truth": dict, "limits": dict,
+       "initial_offset": "vec3"}
+# every Vehicle field, and a preset to start from
+VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
+                  "name": str}.get(name, NUMBER) for name in FIELD_NAMES}
+VEHICLE["preset"] = str
+TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
 LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}
 COG = {"t": NUMBER, "r": "vec3", "ramp": NUMBER}
 DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3"}
@@ -67,7 +73,8 @@ class Scenario:
     trajectory: object = field(default_factory=Hover)
     cog: CogProfile = field(default_factory=CogProfile)
     disturbances: list = field(default_factory=list)
-    vehicle: dict = field(default_factory=dict)
+    vehicle: object = HUMMINGBIRD                 # the truth Vehicle
+    controller_model: object = None               # what the controller believes (a Vehicle)
     controller_params: dict = field(default_factory=dict)
     truth: TruthOptions = field(default_factory=TruthOptions)
     limits: Limits = field(default_factory=Limits)
@@ -75,24 +82,29 @@ class Scenario:
     source: str = "<scenario>"
 
     def make_controller(self):
+        """The scenario's controller, designed for its controller model."""
         params = dict(self.controller_params)
-        nominal = default_parameters(**{k: v for k, v in self.vehicle.items()
-                                        if k not in ("x_G", "y_G", "z_G")})
         if "Q_scale" in params:
             params["Q"] = np.eye(8) * params.pop("Q_scale")
         if params.get("projection_radius") is False:
             params["projection_radius"] = None
-        return make_controller(self.controller, nominal=nominal, **params)
+        return make_controller(self.controller, vehicle=self.model_vehicle(), **params)
+
+    def model_vehicle(self):
+        """The controller's model: ``controller_model``, or the truth vehicle with r_G = 0."""
+        if self.controller_model is not None:
+            return self.controller_model
+        return self.vehicle.with_cog(np.zeros(3))
 
     def run(self, progress=None):
         """Simulate; returns a quadcog SimulationResult."""
-        params = default_parameters(**self.vehicle)
         x0 = None
         if any(self.initial_offset):
             x0 = start_at_reference(self.trajectory(0.0))
             x0[:3] += np.asarray(self.initial_offset)
         return simulate(self.make_controller(), self.trajectory, duration=self.duration,
-                        dt=self.dt, params=params, cog=self.cog, disturbances=self.disturbances,
+                        dt=self.dt, vehicle=self.vehicle, controller_model=self.model_vehicle(),
+                        cog=self.cog, disturbances=self.disturbances,
                         truth=self.truth, x0=x0, path=self.path, limits=self.limits,
                         progress=progress)
 
@@ -101,7 +113,8 @@ def _type_name(kind):
     return {str: "a string", bool: "true or false", dict: "a table", list: "an array of tables",
             "vec3": "an array of 3 numbers", "vec": "an array of numbers",
             "number_or_vec3": "a number or an array of 3 numbers",
-            "number_or_false": "a number or false"}.get(
+            "number_or_false": "a number or false",
+            "pairs4": "an array of 4 arrays [x, y] of numbers"}.get(
         kind, "a number" if kind == NUMBER else str(kind))
 
 
@@ -110,6 +123,8 @@ def _check(value, kind, where):
         return isinstance(v, NUMBER) and not isinstance(v, bool) and math.isfinite(v)
     ok = {
         "vec3": lambda v: isinstance(v, list) and len(v) == 3 and all(map(is_num, v)),
+        "pairs4": lambda v: isinstance(v, list) and len(v) == 4 and all(
+            isinstance(r, list) and len(r) == 2 and all(map(is_num, r)) for r in v),
         "vec": lambda v: isinstance(v, list) and len(v) > 0 and all(map(is_num, v)),
         "number_or_vec3": lambda v: is_num(v) or (isinstance(v, list) and len(v) == 3
                                                   and all(map(is_num, v))),
@@ -199,8 +214,9 @@ def parse(data, source="<scenario>"):
                             f"{', '.join(TRAJECTORIES)}, got {kind!r}")
     cls, schema = TRAJECTORIES[kind]
     _validate(traj, schema, source, "trajectory.", f" for kind {kind!r}")
-    vehicle = data.get("vehicle", {})
-    _validate(vehicle, dict.fromkeys(PARAM_NAMES, NUMBER), source, "vehicle.", " parameter")
+    vehicle = _vehicle(data, "vehicle", None, source)
+    controller_model = (_vehicle(data, "controller_model", vehicle.with_cog(np.zeros(3)), source)
+                        if "controller_model" in data else None)
     cparams = data.get("controller_params", {})
     _validate(cparams, CONTROLLER_PARAMS[controller], source, "controller_params.",
               f" for controller {controller!r}")
@@ -209,15 +225,12 @@ def parse(data, source="<scenario>"):
     _validate(limits, LIMITS, source, "limits.")
     cog, pulses = _cog_changes(data, source), _disturbances(data, source)
     try:
-        default_parameters(**vehicle)             # admissible vehicle, checked now
-    except InputError as e:
-        raise ScenarioError(f"{source}: key 'vehicle': {e}") from None
-    try:
         return Scenario(
             name=data["name"], controller=controller, duration=float(data["duration"]),
             dt=float(data.get("dt", config.defaults["simulate.dt"])), description=data.get("description", ""),
             path=data.get("path", "compiled"), trajectory=cls(**traj), cog=cog,
-            disturbances=pulses, vehicle=dict(vehicle), controller_params=dict(cparams),
+            disturbances=pulses, vehicle=vehicle, controller_model=controller_model,
+            controller_params=dict(cparams),
             truth=TruthOptions(**truth),
             limits=Limits(
                 limits.get("max_position_error", config.defaults["limits.max_position_error"]),
@@ -225,6 +238,23 @@ def parse(data, source="<scenario>"):
             initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source)
     except InputError as e:
         raise ScenarioError(f"{source}: {e}") from None
+
+
+def _vehicle(data, key, base, source):
+    """The Vehicle of table ``key``: its ``preset`` (default: ``base``, or the Hummingbird)
+    with the fields the table sets."""
+    table = dict(data.get(key, {}))
+    _validate(table, VEHICLE, source, f"{key}.", " vehicle field")
+    preset = table.pop("preset", None)
+    if preset is not None:
+        if preset not in PRESETS:
+            raise ScenarioError(f"{source}: key '{key}.preset': expected one of "
+                                f"{', '.join(PRESETS)}, got {preset!r}")
+        base = PRESETS[preset]
+    try:
+        return (base or HUMMINGBIRD).replace(**table)
+    except InputError as e:
+        raise ScenarioError(f"{source}: key {key!r}: {e}") from None
 
 
 def load_scenario(path):

@@ -3,7 +3,7 @@ import numpy as np
 
 from .conventions import R_G, hover_trim
 from .model import load
-from .params import default_parameters
+from .vehicle import default_parameters
 
 
 def tour(print_=print):

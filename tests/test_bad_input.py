@@ -107,7 +107,7 @@ def test_wrong_shapes_and_values(model):
     ({"z_G": 0.5}, "inertia about the CoG has eigenvalue"),
 ])
 def test_inadmissible_parameters(model, override, message):
-    p = np.array([quadcog.HUMMINGBIRD[n] for n in quadcog.PARAM_NAMES])
+    p = quadcog.HUMMINGBIRD.parameters()
     p[quadcog.PARAM_NAMES.index(next(iter(override)))] = next(iter(override.values()))
     with pytest.raises(quadcog.ParameterError, match=message):
         model.mass_matrix(p)

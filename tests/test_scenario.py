@@ -38,7 +38,7 @@ def test_builtin_scenarios_parse():
     (dict(BASE, cog=[{"t": 1.0}]), "cog\\[0\\]': missing key 'r'"),
     (dict(BASE, cog=[{"t": 1.0, "r": [0, 0, 0], "speed": 2}]), "cog\\[0\\].speed': unknown"),
     (dict(BASE, disturbance=[{"t": 1.0, "duration": -1.0}]), "disturbance duration must be > 0"),
-    (dict(BASE, vehicle={"mass": 1.0}), "vehicle.mass': unknown parameter"),
+    (dict(BASE, vehicle={"mass": 1.0}), "vehicle.mass': unknown vehicle field"),
     (dict(BASE, vehicle={"m": -1.0}), "m = -1.0 must be > 0"),
     (dict(BASE, controller_params={"gamma": 0.1}), "unknown for controller 'fl'"),
     (dict(BASE, truth={"parallel_axis": "yes"}), "truth.parallel_axis': expected true or false"),

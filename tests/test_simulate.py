@@ -6,7 +6,7 @@ import pytest
 import quadcog
 from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile, Disturbance,
                      FeedbackLinearization, Limits, TruthOptions, simulate, simulate_batch)
-from quadcog.plant import MAX_ROTOR_THRUST, mixer_matrix
+from quadcog.vehicle import HUMMINGBIRD
 from conftest import assert_close
 
 COG = CogProfile([(0.3, (0.03, -0.02, 0.005), 0.0), (1.0, (0.05, 0.01, 0.0), 0.5)])
@@ -15,10 +15,11 @@ PULSE = [Disturbance(t=0.6, duration=0.2, force=(0.5, -0.3, 0.2), moment=(0.01, 
 
 @pytest.mark.parametrize("controller", [CascadePD, FeedbackLinearization,
                                         AdaptiveFeedbackLinearization])
-@pytest.mark.parametrize("truth", [TruthOptions(), TruthOptions(True, True)])
+@pytest.mark.parametrize("truth", [TruthOptions(), TruthOptions(True, True, True)])
 def test_paths_agree(controller, truth):
     ctl = controller()
-    kw = dict(trajectory=quadcog.Circle(), duration=2.0, cog=COG, disturbances=PULSE, truth=truth)
+    kw = dict(trajectory=quadcog.Circle(), duration=2.0, cog=COG, disturbances=PULSE, truth=truth,
+              vehicle=HUMMINGBIRD.replace(max_rotor_thrust=3.0))
     a = simulate(ctl, path="python", **kw)
     b = simulate(ctl, path="compiled", **kw)
     assert a.x.shape == b.x.shape == (2001, 12)
@@ -46,15 +47,15 @@ def test_truth_options_change_the_flight():
     kw = dict(trajectory="hover", duration=1.0, cog=CogProfile.step(0.1, (0.08, 0.0, 0.0)))
     base = simulate(ctl, **kw)
     pa = simulate(ctl, truth=TruthOptions(parallel_axis=True), **kw)
-    sat = simulate(ctl, truth=TruthOptions(rotor_saturation=True, max_rotor_thrust=2.0), **kw)
+    weak = HUMMINGBIRD.replace(max_rotor_thrust=2.0)
+    sat = simulate(ctl, vehicle=weak, truth=TruthOptions(rotor_saturation=True), **kw)
     assert np.max(np.abs(base.x - pa.x)) > 1e-4
-    f = np.linalg.solve(mixer_matrix(), sat.U.T)
+    f = np.linalg.solve(HUMMINGBIRD.mixer(), sat.U.T)
     assert f.min() >= -1e-12 and f.max() <= 2.0 + 1e-12
     n = min(len(base.t), len(sat.t))
     assert np.max(np.abs(base.x[:n] - sat.x[:n])) > 1e-4
-    f_base = np.linalg.solve(mixer_matrix(), base.U.T)
+    f_base = np.linalg.solve(HUMMINGBIRD.mixer(), base.U.T)
     assert f_base.max() > 2.0, "the saturation test did not saturate"
-    assert MAX_ROTOR_THRUST == pytest.approx(8.54858e-6 * 838 ** 2)
 
 
 def test_parallel_axis_is_neutral_at_zero_offset():
@@ -119,13 +120,12 @@ def test_euler_singularity_named():
 
 def test_batch_agrees_with_single_flights():
     ctl = AdaptiveFeedbackLinearization()
-    base = quadcog.default_parameters()
-    params = np.array([quadcog.with_cog(base, r) for r in
-                       [(0.0, 0.0, 0.0), (0.03, 0.0, 0.0), (0.0, -0.04, 0.01), (0.05, 0.05, 0.0)]])
-    batch = simulate_batch(ctl, params, "circle", duration=3.0, threads=2)
-    serial = simulate_batch(ctl, params, "circle", duration=3.0, threads=1)
-    for b, p in enumerate(params):
-        single = simulate(ctl, "circle", duration=3.0, params=p).metrics
+    vehicles = [HUMMINGBIRD.with_cog(r) for r in
+                [(0.0, 0.0, 0.0), (0.03, 0.0, 0.0), (0.0, -0.04, 0.01), (0.05, 0.05, 0.0)]]
+    batch = simulate_batch(ctl, vehicles, "circle", duration=3.0, threads=2)
+    serial = simulate_batch(ctl, vehicles, "circle", duration=3.0, threads=1)
+    for b, v in enumerate(vehicles):
+        single = simulate(ctl, "circle", duration=3.0, vehicle=v).metrics
         assert batch.rms_position_error[b] == pytest.approx(single.rms_position_error, rel=1e-9)
         assert batch.max_position_error[b] == pytest.approx(single.max_position_error, rel=1e-9)
         assert batch.rms_position_error_tail[b] == pytest.approx(single.rms_position_error_tail,
@@ -136,9 +136,8 @@ def test_batch_agrees_with_single_flights():
 
 def test_batch_reports_divergence():
     ctl = AdaptiveFeedbackLinearization(gamma=0.2, projection_radius=None)
-    base = quadcog.default_parameters()
-    params = np.array([base, quadcog.with_cog(base, (0.06, 0.06, 0.0))])
-    res = simulate_batch(ctl, params, "hover", duration=5.0, cog_shape=lambda t: float(t >= 0.2))
+    vehicles = [HUMMINGBIRD, HUMMINGBIRD.with_cog((0.06, 0.06, 0.0))]
+    res = simulate_batch(ctl, vehicles, "hover", duration=5.0, cog_shape=lambda t: float(t >= 0.2))
     single = simulate(ctl, "hover", duration=5.0, cog=CogProfile.step(0.2, (0.06, 0.06, 0.0)))
     assert list(res.diverged) == [False, True]
     assert res.diverged_at[1] == pytest.approx(single.metrics.diverged_at)
@@ -151,7 +150,7 @@ def test_batch_reports_divergence():
     (dict(dt=0.5, duration=2.0), r"dt = 0.5 s is too large: .* RK4 needs dt < "),
     (dict(x0=np.zeros(5)), "x0 must be 12 finite numbers"),
     (dict(x0=np.full(12, np.nan)), "x0 must be 12 finite numbers"),
-    (dict(params=np.ones(14) * -1), "m = -1.0 must be > 0"),
+    (dict(vehicle=np.ones(14)), "vehicle must be a quadcog Vehicle"),
     (dict(trajectory="spiral"), "unknown trajectory 'spiral'"),
     (dict(path="fast"), "path must be 'compiled' or 'python'"),
     (dict(cog=[(1.0, (0.02, 0, 0), 0.0), (0.5, (0.0, 0, 0), 0.0)]), "must be in time order"),

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from ..conventions import IDX
-from ..params import default_parameters
+from ..vehicle import default_parameters
 from ..progress import ProgressBar
 from .adaptive_design import design_checks, lyapunov_study, plot_lyapunov
 from .failure_map import (adaptive_failures_vs_projection, failure_map, plot_failure_map,
@@ -175,8 +175,8 @@ def analyze(out_dir, grid=41, progress=True, duration=20.0):
     """Run the whole analysis and write it to ``out_dir`` (created if needed).
 
     out_dir: folder (str or Path). grid: failure-map points per axis (grid x grid offsets over
-    [-ARM_LENGTH, ARM_LENGTH]^2 m). progress: print part names and a progress bar for the
-    failure map on stderr. duration: seconds per failure-map flight.
+    [-arm, arm]^2 m, arm = the Hummingbird's 0.17 m). progress: print part names and a
+    progress bar for the failure map on stderr. duration: seconds per failure-map flight.
     Writes pd_sigma.png, zero_dynamics.png, lyapunov.png, failure_map.png, failure_map.npz,
     failure_map.json, analysis.json and analysis.md. Returns the summary dict (the numbers of
     analysis.json, as Python/numpy values; complex eigenvalues stay complex).

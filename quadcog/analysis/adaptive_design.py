@@ -10,7 +10,7 @@ import casadi as ca
 import numpy as np
 
 from ..controllers import AdaptiveFeedbackLinearization
-from ..simulate import Limits, simulate
+from ..simulation import Limits, simulate
 from ..timeline import CogProfile
 from .adaptive_variants import (OracleAdaptive, OracleBMixin, OracleOutputRegulationAdaptive,
                                 OutputRegulationAdaptive)

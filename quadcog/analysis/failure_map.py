@@ -8,10 +8,11 @@ import numpy as np
 from ..controllers import AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization
 from ..controllers.adaptive import admissible_estimate_radius
 from ..errors import ParameterError
-from ..params import ARM_LENGTH, check_parameters, default_parameters, inertia_about_cog, with_cog
+from ..params import check_parameters, inertia_about_cog, with_cog
 from .. import config
 from ..batch import simulate_batch
-from ..simulate import RK4_LIMIT
+from ..simulation import RK4_LIMIT
+from ..vehicle import HUMMINGBIRD, default_parameters
 from ..trajectory import Hover
 
 THRESHOLD = 0.5          # m: tail RMS above this (or a diverged run) counts as a failure
@@ -63,7 +64,7 @@ def rk4_stiffness(controller, params, dt=None):
                      range(params.shape[0])]) * dt
 
 
-def failure_map(grid=41, half_width=ARM_LENGTH, duration=20.0, t_step=1.0, threads=2,
+def failure_map(grid=41, half_width=HUMMINGBIRD.arm_length, duration=20.0, t_step=1.0, threads=2,
                 controllers=None, threshold=THRESHOLD, progress=None):
     """Tail RMS position error (m; the tail is the last ``config.defaults["metrics.tail_fraction"]``
     of each run) after a CoG step at hover.
@@ -85,9 +86,9 @@ def failure_map(grid=41, half_width=ARM_LENGTH, duration=20.0, t_step=1.0, threa
     xs = np.linspace(-half_width, half_width, grid)
     ys = xs.copy()
     adm, lam = admissibility(xs, ys)
-    base = default_parameters()
     idx = np.argwhere(adm)
-    params = np.array([with_cog(base, (xs[j], ys[i], 0.0)) for i, j in idx]).reshape(-1, 14)
+    vehicles = [HUMMINGBIRD.with_cog((xs[j], ys[i], 0.0)) for i, j in idx]
+    params = np.array([v.parameters() for v in vehicles]).reshape(-1, 14)
     out = {"x_G": xs, "y_G": ys, "admissible": adm, "lambda_min": lam,
            "n_points": int(adm.size), "n_admissible": int(adm.sum()), "duration": duration,
            "t_step": t_step, "threshold": threshold,
@@ -102,7 +103,7 @@ def failure_map(grid=41, half_width=ARM_LENGTH, duration=20.0, t_step=1.0, threa
         div_at = np.full(adm.shape, np.nan)
         stiff = 0
         if len(params):
-            br = simulate_batch(ctl, params, "hover", duration=duration,
+            br = simulate_batch(ctl, vehicles, "hover", duration=duration,
                                 cog_shape=shape, threads=threads, progress=sub)
             tail[adm] = br.rms_position_error_tail
             div[adm] = br.diverged
@@ -127,7 +128,7 @@ def adaptive_failures_vs_projection(fm, name="adaptive"):
     c = fm["controllers"].get(name)
     if c is None or not np.any(c["failed"]):
         return None
-    radius = admissible_estimate_radius(default_parameters())
+    radius = admissible_estimate_radius(HUMMINGBIRD)
     X, Y = np.meshgrid(fm["x_G"], fm["y_G"])
     r = np.hypot(X, Y)[c["failed"]]
     return {"radius": radius, "n_failed": int(r.size), "n_beyond": int(np.sum(r > radius)),

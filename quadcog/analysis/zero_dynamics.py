@@ -20,7 +20,8 @@ from scipy.integrate import solve_ivp
 
 from ..conventions import IDX, OUTPUT_ROWS
 from ..model import load
-from ..params import check_parameters, default_parameters, with_cog
+from ..params import check_parameters, with_cog
+from ..vehicle import default_parameters
 
 ZETA_ROWS = [0, 1, 6, 7]           # x, y, u, v in the state
 ZETA_NAMES = ("x", "y", "u", "v")

@@ -12,16 +12,16 @@ import numpy as np
 
 from ..conventions import B_U
 from ..errors import InputError
-from ..params import ARM_LENGTH
 from .feedback_linearization import FeedbackLinearization
 from .shaping import kinematics
 
 
-def admissible_estimate_radius(p, margin=0.95):
-    """min(arm length, margin * sqrt(min(Ixx, Iyy, Izz) / m)) in m: any r_hat in this ball
-    keeps the inertia about the estimated CoG positive definite (m |r|^2 < min I suffices)."""
-    p = np.asarray(p, dtype=float)
-    return float(min(ARM_LENGTH, margin * np.sqrt(np.min(p[2:5]) / p[0])))
+def admissible_estimate_radius(vehicle, margin=0.95):
+    """min(arm length, margin * sqrt(min(Ixx, Iyy, Izz) / m)) in m for a Vehicle: any r_hat in
+    this ball keeps the inertia about the estimated CoG positive definite (m |r|^2 < min I
+    suffices)."""
+    smallest = min(vehicle.Ixx, vehicle.Iyy, vehicle.Izz)
+    return float(min(vehicle.arm_length, margin * np.sqrt(smallest / vehicle.m)))
 
 
 class AdaptiveFeedbackLinearization(FeedbackLinearization):
@@ -41,9 +41,9 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
     name = "adaptive_feedback_linearization"
     n_state = 3
 
-    def __init__(self, nominal=None, model=None, gamma=0.01, Q=None,
+    def __init__(self, vehicle=None, model=None, *, gamma=0.01, Q=None,
                  projection_radius="default", **kwargs):
-        super().__init__(nominal, model, **kwargs)
+        super().__init__(vehicle, model, **kwargs)
         gamma = np.broadcast_to(np.asarray(gamma, dtype=float), (3,)).copy()
         if not np.all(np.isfinite(gamma)) or np.any(gamma <= 0):
             raise InputError(f"gamma must be positive, got {gamma}")
@@ -53,7 +53,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
             raise InputError(f"Q must be a symmetric positive definite 8x8 matrix, got {Q}")
         self.Q = Q
         if isinstance(projection_radius, str) and projection_radius == "default":
-            projection_radius = admissible_estimate_radius(self.nominal)
+            projection_radius = admissible_estimate_radius(self.vehicle)
         if projection_radius is not None and not projection_radius > 0:
             raise InputError(f"projection_radius must be > 0 m or None, got {projection_radius}")
         self.projection_radius = projection_radius
@@ -61,6 +61,10 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
                                  [-np.diag(self.kp), -np.diag(self.kd)]])
         from scipy.linalg import solve_continuous_lyapunov   # here: slow to import
         self.P = solve_continuous_lyapunov(self.A_error.T, -Q)
+
+    def initial_state(self):
+        """r_hat at t = 0: the CoG of the controller's model (zero unless it believes one)."""
+        return self.vehicle.r_G
 
     def parts(self, x, ref, r_hat):
         """(U, e_s, Phi, B) of the law at estimate r_hat (SX); the pieces of the update."""

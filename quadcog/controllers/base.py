@@ -1,10 +1,17 @@
 """What every controller is: a CasADi control law, compiled on demand, callable from Python.
 
-A controller maps (t, x, ref, c) to (U, c_dot): time (s), state x (12,), reference ref (11,)
+A controller maps (t, x, ref, c) to (U, c_dot): time (s), state x (12,), reference ref (14,)
 (see ``quadcog.trajectory``), its own state c (``n_state``,; the adaptive controller's r_hat)
 to the input U (4,) and the rate of its state. ``function()`` is that law as a CasADi Function
 (SX, to compose into bigger expressions), ``compiled()`` an allocation-free compiled call.
+
+A controller is designed for a model of the vehicle, ``controller.vehicle`` (a Vehicle: what
+the controller believes; by default the Hummingbird with r_G = 0). ``for_vehicle(v)`` gives the
+same controller (same settings) designed for another model; ``quadcog.simulate`` uses it for
+its ``controller_model`` argument. Subclasses take ``vehicle`` and ``model`` as their first two
+parameters and their settings as keywords.
 """
+
 import casadi as ca
 import numpy as np
 
@@ -12,8 +19,9 @@ from ..compiled import compile_function
 from ..errors import InputError
 from ..fastcall import FastCall
 from ..model import load
-from ..params import check_parameters, default_parameters, with_cog
+from ..params import with_cog
 from ..trajectory import REF_SIZE
+from ..vehicle import HUMMINGBIRD, Vehicle
 
 
 class Controller:
@@ -22,14 +30,27 @@ class Controller:
     name = "controller"
     n_state = 0
 
-    def __init__(self, nominal=None, model=None):
-        """nominal: the controller's model parameters p (14,); default: the default vehicle
-        with r_G = 0 (the controller does not know the CoG). model: a quadcog Model."""
+    def __new__(cls, *args, **kwargs):
+        self = super().__new__(cls)
+        self._init_args = (args, kwargs)        # to redesign the same controller: for_vehicle
+        return self
+
+    def __init__(self, vehicle=None, model=None):
+        """vehicle: the controller's model of the vehicle, a Vehicle (default: the Hummingbird
+        with r_G = 0: the controller does not know the CoG). model: a quadcog Model (the
+        generated functions; default ``quadcog.load()``)."""
         self.model = model or load()
-        nominal = default_parameters() if nominal is None else np.asarray(nominal, float)
-        self.nominal = check_parameters(nominal, "nominal")
+        vehicle = HUMMINGBIRD if vehicle is None else vehicle
+        if not isinstance(vehicle, Vehicle):
+            raise InputError(f"vehicle must be a quadcog Vehicle (the controller's model), got "
+                             f"{vehicle!r}")
+        self.vehicle = vehicle
+        self.nominal = vehicle.parameters()       # the model's parameter vector p (14,)
         self._function = None
         self._compiled = None
+        self._cache_key = None
+        self._jacobian = None
+        self._designs = {}
 
     # -- to implement -------------------------------------------------------------------
     def expression(self, t, x, ref, c):
@@ -80,6 +101,42 @@ class Controller:
                 raise InputError(f"{name} has non-finite entries: {a}")
         U, c_dot = self.function()(float(t), x, ref, c)
         return np.array(U).ravel(), np.array(c_dot).ravel()
+
+    def for_vehicle(self, vehicle):
+        """This controller, with the same settings, designed for the model ``vehicle`` (a
+        Vehicle); ``self`` when that is already its model. Designs are kept per vehicle."""
+        if vehicle == self.vehicle:
+            return self
+        if vehicle not in self._designs:
+            args, kwargs = self._init_args
+            kwargs = dict(kwargs, **dict(zip(("vehicle", "model"), args)))
+            if len(args) > 2:
+                raise InputError(f"{type(self).__name__} was built with positional settings; "
+                                 "pass them as keywords so that it can be redesigned")
+            kwargs.update(vehicle=vehicle, model=self.model)
+            self._designs[vehicle] = type(self)(**kwargs)
+        return self._designs[vehicle]
+
+    def cache_key(self):
+        """What identifies this controller's compiled code: its class and its law, serialized
+        (computed once)."""
+        if self._cache_key is None:
+            self._cache_key = (type(self).__name__, self.function().serialize())
+        return self._cache_key
+
+    def closed_loop_jacobian(self):
+        """CasADi Function (x (12), ref (14), p (14)) -> d/dx f(x, U(0, x, ref, c0), p): the
+        Jacobian of the closed loop at the controller's initial state ``c0``, f the truth
+        dynamics without extra effects (built once)."""
+        if self._jacobian is None:
+            x, ref, p = ca.SX.sym("x", 12), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("p", 14)
+            U, _ = self.function()(0.0, x, ref, self.initial_state())
+            f = self.model.casadi_function("truth_dynamics")
+            self._jacobian = ca.Function(
+                "closed_loop_jacobian", [x, ref, p],
+                [ca.jacobian(f(x, U, p, ca.DM.zeros(3), ca.DM.zeros(6)), x)],
+                ["x", "ref", "p"], ["A"])
+        return self._jacobian
 
     def nominal_with_cog(self, r):
         """The nominal parameters with r_G = r (SX or numbers)."""

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..conventions import IDX
 from ..errors import InputError
+from ..params import with_cog
 from ..trajectory import ACC, POS, VEL, YAW, YAW_RATE
 from .base import Controller
 from .shaping import drag_over_mass, kinematics, wrap_angle, yaw_rotation_T
@@ -30,15 +31,17 @@ class CascadePD(Controller):
 
     name = "cascade_pd"
 
-    def __init__(self, nominal=None, model=None, poles_z=(-3.0, -4.0), poles_psi=(-4.0, -5.0),
-                 poles_x=(-2.0, -2.5, -10.0, -12.0), poles_y=(-2.0, -2.5, -10.0, -12.0),
-                 max_tilt=0.6):
-        super().__init__(nominal, model)
+    def __init__(self, vehicle=None, model=None, *, poles_z=(-3.0, -4.0),
+                 poles_psi=(-4.0, -5.0), poles_x=(-2.0, -2.5, -10.0, -12.0),
+                 poles_y=(-2.0, -2.5, -10.0, -12.0), max_tilt=0.6):
+        super().__init__(vehicle, model)
         self.poles = {"z": poles_z, "psi": poles_psi, "x": poles_x, "y": poles_y}
         self.max_tilt = float(max_tilt)
-        p = self.nominal
-        self.hover_input = np.array([p[IDX["m"]] * p[IDX["g"]], 0, 0, 0])
-        A, B = self.model.linearization(np.zeros(12), self.hover_input, p)
+        # designed at r_G = 0 (the loops decouple there); a CoG the model believes in enters
+        # only as the hover moment it needs, fed forward
+        self.hover_input = self.vehicle.hover_input()
+        p = with_cog(self.nominal, np.zeros(3))
+        A, B = self.model.linearization(np.zeros(12), [self.hover_input[0], 0, 0, 0], p)
         self.A, self.B = A, B
         from scipy.signal import place_poles      # here: scipy.signal takes a second to import
         self.gains = {}
@@ -77,7 +80,7 @@ class CascadePD(Controller):
         phi_d = clip(-(ky[0] * e_p[1] + ky[1] * e_v[1]) / ky[2] - (a_ff[1] + cy * v_ff[1]) / g)
         U1 = (m * (g + ref[ACC][2]) + cz * m * ref[VEL][2] - kz[0] * (x[2] - ref[POS][2])
               - kz[1] * e_v[2])
-        U2 = -ky[2] * (x[3] - phi_d) - ky[3] * x[9]
-        U3 = -kx[2] * (x[4] - theta_d) - kx[3] * x[10]
+        U2 = self.hover_input[1] - ky[2] * (x[3] - phi_d) - ky[3] * x[9]
+        U3 = self.hover_input[2] - kx[2] * (x[4] - theta_d) - kx[3] * x[10]
         U4 = -kpsi[0] * wrap_angle(x[5] - ref[YAW]) - kpsi[1] * (x[11] - ref[YAW_RATE])
         return ca.vertcat(U1, U2, U3, U4), ca.SX(0, 1)

@@ -20,10 +20,10 @@ class FeedbackLinearization(Controller):
 
     name = "feedback_linearization"
 
-    def __init__(self, nominal=None, model=None, poles_z=(-3.0, -4.0),
+    def __init__(self, vehicle=None, model=None, *, poles_z=(-3.0, -4.0),
                  poles_attitude=(-10.0, -12.0), poles_psi=(-4.0, -5.0),
                  poles_position=(-1.5, -2.0), max_tilt=0.6):
-        super().__init__(nominal, model)
+        super().__init__(vehicle, model)
         kz = second_order_gains(poles_z, "poles_z")
         ka = second_order_gains(poles_attitude, "poles_attitude")
         kpsi = second_order_gains(poles_psi, "poles_psi")

@@ -1,6 +1,10 @@
 """Closed-loop simulation of one flight: a Python step loop (any controller) and a one-call
 compiled path (the closed-loop step mapaccum'd over chunks of steps, compiled). Batches of
-flights are in ``quadcog.batch``."""
+flights are in ``quadcog.batch``.
+
+Two vehicles take part in a run: the truth ``vehicle`` that flies, and the ``controller_model``
+the controller is designed for (what it believes; by default the truth with r_G = 0, since the
+CoG is what it does not know)."""
 from dataclasses import dataclass, field
 import math
 import time
@@ -17,11 +21,12 @@ from .conventions import rotation_matrix
 from .errors import EulerSingularityError, InputError
 from .fastcall import FastCall
 from .model import load
-from .params import check_parameters, default_parameters, with_cog
-from .plant import TruthOptions, plant_step_function
+from .params import check_parameters, with_cog
+from .plant import Actuation, TruthOptions, initial_rotor_thrusts, plant_step_function
 from .result import Metrics, SimulationResult, position_metrics
 from .timeline import CogProfile, wrench_table
-from .trajectory import POS, REF_SIZE, VEL, YAW, as_trajectory
+from .trajectory import POS, VEL, YAW, as_trajectory
+from .vehicle import HUMMINGBIRD, Vehicle
 
 CHUNK = 1000          # steps per compiled call
 RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region with margin
@@ -46,15 +51,6 @@ def _compiled(key, build):
     return _compiled_cache[key]
 
 
-def _controller_key(controller):
-    """What identifies a controller's compiled code: its law, serialized once."""
-    key = getattr(controller, "_cache_key", None)
-    if key is None:
-        key = controller._cache_key = (type(controller).__name__,
-                                       controller.function().serialize())
-    return key
-
-
 def _check_time(duration, dt):
     for name, v in (("duration", duration), ("dt", dt)):
         if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
@@ -63,35 +59,29 @@ def _check_time(duration, dt):
         raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
 
 
-def _closed_loop_jacobian(controller):
-    """Function (x, ref, P) -> d/dx f(x, U(t=0, x, ref, c0)), built once per controller."""
-    J = getattr(controller, "_closed_loop_jacobian", None)
-    if J is None:
-        x, ref, P = ca.SX.sym("x", 12), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("P", 14)
-        U, _ = controller.function()(0.0, x, ref, controller.initial_state())
-        f = controller.model.casadi_function("truth_dynamics")
-        J = ca.Function("closed_loop_jacobian", [x, ref, P],
-                        [ca.jacobian(f(x, U, P, ca.DM.zeros(3), ca.DM.zeros(6)), x)])
-        controller._closed_loop_jacobian = J
-    return J
-
-
-def check_step_size(controller, x0, ref0, P, dt, options):
-    """Raise InputError if RK4 with step dt is unstable for the closed loop at the start.
+def check_step_size(controller, x0, ref0, P, dt, actuation):
+    """Raise InputError if RK4 with step dt is unstable for the closed loop at the start, or
+    for the motor lag.
 
     The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from CasADi AD."""
-    lam = np.linalg.eigvals(np.array(_closed_loop_jacobian(controller)(x0, ref0, P)))
+    if actuation.n_rotor_states and dt / actuation.time_constant > RK4_LIMIT:
+        raise InputError(f"dt = {dt} s is too large for the motor time constant "
+                         f"{actuation.time_constant} s: RK4 needs dt < "
+                         f"{RK4_LIMIT * actuation.time_constant:.3g} s")
+    if controller is None:
+        return
+    lam = np.linalg.eigvals(np.array(controller.closed_loop_jacobian()(x0, ref0, P)))
     fastest = float(np.max(np.abs(lam)))
     if fastest * dt > RK4_LIMIT:
         raise InputError(f"dt = {dt} s is too large: the closed loop has an eigenvalue of "
                          f"magnitude {fastest:.3g} 1/s, and RK4 needs dt < {RK4_LIMIT / fastest:.3g} s")
 
 
-def _prepare(trajectory, duration, dt, params, cog, disturbances, x0):
+def _prepare(trajectory, duration, dt, vehicle, cog, disturbances, x0):
     """Validate the run's inputs and tabulate them: (trajectory, P, step table, x0)."""
     _check_time(duration, dt)
     trajectory = as_trajectory(trajectory)
-    P = default_parameters() if params is None else check_parameters(params, "params")
+    P = vehicle.parameters()
     cog = cog if isinstance(cog, CogProfile) else CogProfile(list(cog or []))
     n = int(round(duration / dt))
     times = np.arange(n + 1) * dt
@@ -101,7 +91,7 @@ def _prepare(trajectory, duration, dt, params, cog, disturbances, x0):
     # checking where each change ends covers the ramps between them.
     for i, change in enumerate(cog.changes):
         check_parameters(with_cog(P, P[11:14] + np.asarray(change.r)),
-                         f"params with the CoG of cog change {i} (r = {list(change.r)} m)")
+                         f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
     table = step_table(times, dt, refs, r_tab, wrench_table(disturbances, times),
                        tail_from=tail_start(duration))
     x0 = start_at_reference(refs[0]) if x0 is None else np.asarray(x0, dtype=float)
@@ -160,24 +150,39 @@ def _singularity_check(t, x):
             f"kinematics (Q(eta2)) are singular there; lower Limits.max_tilt below 90 deg")
 
 
-def simulate(controller, trajectory="hover", duration=10.0, dt=None, params=None, cog=None,
-             disturbances=(), truth=None, x0=None, path="compiled", limits=None,
-             progress=None, check_dt=True):
+def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=None,
+             controller_model=None, cog=None, disturbances=(), truth=None, x0=None,
+             path="compiled", limits=None, progress=None, check_dt=True):
     """Fly one closed-loop run and return a SimulationResult.
 
-    controller: a quadcog Controller, or (path="python" only) a callable U = ctrl(t, x).
-    trajectory: a Trajectory, 'hover' | 'circle' | 'figure8' | 'helix', or a callable
-        (see quadcog.trajectory). duration, dt: seconds (fixed-step RK4; dt defaults to
+    Parameters
+    ----------
+    controller : a quadcog Controller, or (path="python" only) a callable U = ctrl(t, x).
+    trajectory : a Trajectory, 'hover' | 'circle' | 'figure8' | 'helix', or a callable
+        (see quadcog.trajectory).
+    duration, dt : seconds (fixed-step RK4; dt defaults to
         ``quadcog.config.defaults["simulate.dt"]``, 1 ms).
-    params: the truth parameters p (14,) (default vehicle); the CoG of the run is
-        r_G(params) + cog(t). cog: a CogProfile or a list of (t, r, ramp) changes.
-    disturbances: Disturbance pulses. truth: TruthOptions (parallel axis, rotor saturation).
-    x0: initial state (default: at the reference, level, with the reference velocity).
-    path: "compiled" (one compiled call per 1000 steps) or "python" (a step loop).
-    limits: Limits of divergence. progress: a callable(fraction), e.g. a ProgressBar.
-    A diverged run stops there and says when and why in result.metrics.
+    vehicle : the truth Vehicle that flies (default: the controller's model, or the
+        Hummingbird for a callable). Its CoG during the run is ``vehicle.r_G + cog(t)``.
+    controller_model : the Vehicle the controller is designed for, i.e. what it believes
+        (default: ``vehicle`` with r_G = 0 when ``vehicle`` is given, else the controller's own
+        model). The controller is redesigned for it with ``controller.for_vehicle``.
+    cog : a CogProfile or a list of (t, r, ramp) changes (m, body frame).
+    disturbances : Disturbance pulses.
+    truth : TruthOptions (parallel axis, rotor saturation, motor lag); default all off.
+    x0 : initial state (12,) (default: at the reference, level, with the reference velocity).
+    path : "compiled" (one compiled call per 1000 steps) or "python" (a step loop).
+    limits : Limits of divergence.
+    progress : a callable(fraction), e.g. a ProgressBar.
+    check_dt : refuse a dt too large for RK4 on the closed loop at the start.
+
+    Returns
+    -------
+    SimulationResult. A diverged run stops there and says when and why in result.metrics.
     """
     options = truth or TruthOptions()
+    if not isinstance(options, TruthOptions):
+        raise InputError(f"truth must be a quadcog TruthOptions, got {truth!r}")
     limits = limits or Limits()
     dt = config.get("simulate.dt", dt)
     if path not in ("compiled", "python"):
@@ -186,32 +191,46 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=None, params=None
     if not is_law and not (path == "python" and callable(controller)):
         raise InputError("controller must be a quadcog Controller, or a callable U = ctrl(t, x) "
                          f"with path='python'; got {controller!r}")
-    trajectory, P, table, x0 = _prepare(trajectory, duration, dt, params, cog, disturbances, x0)
-    if check_dt and is_law:
-        check_step_size(controller, x0, table[0, TABLE["ref"]], truth_parameters(P, table[0]),
-                        dt, options)
+    if vehicle is None:
+        vehicle = controller.vehicle if is_law else HUMMINGBIRD
+        model_default = vehicle
+    else:
+        model_default = vehicle.with_cog(np.zeros(3)) if isinstance(vehicle, Vehicle) else None
+    for name, v in (("vehicle", vehicle), ("controller_model", controller_model)):
+        if v is not None and not isinstance(v, Vehicle):
+            raise InputError(f"{name} must be a quadcog Vehicle, got {v!r}")
+    if is_law:
+        controller = controller.for_vehicle(controller_model or model_default)
+    trajectory, P, table, x0 = _prepare(trajectory, duration, dt, vehicle, cog, disturbances, x0)
+    actuation = Actuation.of(vehicle, options)
+    P0 = truth_parameters(P, table[0])
+    f0 = initial_rotor_thrusts(vehicle.with_parameters(P0), actuation)
+    if check_dt:
+        check_step_size(controller if is_law else None, x0, table[0, TABLE["ref"]], P0, dt,
+                        actuation)
     t0 = time.perf_counter()
     if path == "compiled":
-        X, U = _run_compiled(controller, P, table, x0, options, limits, progress)
+        X, U = _run_compiled(controller, P, table, x0, f0, actuation, limits, progress)
     else:
-        X, U = _run_python(controller, P, table, x0, options, limits, progress, is_law)
+        X, U = _run_python(controller, P, table, x0, f0, actuation, limits, progress, is_law)
     elapsed = time.perf_counter() - t0
-    return _result(controller, X, U, table, P, duration, limits, path, elapsed)
+    return _result(controller, X, U, table, P, duration, limits, path, elapsed,
+                   actuation.n_rotor_states)
 
 
-def chunk_function(controller, options, n=CHUNK):
-    """Compiled Function (X0, P, rows 27 x n) -> (X 15 x n, U 4 x n): n closed-loop steps.
+def chunk_function(controller, actuation, n=CHUNK):
+    """Compiled Function (X0, P, rows 27 x n) -> (X, U 4 x n): n closed-loop steps.
 
     P is shared by all steps (mapaccum alone would expect one copy per step)."""
     def build():
-        step = closed_loop_step(controller, options)
+        step = closed_loop_step(controller, actuation)
         acc = step.mapaccum("closed_loop_steps", n)
         X0, P = ca.MX.sym("X0", step.size1_in(0)), ca.MX.sym("P", 14)
         rows = ca.MX.sym("rows", TABLE_SIZE, n)
         Xs, Us = acc(X0, ca.repmat(P, 1, n), rows)
         return ca.Function("closed_loop_chunk", [X0, P, rows], [Xs, Us],
                            ["X0", "P", "rows"], ["X", "U"])
-    return _compiled(("chunk", _controller_key(controller), options, n), build)
+    return _compiled(("chunk", controller.cache_key(), actuation, n), build)
 
 
 def _padded(table):
@@ -222,16 +241,16 @@ def _padded(table):
     return np.vstack([table, np.repeat(table[-1:], n_rows - table.shape[0], axis=0)])
 
 
-def _run_compiled(controller, P, table, x0, options, limits, progress):
-    chunk = chunk_function(controller, options)
+def _run_compiled(controller, P, table, x0, f0, actuation, limits, progress):
+    chunk = chunk_function(controller, actuation)
     n_steps = table.shape[0] - 1
     rows = _padded(table)
     n_pad = rows.shape[0] - 1
     # C-ordered (steps, k) blocks are exactly CasADi's column-major (k, steps) matrices:
     # the compiled function reads the table and writes X and U in place, without copies.
-    X = np.empty((n_pad + 1, 12 + controller.n_state))
+    X = np.empty((n_pad + 1, 12 + f0.size + controller.n_state))
     U = np.empty((n_pad + 1, 4))
-    X[0] = np.concatenate([x0, controller.initial_state()])
+    X[0] = np.concatenate([x0, f0, controller.initial_state()])
     P = np.ascontiguousarray(P, dtype=float)
     buf, evaluate = chunk.buffer()
     buf.set_arg(1, memoryview(P))
@@ -256,22 +275,25 @@ def _run_compiled(controller, P, table, x0, options, limits, progress):
     return X[:n_steps + 1], U[:n_steps + 1]
 
 
-def _run_python(controller, P, table, x0, options, limits, progress, is_law):
-    key = ("plant", options)
-    plant = FastCall(_compiled(key, lambda: plant_step_function(load(), options)))
+def _run_python(controller, P, table, x0, f0, actuation, limits, progress, is_law):
+    key = ("plant", actuation)
+    plant = FastCall(_compiled(key, lambda: plant_step_function(load(), actuation)))
     n_steps = table.shape[0] - 1
     nc = controller.n_state if is_law else 0
-    X = np.empty((n_steps + 1, 12 + nc))
+    nf = f0.size
+    ic = 12 + nf                 # where the controller state starts in X
+    X = np.empty((n_steps + 1, ic + nc))
     U = np.empty((n_steps + 1, 4))
     X[0, :12] = x0
+    X[0, 12:ic] = f0
     if nc:
-        X[0, 12:] = controller.initial_state()
+        X[0, ic:] = controller.initial_state()
     law = controller.compiled() if is_law else None
     if law is not None:
         t_in, x_in, ref_in, c_in = law.inputs
         U_out, cdot_out = law.outputs
-    px, pU, pP, pw, pdt = plant.inputs
-    x_next, U_app = plant.outputs
+    px, pf, pU, pP, pw, pdt = plant.inputs
+    x_next, f_next, U_app = plant.outputs
     ref_slice, w_slice = TABLE["ref"], TABLE["wrench"]
     refs = table[:, ref_slice]
     max_err2, max_tilt = limits.max_position_error ** 2, limits.max_tilt
@@ -284,7 +306,7 @@ def _run_python(controller, P, table, x0, options, limits, progress, is_law):
             x_in[:] = x
             ref_in[:] = refs[k]
             if nc:
-                c_in[:] = X[k, 12:]
+                c_in[:] = X[k, ic:]
             law()
             pU[:] = U_out
         else:
@@ -294,14 +316,18 @@ def _run_python(controller, P, table, x0, options, limits, progress, is_law):
                                  "expected (4,)")
             pU[:] = Uk
         px[:] = x
+        if nf:
+            pf[:] = X[k, 12:ic]
         pP[:] = truth_parameters(P, row)
         pw[:] = row[w_slice]
         pdt[0] = row[1]
         plant()
         X[k + 1, :12] = x_next
+        if nf:
+            X[k + 1, 12:ic] = f_next
         U[k] = U_app
         if nc:
-            X[k + 1, 12:] = controller.project_numpy(X[k, 12:] + row[1] * cdot_out)
+            X[k + 1, ic:] = controller.project_numpy(X[k, ic:] + row[1] * cdot_out)
         # scalar checks (NaN fails every comparison); _result names the cause precisely
         r = refs[k + 1]
         dx, dy, dz = x_next[0] - r[0], x_next[1] - r[1], x_next[2] - r[2]
@@ -316,7 +342,7 @@ def _run_python(controller, P, table, x0, options, limits, progress, is_law):
     return X, U
 
 
-def _result(controller, X, U, table, P, duration, limits, path, elapsed):
+def _result(controller, X, U, table, P, duration, limits, path, elapsed, nf):
     n = X.shape[0]
     t = table[:n, TABLE["t"]]
     ref = table[:n, TABLE["ref"]]
@@ -330,8 +356,8 @@ def _result(controller, X, U, table, P, duration, limits, path, elapsed):
     if limits.max_tilt >= np.pi / 2 - 1e-6:     # otherwise the tilt limit catches it first
         _singularity_check(t[:keep], X[:keep])
     x = X[:keep, :12]
-    nc = X.shape[1] - 12
-    r_hat = X[:keep, 12:15] if nc >= 3 else np.zeros((keep, 3))
+    nc = X.shape[1] - 12 - nf
+    r_hat = X[:keep, 12 + nf:15 + nf] if nc >= 3 else np.zeros((keep, 3))
     metrics = Metrics(**position_metrics(t[:keep], x, ref[:keep], duration))
     if idx is not None:
         metrics.diverged, metrics.diverged_at, metrics.diverged_cause = True, float(t[idx]), cause
