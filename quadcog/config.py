@@ -14,6 +14,8 @@ Keys:
 - ``limits.max_position_error``: a run diverges when the position error exceeds this (m).
 - ``limits.max_tilt_deg``: ... or when |phi| or |theta| exceeds this (deg).
 - ``metrics.tail_fraction``: the tail metrics cover this last fraction of the run.
+- ``simulate.max_steps``: runs of more steps (duration / dt) are refused before anything is
+  allocated (about 1 KiB per step; ``quadcog.validate.step_count``).
 """
 
 _FACTORY = {
@@ -21,6 +23,7 @@ _FACTORY = {
     "limits.max_position_error": 10.0,
     "limits.max_tilt_deg": 85.0,
     "metrics.tail_fraction": 0.25,
+    "simulate.max_steps": 10_000_000,
 }
 
 defaults = dict(_FACTORY)

@@ -14,6 +14,7 @@ from .fastcall import FastCall
 from .generated import C_SOURCE, load_casadi_function, verify
 from .params import check_parameters
 from .paths import generated_dir
+from .validate import vector
 
 Linearization = namedtuple("Linearization", "A B")
 _warned_no_compiler = False
@@ -22,14 +23,7 @@ _cache_lock = threading.Lock()
 
 
 def _as_vector(name, value, n):
-    a = np.asarray(value, dtype=float)
-    if a.shape not in ((n,), (n, 1)):
-        raise InputError(f"{name} must have shape ({n},), got shape {a.shape}")
-    a = a.reshape(n)
-    if not np.isfinite(a).all():
-        k = int(np.flatnonzero(~np.isfinite(a))[0])
-        raise InputError(f"{name}[{k}] = {a[k]} is not finite")
-    return a
+    return vector(value, name, n)
 
 
 class Model:

@@ -3,8 +3,11 @@
 ``quadcog.vehicle.Vehicle``."""
 import numpy as np
 
+from .admissibility import LARGEST, MARGIN, SMALLEST, inertia_about_cog, inertia_ratio  # noqa: F401 (re-export)
 from .conventions import IDX, N_PARAM, PARAM_NAMES, R_G
-from .errors import InputError, ParameterError
+from .errors import ParameterError
+from .validate import vector
+
 
 def with_cog(p, r_G):
     """A copy of ``p`` (14,) with the CoG offset replaced by ``r_G`` (3,), in m."""
@@ -13,20 +16,10 @@ def with_cog(p, r_G):
     return p
 
 
-def inertia_about_cog(p):
-    """I_G = I_O - m (|r_G|^2 I - r_G r_G^T), 3x3 in kg m^2."""
-    p = np.asarray(p, dtype=float)
-    r = p[R_G]
-    return np.diag(p[IDX["Ixx"]:IDX["Izz"] + 1]) - p[IDX["m"]] * (r @ r * np.eye(3) - np.outer(r, r))
-
-
 def check_parameters(p, name="p"):
-    """Raise ParameterError unless ``p`` is an admissible (14,) parameter vector."""
-    p = np.asarray(p, dtype=float)
-    if p.shape not in ((N_PARAM,), (N_PARAM, 1)):
-        raise InputError(f"{name} must have shape ({N_PARAM},) ordered {PARAM_NAMES}, "
-                         f"got shape {p.shape}")
-    p = p.reshape(-1)
+    """Raise ParameterError unless ``p`` is an admissible (14,) parameter vector (docs/model.md
+    sec. 1.4; the margin is ``quadcog.admissibility.MARGIN``); returns it as a float array."""
+    p = vector(p, name, N_PARAM, finite=False, error=ParameterError)
     bad = np.flatnonzero(~np.isfinite(p))
     if bad.size:
         k = bad[0]
@@ -37,11 +30,18 @@ def check_parameters(p, name="p"):
     for k in ("c_x", "c_y", "c_z", "c_phi", "c_theta", "c_psi"):
         if p[IDX[k]] < 0:
             raise ParameterError(f"{name}: {k} = {p[IDX[k]]} must be >= 0")
-    eig = np.linalg.eigvalsh(inertia_about_cog(p))
-    if eig[0] <= 0:
+    for k in PARAM_NAMES[:IDX["c_psi"] + 1]:
+        lo = 0.0 if k.startswith("c_") else SMALLEST
+        if not lo <= p[IDX[k]] <= LARGEST:
+            raise ParameterError(f"{name}: {k} = {p[IDX[k]]} is out of scale: expected a "
+                                 f"number in [{lo:g}, {LARGEST:g}] (SI units, docs/model.md "
+                                 f"sec. 1.4)")
+    ratio = inertia_ratio(p)
+    if not ratio >= MARGIN:             # NaN (overflow) fails too
         raise ParameterError(
             f"{name}: r_G = {p[R_G].tolist()} m is too far from O for m = {p[IDX['m']]:g} kg and "
             f"I_O = diag({', '.join(f'{v:g}' for v in p[IDX['Ixx']:IDX['Izz'] + 1])}): the "
-            f"inertia about the CoG has "
-            f"eigenvalue {eig[0]:.3g} (expected > 0), so M is not positive definite")
+            f"inertia about the CoG keeps only {ratio:.3g} of I_O in its weakest direction "
+            f"(expected >= {MARGIN:g}, docs/model.md sec. 1.4); M is "
+            + ("not positive definite" if not ratio > 0 else "nearly singular"))
     return p

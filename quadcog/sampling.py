@@ -2,13 +2,13 @@
 import numpy as np
 
 from .conventions import IDX
-from .params import inertia_about_cog
+from .admissibility import is_admissible
 
 
-def random_parameters(rng, margin=1e-4):
+def random_parameters(rng):
     """An admissible parameter set p (14,): m in [0.3, 2] kg, g in [9, 10.5] m/s^2, I_O entries
-    in [0.003, 0.05] kg m^2, drag in [0, 0.5], r_G in [-0.1, 0.1]^3 m, resampled until the
-    inertia about the CoG has eigenvalues above ``margin``. ``rng``: numpy Generator."""
+    in [0.003, 0.05] kg m^2, drag in [0, 0.5], r_G in [-0.1, 0.1]^3 m, resampled until it is
+    admissible with the margin of ``quadcog.admissibility``. ``rng``: numpy Generator."""
     while True:
         p = np.empty(14)
         p[IDX["m"]] = rng.uniform(0.3, 2.0)
@@ -16,7 +16,7 @@ def random_parameters(rng, margin=1e-4):
         p[IDX["Ixx"]:IDX["Izz"] + 1] = rng.uniform(0.003, 0.05, 3)
         p[IDX["c_x"]:IDX["c_psi"] + 1] = rng.uniform(0.0, 0.5, 6)
         p[IDX["x_G"]:] = rng.uniform(-0.1, 0.1, 3)
-        if np.linalg.eigvalsh(inertia_about_cog(p))[0] > margin:
+        if is_admissible(p):
             return p
 
 

@@ -26,6 +26,7 @@ from .plant import Actuation, TruthOptions, initial_rotor_thrusts, plant_step_fu
 from .result import Metrics, SimulationResult, position_metrics
 from .timeline import CogProfile, wrench_table
 from .trajectory import POS, VEL, YAW, as_trajectory
+from .validate import positive, step_count
 from .vehicle import HUMMINGBIRD, Vehicle
 
 CHUNK = 1000          # steps per compiled call
@@ -52,11 +53,10 @@ def _compiled(key, build):
 
 
 def _check_time(duration, dt):
-    for name, v in (("duration", duration), ("dt", dt)):
-        if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
-            raise InputError(f"{name} must be a positive number of seconds, got {v!r}")
+    duration, dt = positive(duration, "duration", "s"), positive(dt, "dt", "s")
     if dt > duration:
         raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
+    step_count(duration, dt, config.defaults["simulate.max_steps"])
 
 
 def check_step_size(controller, x0, ref0, P, dt, actuation):

@@ -23,6 +23,7 @@ import numpy as np
 from .conventions import IDX, PARAM_NAMES, hover_trim
 from .errors import InputError, ParameterError
 from .params import check_parameters
+from .validate import real
 
 N_ROTORS = 4
 
@@ -257,4 +258,5 @@ def default_parameters(**overrides):
     unknown = set(overrides) - set(PARAM_NAMES)
     if unknown:
         raise InputError(f"unknown parameter {sorted(unknown)[0]!r}; expected one of {PARAM_NAMES}")
-    return HUMMINGBIRD.replace(**{k: float(v) for k, v in overrides.items()}).parameters()
+    return HUMMINGBIRD.replace(**{k: real(v, k, error=ParameterError)
+                                  for k, v in overrides.items()}).parameters()

@@ -90,11 +90,11 @@ def test_unloadable_casadi_file_with_matching_hash(damaged):
 
 def test_wrong_shapes_and_values(model):
     p = quadcog.default_parameters()
-    with pytest.raises(quadcog.InputError, match=r"x must have shape \(12,\), got shape \(3,\)"):
+    with pytest.raises(quadcog.InputError, match=r"x: expected an array of shape \(12,\), got shape \(3,\)"):
         model.dynamics(np.zeros(3), np.zeros(4), p)
-    with pytest.raises(quadcog.InputError, match=r"U\[2\] = nan is not finite"):
+    with pytest.raises(quadcog.InputError, match=r"U\[2\]: expected a finite number, got nan"):
         model.dynamics(np.zeros(12), [1, 0, np.nan, 0], p)
-    with pytest.raises(quadcog.InputError, match=r"p must have shape \(14,\)"):
+    with pytest.raises(quadcog.InputError, match=r"p: expected an array of shape \(14,\)"):
         model.mass_matrix(np.ones(13))
     with pytest.raises(quadcog.InputError, match="out for M must have shape"):
         model.mass_matrix(p, out=np.zeros((5, 5)))
@@ -104,7 +104,7 @@ def test_wrong_shapes_and_values(model):
     ({"m": -1.0}, "m = -1.0 must be > 0"),
     ({"Izz": 0.0}, "Izz = 0.0 must be > 0"),
     ({"c_x": -0.1}, "c_x = -0.1 must be >= 0"),
-    ({"z_G": 0.5}, "inertia about the CoG has eigenvalue"),
+    ({"z_G": 0.5}, "inertia about the CoG keeps only"),
 ])
 def test_inadmissible_parameters(model, override, message):
     p = quadcog.HUMMINGBIRD.parameters()

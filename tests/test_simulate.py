@@ -144,9 +144,9 @@ def test_batch_reports_divergence():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(dt=0.0), "dt must be a positive number of seconds, got 0.0"),
-    (dict(dt=-1e-3), "dt must be a positive number"),
-    (dict(duration=-1.0), "duration must be a positive number"),
+    (dict(dt=0.0), r"dt: expected a positive number \(s\), got 0.0"),
+    (dict(dt=-1e-3), "dt: expected a positive number"),
+    (dict(duration=-1.0), "duration: expected a positive number"),
     (dict(dt=0.5, duration=2.0), r"dt = 0.5 s is too large: .* RK4 needs dt < "),
     (dict(x0=np.zeros(5)), "x0 must be 12 finite numbers"),
     (dict(x0=np.full(12, np.nan)), "x0 must be 12 finite numbers"),

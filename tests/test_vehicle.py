@@ -76,7 +76,7 @@ def test_any_layout_is_data():
     (dict(rotor_directions=(1, 1, 1, 1)), "mixer .* is singular"),
     (dict(rotor_directions=(1, -1, 2, -1)), "each \\+1 or -1"),
     (dict(rotor_positions=((0.1, 0.0),) * 3), "4 pairs"),
-    (dict(x_G=0.5), "inertia about the CoG has eigenvalue"),
+    (dict(x_G=0.5), "inertia about the CoG keeps only"),
     (dict(m="heavy"), "m must be a number, got 'heavy'"),
     (dict(mass=1.0), "unknown vehicle field"),
 ])

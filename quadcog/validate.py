@@ -1,0 +1,282 @@
+"""Checks of values that come from outside (API arguments, scenario files): one set, shared.
+
+Every check takes the value and ``where``, the name the caller knows it by (an argument such
+as ``"duration"``, or ``"fig6.toml: key 'duration'"`` for a scenario file), and returns the
+value converted (``float``, a float64 array, ...). A bad value raises ``error`` (default
+``quadcog.InputError``) with the message ``"{where}: expected {what}, got {value}"``, the
+value written as a plain number (``1e-09``, ``nan``, ``[1.0, 2.0]``), never a numpy repr.
+
+Numbers are real and finite: ``bool`` and ``numpy.bool_`` are not numbers here (``True`` is
+not 1 s), strings, complex values (whose imaginary part numpy would drop), ``None`` and
+integers beyond the float range are refused; ``numpy`` integer and float scalars
+(``np.int64(1)``, ``np.float32(0.5)``) are accepted.
+"""
+import math
+import numbers
+import operator
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["plain", "fail", "real", "positive", "nonnegative", "integer", "flag", "choice",
+           "array", "vector", "step_count", "BYTES_PER_STEP"]
+
+_MAX_ITEMS_SHOWN = 8
+
+
+def plain(value):
+    """``value`` written for a message: plain numbers, short lists, a type name otherwise."""
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if isinstance(value, numbers.Integral):
+        text = str(int(value))
+        return text if len(text) <= 24 else f"an integer of {len(text.lstrip('-'))} digits"
+    if isinstance(value, numbers.Real):
+        return repr(float(value))
+    if isinstance(value, numbers.Complex):
+        return repr(complex(value))
+    if isinstance(value, (str, bytes)):
+        text = repr(value)
+        return text if len(text) <= 60 else text[:57] + "...'"
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "biufc" and value.size <= _MAX_ITEMS_SHOWN:
+            return plain(value.tolist())
+        return f"an array of shape {value.shape} and dtype {value.dtype}"
+    if isinstance(value, (list, tuple)):
+        if len(value) > _MAX_ITEMS_SHOWN:
+            return f"a {type(value).__name__} of {len(value)} items"
+        inner = ", ".join(plain(v) for v in value)
+        return f"[{inner}]" if isinstance(value, list) else f"({inner}{',' if len(value) == 1 else ''})"
+    if isinstance(value, dict):
+        return "a table" if not value else f"a table with keys {', '.join(map(str, value))}"
+    if value is None:
+        return "None"
+    if callable(value):
+        return f"the callable {getattr(value, '__name__', type(value).__name__)}"
+    return f"a {type(value).__name__}"
+
+
+def fail(where, what, value, error=InputError):
+    """Raise ``error("{where}: expected {what}, got {plain(value)}")``."""
+    raise error(f"{where}: expected {what}, got {plain(value)}")
+
+
+def _is_real_scalar(value):
+    """A real number that is not a bool (Python or numpy); 0-d real arrays count."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        return value.dtype.kind in "iuf"
+    return (isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)))
+
+
+def _describe(lo, hi, lo_open, hi_open, unit):
+    if lo is None and hi is None:
+        text = "a finite real number"
+    elif lo == 0 and hi is None:
+        text = "a positive number" if lo_open else "a number >= 0"
+    elif hi is None:
+        text = f"a number {'>' if lo_open else '>='} {plain(lo)}"
+    elif lo is None:
+        text = f"a number {'<' if hi_open else '<='} {plain(hi)}"
+    else:
+        text = (f"a number in {'(' if lo_open else '['}{plain(lo)}, {plain(hi)}"
+                f"{')' if hi_open else ']'}")
+    return f"{text} ({unit})" if unit else text
+
+
+def real(value, where, lo=None, hi=None, lo_open=False, hi_open=False, unit=None,
+         error=InputError):
+    """A finite real number as ``float``, optionally within bounds.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    where : str
+        The argument name or scenario key, used as the start of the message.
+    lo, hi : float, optional
+        Bounds; ``lo_open`` / ``hi_open`` make them strict.
+    unit : str, optional
+        Unit named in the message, e.g. ``"s"``.
+    error : type, optional
+        Exception class raised (a subclass of quadcog.InputError).
+
+    Returns
+    -------
+    float
+    """
+    what = _describe(lo, hi, lo_open, hi_open, unit)
+    if not _is_real_scalar(value):
+        fail(where, what, value, error)
+    try:
+        x = float(value)
+    except OverflowError:               # an int beyond the float range
+        fail(where, what, value, error)
+    if not math.isfinite(x):
+        fail(where, what, value, error)
+    if lo is not None and (x < lo or (lo_open and x == lo)):
+        fail(where, what, value, error)
+    if hi is not None and (x > hi or (hi_open and x == hi)):
+        fail(where, what, value, error)
+    return x
+
+
+def positive(value, where, unit=None, error=InputError):
+    """A finite number > 0 as ``float``."""
+    return real(value, where, lo=0.0, lo_open=True, unit=unit, error=error)
+
+
+def nonnegative(value, where, unit=None, error=InputError):
+    """A finite number >= 0 as ``float``."""
+    return real(value, where, lo=0.0, unit=unit, error=error)
+
+
+def integer(value, where, lo=None, hi=None, error=InputError):
+    """An ``int`` (Python or numpy integer, not a bool, not a float) within [lo, hi]."""
+    bounds = (f" >= {lo}" if hi is None else f" in [{lo}, {hi}]") if lo is not None else (
+        f" <= {hi}" if hi is not None else "")
+    what = f"an integer{bounds}"
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        fail(where, what, value, error)
+    n = operator.index(value)
+    if (lo is not None and n < lo) or (hi is not None and n > hi):
+        fail(where, what, value, error)
+    return n
+
+
+def flag(value, where, error=InputError):
+    """``True`` or ``False`` (Python or numpy bool), as ``bool``; 0 and 1 are refused."""
+    if not isinstance(value, (bool, np.bool_)):
+        fail(where, "true or false", value, error)
+    return bool(value)
+
+
+def choice(value, where, options, error=InputError):
+    """``value`` if it equals one of ``options`` (and has the same type: 1 is not True).
+    Safe for unhashable values (a list or a table given where a name is expected)."""
+    for option in options:
+        if type(value) is type(option) and value == option:
+            return value
+    listed = ", ".join(repr(o) for o in options)
+    fail(where, f"one of {listed}", value, error)
+
+
+def _walk(value, where, index, error, what):
+    """Check every leaf of nested lists/tuples: real numbers, not bools; returns the shape."""
+    if isinstance(value, (list, tuple)):
+        shapes = {(_walk(v, where, index + (i,), error, what)) for i, v in enumerate(value)}
+        if len(shapes) > 1:
+            fail(where, f"{what} (a rectangular array; the rows differ in length)", value, error)
+        return (len(value),) + (shapes.pop() if shapes else ())
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "iuf":
+            fail(_at(where, index), what, value, error)
+        return value.shape
+    if not _is_real_scalar(value):
+        fail(_at(where, index), "a real number", value, error)
+    try:
+        float(value)
+    except OverflowError:
+        fail(_at(where, index), "a number within the float range", value, error)
+    return ()
+
+
+def _at(where, index):
+    return f"{where}[{', '.join(map(str, index))}]" if index else where
+
+
+def _shape_text(shape):
+    dims = ["any" if d is None else str(d) for d in shape]
+    return f"({dims[0]},)" if len(dims) == 1 else f"({', '.join(dims)})"
+
+
+def array(value, where, shape=None, finite=True, what=None, error=InputError):
+    """A float64 array (a new copy) of real numbers.
+
+    Parameters
+    ----------
+    value : array_like
+        Nested lists/tuples or an ndarray of real numbers (ints, floats; not bools, not
+        complex, not strings).
+    where : str
+        Name for messages; a bad entry is named ``where[i, j]``.
+    shape : tuple of int or None, optional
+        Expected shape; ``None`` entries match any length (``(None, 14)``: any number of rows
+        of 14). Omitted: any shape.
+    finite : bool, optional
+        Refuse NaN and infinities (default).
+    what : str, optional
+        What to call the expected value in messages (default e.g. "an array of shape (3,)").
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    what = what or ("an array of real numbers" if shape is None
+                    else f"an array of shape {_shape_text(shape)}")
+    if isinstance(value, (str, bytes, dict)) or value is None or isinstance(value, (bool, np.bool_)):
+        fail(where, what, value, error)
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "iuf":
+            kind = {"b": "booleans", "c": "complex numbers"}.get(value.dtype.kind,
+                                                                 f"dtype {value.dtype}")
+            fail(where, f"{what} of real numbers, not {kind}", value, error)
+    elif isinstance(value, (list, tuple)):
+        _walk(value, where, (), error, what)
+    elif not _is_real_scalar(value):
+        fail(where, what, value, error)
+    a = np.array(value, dtype=float)
+    if shape is not None and (a.ndim != len(shape) or any(
+            d is not None and d != n for d, n in zip(shape, a.shape))):
+        raise error(f"{where}: expected {what}, got shape {a.shape}"
+                    + (f" ({plain(value)})" if a.size <= _MAX_ITEMS_SHOWN else ""))
+    if finite:
+        bad = ~np.isfinite(a)
+        if bad.any():
+            k = np.unravel_index(int(np.argmax(bad)), a.shape) if a.ndim else ()
+            raise error(f"{_at(where, tuple(int(i) for i in k))}: expected a finite number, "
+                        f"got {plain(a[k] if a.ndim else float(a))}")
+    return a
+
+
+def vector(value, where, n, finite=True, error=InputError):
+    """A float64 vector of shape (n,); a column (n, 1) is accepted and flattened."""
+    a = array(value, where, None, finite=False, what=f"an array of shape ({n},)", error=error)
+    if a.shape not in ((n,), (n, 1)):
+        raise error(f"{where}: expected an array of shape ({n},), got shape {a.shape}"
+                    + (f" ({plain(value)})" if a.size <= _MAX_ITEMS_SHOWN else ""))
+    a = a.reshape(n)
+    if finite:
+        bad = np.flatnonzero(~np.isfinite(a))
+        if bad.size:
+            raise error(f"{where}[{bad[0]}]: expected a finite number, got {plain(a[bad[0]])}")
+    return a
+
+
+# Memory one simulated step costs a single flight: the step table (27 numbers), the state and
+# controller state (up to 15), the input (4), the reference sample (14) and the result arrays
+# handed out, about 80 float64 in all, with room for temporaries.
+BYTES_PER_STEP = 1024
+
+
+def step_count(duration, dt, max_steps, where=None, error=InputError):
+    """The number of steps ``round(duration / dt)``, refused when it is not finite or above
+    ``max_steps``; the message gives the count and the memory it would take. ``duration``
+    and ``dt`` (s) must already be positive floats; ``where`` (e.g. the scenario file) is put
+    in front of the message."""
+    n = duration / dt
+    if not math.isfinite(n) or n > max_steps:
+        count = (f"{n:.3g} steps, about {_bytes(n * BYTES_PER_STEP)} of memory"
+                 if math.isfinite(n) else "more steps than a float can count")
+        raise error(f"{where + ': ' if where else ''}duration / dt = {plain(duration)} s / "
+                    f"{plain(dt)} s gives {count}; expected at most {max_steps:,} steps "
+                    f"(about {_bytes(max_steps * BYTES_PER_STEP)}): raise dt or shorten the "
+                    f"duration")
+    return int(round(n))
+
+
+def _bytes(b):
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
+        if b < 1024 or unit == "EiB":
+            return f"{b:.3g} {unit}"
+        b /= 1024
