@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench embedded clean
 
 OUT ?= out
 
@@ -66,6 +66,12 @@ test: $(STAMP)
 # Timing tables (no assertions); writes bench/results.md.
 bench: compile
 	$(PY) bench/run.py
+
+# The controllers as C99 modules (float32, double) in generated/embedded/, checked with strict
+# flags, run on a Cortex-M4 in QEMU; prints the cost table (needs $(ARM_PACKAGES)).
+ARM_PACKAGES := gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
+embedded: compile
+	$(PY) -m quadcog.embedded
 
 clean:
 	rm -rf $(VENV) .pytest_cache quadcog.egg-info

@@ -6,8 +6,9 @@ from pathlib import Path
 
 from setuptools import find_namespace_packages, setup
 
-GENERATED = ["quadcog._generated"] + [f"quadcog._generated.{d.name}"
-                                      for d in sorted(Path("generated").iterdir()) if d.is_dir()]
+GENERATED = ["quadcog._generated"] + [
+    "quadcog._generated." + ".".join(d.relative_to("generated").parts)
+    for d in sorted(Path("generated").rglob("*")) if d.is_dir()]
 
 setup(packages=find_namespace_packages(include=["quadcog", "quadcog.*"],
                                        exclude=["*.__pycache__"]) + GENERATED,

@@ -3,9 +3,20 @@ import difflib
 from pathlib import Path
 
 
+# Sub-folders of generated/ that another generator owns (`make embedded` writes embedded/):
+# derive neither compares, lists in the manifest, nor removes them.
+FOREIGN = ("embedded",)
+
+
+def is_foreign(rel):
+    """True for a path (relative to generated/) inside a FOREIGN sub-folder."""
+    return Path(rel).parts[:1] in [(f,) for f in FOREIGN]
+
+
 def _files(folder):
     folder = Path(folder)
-    return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
+    return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*"))
+            if p.is_file() and not is_foreign(p.relative_to(folder))}
 
 
 def diff_trees(expected, actual, max_lines=200):

@@ -8,6 +8,7 @@ import platform
 import casadi
 import sympy
 
+from .compare import is_foreign
 from .headers import NOTICE
 
 DERIVE_DIR = Path(__file__).parent
@@ -27,7 +28,8 @@ def derive_sources():
 
 def build_manifest(out_dir, functions):
     out_dir = Path(out_dir)
-    files = sorted(p for p in out_dir.rglob("*") if p.is_file() and p.name != MANIFEST)
+    files = sorted(p for p in out_dir.rglob("*") if p.is_file() and p.name != MANIFEST
+                   and not is_foreign(p.relative_to(out_dir)))
     return {
         "_comment": NOTICE,
         "versions": {

@@ -4,6 +4,7 @@ import shutil
 import tempfile
 import time
 
+from .compare import FOREIGN
 from .export import build_functions, write_c, write_casadi
 from .manifest import write_manifest
 from .model import derive_model
@@ -49,6 +50,9 @@ def generate_atomically(target, echo=print):
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     tmp.chmod(0o755)          # mkdtemp makes 0700; generated/ is shared, readable by all
+    for name in FOREIGN:              # keep what other generators wrote into generated/
+        if (target / name).exists():
+            shutil.copytree(target / name, tmp / name)
     old = None
     if target.exists():
         old = Path(tempfile.mkdtemp(prefix=".generated-old-", dir=target.parent))

@@ -22,6 +22,12 @@ def main(argv=None):
     analyze.add_argument("--out", type=Path, required=True, help="output folder")
     analyze.add_argument("--grid", type=int, default=41,
                          help="failure-map points per axis (default 41)")
+    export = sub.add_parser("export", help="write a controller as a C99 module for a flight "
+                                           "controller (README: On a flight controller)")
+    export.add_argument("--controller", required=True,
+                        help="pd, fl, adaptive (any name of quadcog.controllers.BY_NAME)")
+    export.add_argument("--precision", default="float32", choices=("float32", "double"))
+    export.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
     args = ap.parse_args(argv)
     try:
         if getattr(args, "out", None) is not None:
@@ -45,6 +51,10 @@ def main(argv=None):
         elif args.command == "paper":
             from .paper import run_paper
             run_paper(args.out)
+        elif args.command == "export":
+            from .embedded import export_controller
+            for path in export_controller(args.controller, args.precision, args.out):
+                print(f"wrote {path}")
         elif args.command == "analyze":
             from .analysis import analyze
             analyze(args.out, grid=args.grid)

@@ -1,0 +1,6 @@
+"""``python -m quadcog.embedded`` (``make embedded``)."""
+import sys
+
+from .build import main
+
+sys.exit(main())

@@ -1,0 +1,158 @@
+"""Run an exported controller on a Cortex-M4 in QEMU (board mps2-an386, semihosting), and the
+same harness on the host, over a recorded sequence of states and references.
+
+The harness (``target/harness.c``) prints per step U and c as the hex of their bits, then the
+SysTick ticks spent inside the step. QEMU runs with ``-icount shift=0``: the virtual clock
+advances exactly 1 ns per instruction, and the SysTick, clocked at the board's 25 MHz, ticks
+every 40 instructions, deterministically. A calibration loop of known length (2 x 100,000
+instructions) is timed first, which checks that mapping on every run.
+"""
+from pathlib import Path
+import re
+import shutil
+import subprocess
+
+import numpy as np
+
+from ..build import find_compiler
+from ..errors import CompileError, QuadcogError
+from .host import STRICT_FLAGS, compile_checked
+
+TARGET_DIR = Path(__file__).parent / "target"
+ARM_GCC = "arm-none-eabi-gcc"
+ARM_SIZE = "arm-none-eabi-size"
+QEMU = "qemu-system-arm"
+BOARD = "mps2-an386"
+CORTEX_M4 = ("-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard")
+TARGET_OPT = ("-O2",)
+DEBIAN_PACKAGES = "gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm"
+
+
+class TargetError(QuadcogError):
+    """The cross toolchain or QEMU is missing or a target run failed."""
+
+
+def missing_tools():
+    """Names of the tools (cross compiler, size, QEMU) not on PATH."""
+    return [t for t in (ARM_GCC, ARM_SIZE, QEMU) if shutil.which(t) is None]
+
+
+def _hex_literal(value, precision):
+    if precision == "float32":
+        return float(np.float32(value)).hex() + "f"
+    return float(value).hex()
+
+
+def write_data(path, x, ref, dt, precision):
+    """harness_data.h: the recorded states x (N, 12) and references ref (N, 14) and dt as
+    exact hexadecimal literals of the precision (float32: rounded once, as the host does)."""
+    x, ref = np.asarray(x, float), np.asarray(ref, float)
+    rows = lambda a: ",\n".join("    {" + ", ".join(_hex_literal(v, precision) for v in r) + "}"
+                                for r in a)
+    text = (f"/* recorded sequence: {len(x)} steps (written by quadcog.embedded.target) */\n"
+            f"#define HARNESS_N {len(x)}u\n"
+            f"static const qc_real harness_dt = {_hex_literal(dt, precision)};\n"
+            f"static const qc_real harness_x[{len(x)}][12] = {{\n{rows(x)}\n}};\n"
+            f"static const qc_real harness_ref[{len(x)}][14] = {{\n{rows(ref)}\n}};\n")
+    Path(path).write_text(text)
+    return Path(path)
+
+
+def _defines(name, nc):
+    return [f'-DQC_HEADER="quadcog_{name}.h"', f"-DQC_STEP=quadcog_{name}_step",
+            f"-DQC_INIT=quadcog_{name}_init", f"-DQC_NC={nc}"]
+
+
+def build_target(module_dir, name, nc, data_dir, out_dir):
+    """Cross-compile the controller with the harness for the Cortex-M4; returns the ELF path.
+    The controller also gets a .su file (-fstack-usage) and an object for arm-none-eabi-size."""
+    if missing_tools():
+        raise TargetError(f"missing {', '.join(missing_tools())}; install the Debian packages "
+                          f"{DEBIAN_PACKAGES} (as root, apt-get install)")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    module_dir = Path(module_dir)
+    obj = out_dir / f"quadcog_{name}.o"
+    compile_checked([ARM_GCC, *STRICT_FLAGS, *CORTEX_M4, *TARGET_OPT, "-fstack-usage",
+                     "-ffunction-sections", "-c", module_dir / f"quadcog_{name}.c", "-o", obj])
+    elf = out_dir / f"harness_{name}.elf"
+    compile_checked([ARM_GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", *CORTEX_M4,
+                     *TARGET_OPT, "-I", module_dir, "-I", data_dir, "-I", TARGET_DIR,
+                     *_defines(name, nc), "-nostartfiles", "-T", TARGET_DIR / "mps2.ld",
+                     "-Wl,--gc-sections", TARGET_DIR / "startup.c", TARGET_DIR / "harness.c",
+                     obj, "-o", elf, "-lm", "-lc", "-lgcc"])
+    return elf
+
+
+def build_host_harness(module_dir, name, nc, data_dir, out_dir):
+    """The same harness and controller source built for the host; returns the executable."""
+    cc = find_compiler()
+    if cc is None:
+        raise CompileError("no C compiler found (looked for $CC or `cc` on PATH)")
+    exe = Path(out_dir) / f"harness_{name}_host"
+    compile_checked([cc, *STRICT_FLAGS, "-O2", "-I", module_dir, "-I", data_dir, "-I", TARGET_DIR,
+                     *_defines(name, nc), TARGET_DIR / "harness.c", TARGET_DIR / "host_io.c",
+                     Path(module_dir) / f"quadcog_{name}.c", "-o", exe, "-lm"])
+    return exe
+
+
+def run_qemu(elf, timeout=120):
+    """Run an ELF on mps2-an386 with semihosting and icount; returns its output (text).
+
+    The semihosting console goes to a file next to the ELF (a chardev), apart from QEMU's
+    own messages."""
+    log = Path(elf).with_suffix(".out")
+    cmd = [QEMU, "-M", BOARD, "-display", "none", "-monitor", "none", "-serial", "none",
+           "-chardev", f"file,id=semihosting,path={log}",
+           "-semihosting-config", "enable=on,target=native,chardev=semihosting",
+           "-icount", "shift=0", "-kernel", str(elf)]
+    try:
+        res = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                             stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        raise TargetError(f"QEMU did not finish within {timeout} s: {' '.join(cmd)}") from None
+    text = log.read_text() if log.is_file() else ""
+    if res.returncode != 0:
+        raise TargetError(f"`{' '.join(cmd)}` exited with {res.returncode}:\n"
+                          f"{text[-2000:]}{res.stderr[-2000:]}")
+    return text
+
+
+def run_host(exe, timeout=60):
+    res = subprocess.run([str(exe)], capture_output=True, text=True, timeout=timeout)
+    if res.returncode != 0:
+        raise TargetError(f"{exe} exited with {res.returncode}: {res.stderr[-2000:]}")
+    return res.stdout
+
+
+def parse_output(text, precision, nc):
+    """(U (N, 4), c (N, nc), info dict) from a harness output."""
+    dtype = np.dtype(">f4") if precision == "float32" else np.dtype(">f8")
+    values, info = [], {}
+    for line in text.splitlines():
+        head = line.split(" ", 1)[0]
+        if head in ("calibration", "cost"):
+            info[head] = [int(v) for v in line.split()[1:]]
+        elif re.fullmatch(r"[0-9a-f]+", head):
+            values.append(bytes.fromhex(line.replace(" ", "")))
+    if "cost" not in info:
+        raise TargetError(f"harness output ends early:\n{text[-1000:]}")
+    a = np.frombuffer(b"".join(values), dtype=dtype).astype(float).reshape(len(values), 4 + nc)
+    cal_counted, cal_true, empty, n_empty = info["calibration"]
+    total, worst, n, stack = info["cost"]
+    overhead = empty / n_empty if n_empty else 0.0
+    info = {"calibration_counted": cal_counted, "calibration_true": cal_true,
+            "timer_overhead": overhead,
+            "instructions_mean": total / n - overhead if n else 0.0,
+            "instructions_max": worst - overhead, "steps": n, "stack_bytes": stack}
+    return a[:, :4], a[:, 4:], info
+
+
+def object_cost(obj):
+    """{'text', 'data', 'bss', 'stack'} of a controller object (arm-none-eabi-size, and the
+    largest frame in its .su file)."""
+    res = subprocess.run([ARM_SIZE, str(obj)], capture_output=True, text=True, check=True)
+    text, data, bss = (int(v) for v in res.stdout.splitlines()[1].split()[:3])
+    su = Path(obj).with_suffix(".su")
+    frames = [int(line.split("\t")[1]) for line in su.read_text().splitlines() if line.strip()]
+    return {"text": text, "data": data, "bss": bss, "stack": max(frames, default=0)}
