@@ -19,7 +19,6 @@ from quadcog.embedded import ExportError, export_controller
 from quadcog.embedded.build import CONTROLLERS
 from quadcog.embedded.emit import literal
 from quadcog.embedded.host import HostStep, build_host_library, fly
-from quadcog.params import default_parameters
 from quadcog.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -96,8 +95,9 @@ def test_literals_round_trip():
 
 
 def _max_diff(a, b):
-    n = min(len(a), len(b))
-    return float(np.max(np.abs(a[:n] - b[:n]))) if a.size else 0.0
+    """Largest difference relative to max(1, largest |b|): a diverging flight's rates reach
+    hundreds of rad/s."""
+    return float(np.max(np.abs(a - b))) / max(1.0, float(np.max(np.abs(b)))) if a.size else 0.0
 
 
 @pytest.mark.parametrize("fig", ["fig6", "fig7"])
@@ -107,8 +107,7 @@ def test_double_closed_loop_equals_python_path(libraries, flights, fig):
     for name in CONTROLLERS:
         sc, res = flights[fig, name]
         nc = make_controller(name).n_state
-        X, C, _ = fly(HostStep(libraries["double"], name, "double", nc), res,
-                      default_parameters(**sc.vehicle), sc)
+        X, C, _ = fly(HostStep(libraries["double"], name, "double", nc), res, sc)
         assert len(X) == len(res.t)
         assert _max_diff(X, res.x) <= 1e-9, (fig, name, _max_diff(X, res.x))
         if nc:
@@ -121,9 +120,13 @@ def test_float32_closed_loop_stays_with_double(libraries, flights, fig):
     for name in CONTROLLERS:
         sc, res = flights[fig, name]
         nc = make_controller(name).n_state
-        X, C, metrics = fly(HostStep(libraries["float32"], name, "float32", nc), res,
-                            default_parameters(**sc.vehicle), sc)
+        X, C, metrics = fly(HostStep(libraries["float32"], name, "float32", nc), res, sc)
         assert len(X) == len(res.t) and np.isfinite(X).all()
+        if res.metrics.diverged:      # FL on fig6 (rotors only push): the same divergence
+            err = np.linalg.norm(X[:, :3] - res.x[:, :3], axis=1)
+            early = res.t <= res.t[-1] - 0.1
+            assert err[early].max() <= 1e-3, (fig, name, err[early].max())
+            continue
         tail64 = res.metrics.rms_position_error_tail
         assert abs(metrics["rms_position_error_tail"] - tail64) <= 1e-3, (fig, name)
         if nc:

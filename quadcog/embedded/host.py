@@ -12,7 +12,8 @@ from ..compiled import compile_function
 from ..errors import CompileError
 from ..fastcall import FastCall
 from ..model import load
-from ..plant import plant_step_function
+from ..conventions import R_G
+from ..plant import Actuation, initial_rotor_thrusts, plant_step_function
 from ..result import position_metrics
 from ..timeline import wrench_table
 
@@ -79,22 +80,26 @@ class HostStep:
         return self.U.astype(np.float64)
 
 
-def fly(step, reference_result, params, scenario):
+def fly(step, reference_result, scenario):
     """Fly ``step`` (a HostStep) in closed loop over the steps of ``reference_result`` (the
     Python run of ``scenario``): same start, references, CoG and disturbances at each step,
-    double truth plant. Returns (x (N, 12), c (N, nc), metrics dict)."""
-    plant = FastCall(compile_function(plant_step_function(load(), scenario.truth)))
-    px, pU, pP, pw, pdt = plant.inputs
-    x_next, evaluate = plant.outputs[0], plant.eval
+    the scenario's truth plant in double. Returns (x (N, 12), c (N, nc), metrics dict)."""
+    vehicle = scenario.vehicle
+    actuation = Actuation.of(vehicle, scenario.truth)
+    plant = FastCall(compile_function(plant_step_function(load(), actuation)))
+    px, pf, pU, pP, pw, pdt = plant.inputs
+    x_next, f_next, _ = plant.outputs
+    evaluate = plant.eval
     t, refs = reference_result.t, reference_result.ref
     n = len(t)
-    P = np.repeat(np.asarray(params, float)[None, :], n, axis=0)
-    P[:, 11:14] = reference_result.r_G
+    P = np.repeat(vehicle.parameters()[None, :], n, axis=0)
+    P[:, R_G] = reference_result.r_G
     wrenches = wrench_table(scenario.disturbances, t)
     X = np.empty((n, 12))
     C = np.empty((n, step.nc))
     X[0] = reference_result.x[0]
     C[0] = step.init()[:step.nc]
+    pf[:] = initial_rotor_thrusts(vehicle.with_parameters(P[0]), actuation)
     dt = step.dt_type(scenario.dt)
     pdt[0] = scenario.dt
     sx, sref, sU, sc, call, nc = step.x, step.ref, step.U, step.c, step.call, step.nc
@@ -107,6 +112,7 @@ def fly(step, reference_result, params, scenario):
         pw[:] = wrenches[k]
         evaluate()
         X[k + 1] = x_next
+        pf[:] = f_next
         C[k + 1] = sc[:nc]
     bad = np.flatnonzero(~np.isfinite(X).all(axis=1))
     if bad.size:
