@@ -2,13 +2,16 @@
 from .adaptive import AdaptiveFeedbackLinearization
 from .base import Controller
 from .cascade_pd import CascadePD
+from .composite import CompositeAdaptive
 from .feedback_linearization import FeedbackLinearization
+from .fl_integral import FeedbackLinearizationIntegral
 
-BY_NAME = {"pd": CascadePD, "fl": FeedbackLinearization, "adaptive": AdaptiveFeedbackLinearization}
+BY_NAME = {"pd": CascadePD, "fl": FeedbackLinearization, "adaptive": AdaptiveFeedbackLinearization,
+           "fl_integral": FeedbackLinearizationIntegral, "composite": CompositeAdaptive}
 
 
 def make_controller(kind, **params):
-    """A controller by short name: 'pd', 'fl' or 'adaptive', with keyword parameters."""
+    """A controller by short name: 'pd', 'fl', 'adaptive', 'fl_integral' or 'composite', with keyword parameters."""
     from ..errors import InputError
     if kind not in BY_NAME:
         raise InputError(f"unknown controller {kind!r}; expected one of {tuple(BY_NAME)}")

@@ -1,0 +1,203 @@
+"""Composite adaptive feedback linearization: the paper's law plus a prediction-error term.
+
+The feedback linearization runs on the estimate r_hat as in the paper's law (``adaptive.py``).
+The estimate learns from two errors:
+
+- the output tracking error e_s, as the paper: the term -Phi^T B^T P_L e_s;
+- the prediction error of the equations of motion ``M(r) nu_dot + n(nu, eta, r) = B_u U``,
+  which are linear in r: ``B_u U - n(nu, eta, 0) - M(0) nu_dot = Phi(nu, eta, nu_dot) r``
+  (docs/model.md sec. 3.1). Both sides pass through the stable filter F(s) = lam / (s + lam);
+  because ``M(r) nu_dot = d/dt (M(r) nu)`` and F[d/dt y] = lam y - lam F[y], no acceleration is
+  needed:
+
+      z = zeta - lam M_0 nu,          zeta_dot = lam (B_u U_a - n_0 + lam M_0 nu - zeta)
+      Y = lam W(nu) + Psi,             Psi_dot = lam (Phi_0 - lam W(nu) - Psi)
+
+  with n_0 = n(nu, eta, 0), Phi_0 = Phi(nu, eta, 0), W(nu) = Phi(nu, eta, nu) - Phi_0 (the
+  part of the regressor that is M's dependence on r, applied to nu) and U_a the input the
+  rotors deliver (the controller's own model of its motors, optional). Then z = Y r up to a
+  term that decays as exp(-lam t) from the filter's initial state.
+
+The gain is least squares with forgetting and a bounded covariance:
+
+    r_hat_dot = P tau,  tau = -kappa Phi^T B^T P_L e_s - Y_n^T G (Y_n r_hat - z_n)
+    P_dot = beta P (I - P / k0) - P Y_n^T G Y_n P,        P(0) = k0 I
+
+Y_n, z_n are Y and z scaled to metres of CoG (moment rows by 1/(m g), force rows by
+l/(m g), l the arm length), G = ls_gain * diag(force_weight (3), 1 (3)). P stays between a
+positive lower bound and k0 I: in every direction the covariance forgets at rate beta, so the
+estimate follows a CoG that keeps moving, and where the data do not excite a direction (z_G at
+hover) P settles at k0 instead of growing without bound. kappa = gamma / k0, so at P = k0 I the
+tracking term is the paper's law with gain gamma. With V = kappa e_s^T P_L e_s + r~^T P^-1 r~
+(r~ = r_hat - r), the cross terms cancel and
+
+    V_dot = -kappa e_s^T Q e_s - r~^T Y_n^T G Y_n r~ - beta r~^T (P^-1 - I / k0) r~ <= 0
+
+for a constant r and the true M in B (the derived report gives the argument and its limits).
+The projection onto the ball |r_hat| <= projection_radius is P-weighted so that it keeps V_dot
+as it is.
+
+Controller state c (``n_state``): r_hat (3), zeta (6), Psi (18, column-major 6x3), the six
+entries of P (xx, xy, xz, yy, yz, zz) and, with the actuator model, the four rotor thrusts the
+controller believes its rotors deliver (``motor_lag``). ``STATE_SLICES`` names them.
+"""
+import casadi as ca
+import numpy as np
+
+from ..conventions import B_U
+from ..errors import InputError
+from .adaptive import AdaptiveFeedbackLinearization
+from .allocation import prioritized_input
+
+_P_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+
+
+def _positive(name, value):
+    value = float(value)
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(f"{name} must be a positive number, got {value!r}")
+    return value
+
+
+def unpack_covariance(v):
+    """The symmetric 3x3 P from its six entries (SX or numpy)."""
+    if isinstance(v, np.ndarray):
+        P = np.empty((3, 3))
+        for k, (i, j) in enumerate(_P_INDEX):
+            P[i, j] = P[j, i] = v[k]
+        return P
+    rows = [[None] * 3 for _ in range(3)]
+    for k, (i, j) in enumerate(_P_INDEX):
+        rows[i][j] = rows[j][i] = v[k]
+    return ca.vertcat(*[ca.horzcat(*row) for row in rows])
+
+
+def pack_covariance(P):
+    """The six entries of a symmetric 3x3 P (SX)."""
+    return ca.vertcat(*[P[i, j] for i, j in _P_INDEX])
+
+
+class CompositeAdaptive(AdaptiveFeedbackLinearization):
+    """Composite adaptive feedback linearization (see the module docstring).
+
+    Parameters
+    ----------
+    vehicle, model : as every controller (the controller's model of the vehicle; r_G = 0 by
+        default, and r_hat starts at the model's r_G).
+    gamma : tracking-error gain at P = k0 I (the paper's Gamma), default 0.01.
+    filter_rate : lam (1/s) of the filter F(s) = lam / (s + lam), default 20.
+    ls_gain : the least-squares weight (1/s) of the normalized prediction error, default 200.
+    forgetting : beta (1/s), default 8: data older than a few 1/beta no longer count.
+    covariance_bound : k0 (dimensionless, in the normalized units), default 1.
+    force_weight : weight of the three force rows against the moment rows, default 1.
+    allocation : True (default): the commanded input is reduced to what the rotors can give,
+        yaw first (``allocation.prioritized_input``), so the filter knows what is delivered.
+    motor_lag : True: the filter sees the rotor thrusts lagging behind the command with the
+        vehicle's motor_time_constant (4 more states); False (default): the command itself.
+    Q, projection_radius and the feedback-linearization poles : as AdaptiveFeedbackLinearization.
+    """
+
+    name = "composite_adaptive"
+
+    def __init__(self, vehicle=None, model=None, *, gamma=0.01, filter_rate=20.0,
+                 ls_gain=200.0, forgetting=8.0, covariance_bound=1.0, force_weight=1.0,
+                 allocation=True, motor_lag=False, **kwargs):
+        super().__init__(vehicle, model, gamma=gamma, **kwargs)
+        self.filter_rate = _positive("filter_rate", filter_rate)
+        self.ls_gain = _positive("ls_gain", ls_gain)
+        self.forgetting = _positive("forgetting", forgetting)
+        self.covariance_bound = _positive("covariance_bound", covariance_bound)
+        force_weight = float(force_weight)
+        if not (np.isfinite(force_weight) and force_weight >= 0):
+            raise InputError(f"force_weight must be a number >= 0, got {force_weight!r}")
+        self.force_weight = force_weight
+        for name, flag in (("allocation", allocation), ("motor_lag", motor_lag)):
+            if not isinstance(flag, (bool, np.bool_)):
+                raise InputError(f"{name} must be True or False, got {flag!r}")
+        self.allocation, self.motor_lag = bool(allocation), bool(motor_lag)
+        self.motor_states = 4 if (self.motor_lag and self.vehicle.motor_time_constant > 0) else 0
+        self.n_state = 33 + self.motor_states
+        v = self.vehicle
+        mg = v.m * v.g
+        self.row_scale = np.r_[[v.arm_length / mg] * 3, [1.0 / mg] * 3]
+        self.row_weight = self.ls_gain * np.r_[[self.force_weight] * 3, [1.0] * 3]
+
+    STATE_SLICES = {"r_hat": slice(0, 3), "zeta": slice(3, 9), "Psi": slice(9, 27),
+                    "P": slice(27, 33), "rotor_thrusts": slice(33, 37)}
+
+    def initial_state(self):
+        """r_hat = the model's r_G, filters at rest, P = k0 I, believed rotor thrusts at the model's hover."""
+        c = np.zeros(self.n_state)
+        c[0:3] = self.vehicle.r_G
+        c[27:33] = self.covariance_bound * np.array([1, 0, 0, 1, 0, 1.0])
+        if self.motor_states:
+            c[33:37] = self.vehicle.rotor_thrusts(self.vehicle.hover_input())
+        return c
+
+    def delivered_input(self, U, f_hat):
+        """(U_a, U_cmd, f_hat_dot) (SX): the input the law commands (yaw-last allocation within
+        the rotor limits, when ``allocation``) and what the controller believes its rotors
+        deliver (the command, or with ``motor_lag`` the rotor thrusts lagging behind it)."""
+        if self.allocation:
+            U = prioritized_input(U, self.vehicle)
+        if not self.motor_states:
+            return U, U, ca.SX(0, 1)
+        v = self.vehicle
+        f_cmd = ca.DM(np.linalg.inv(v.mixer())) @ U
+        return ca.DM(v.mixer()) @ f_hat, U, (f_cmd - f_hat) / v.motor_time_constant
+
+    def filtered_regression(self, x, U_a, zeta, Psi):
+        """(z (6), Y (6x3), zeta_dot, Psi_dot) of the filtered identity z = Y r (SX)."""
+        f = self.model.casadi_function
+        lam = self.filter_rate
+        p0 = self.nominal_with_cog(ca.SX.zeros(3))
+        nu = x[6:12]
+        M0 = f("mass_matrix")(p0)
+        n0 = f("coriolis")(x, p0) @ nu + f("damping")(p0) @ nu + f("gravity")(x, p0)
+        Phi0 = f("regressor")(x, ca.SX.zeros(6), p0)
+        W = f("regressor")(x, nu, p0) - Phi0
+        zeta_dot = lam * (ca.DM(B_U) @ U_a - n0 + lam * M0 @ nu - zeta)
+        Psi_dot = lam * (Phi0 - lam * W - Psi)
+        return zeta - lam * M0 @ nu, lam * W + Psi, zeta_dot, Psi_dot
+
+    def expression(self, t, x, ref, c):
+        r_hat, zeta = c[0:3], c[3:9]
+        Psi = ca.reshape(c[9:27], 6, 3)
+        P = unpack_covariance(c[27:33])
+        f_hat = c[33:33 + self.motor_states]
+        U, e_s, Phi, B = self.parts(x, ref, r_hat)
+        U_a, U, f_hat_dot = self.delivered_input(U, f_hat)
+        z, Y, zeta_dot, Psi_dot = self.filtered_regression(x, U_a, zeta, Psi)
+        S, G = ca.DM(self.row_scale), ca.DM(np.diag(self.row_weight))
+        Y_n, z_n = S * Y, S * z                       # rows scaled to metres of CoG
+        kappa = ca.DM(self.gamma / self.covariance_bound)
+        tau = -kappa * (Phi.T @ (B.T @ (ca.DM(self.P) @ e_s))) - Y_n.T @ (G @ (Y_n @ r_hat - z_n))
+        r_dot = P @ tau
+        if self.projection_radius is not None:
+            # P-weighted projection: remove the outward part along P r_hat on the sphere
+            outward = ca.dot(r_hat, r_dot)
+            Pr = P @ r_hat
+            on_rim = ca.logic_and(ca.dot(r_hat, r_hat) >= self.projection_radius ** 2,
+                                  outward > 0)
+            r_dot = ca.if_else(on_rim, r_dot - Pr * outward / ca.fmax(ca.dot(r_hat, Pr), 1e-12),
+                               r_dot)
+        k0 = self.covariance_bound
+        P_dot = (self.forgetting * P @ (ca.DM.eye(3) - P / k0)
+                 - P @ Y_n.T @ G @ Y_n @ P)
+        c_dot = ca.vertcat(r_dot, zeta_dot, ca.vec(Psi_dot), pack_covariance(P_dot), f_hat_dot)
+        return U, c_dot
+
+    def project(self, c):
+        """Scale r_hat back onto the ball after a discrete step; the rest unchanged (SX)."""
+        if self.projection_radius is None:
+            return c
+        return ca.vertcat(super().project(c[0:3]), c[3:])
+
+    def project_numpy(self, c):
+        if self.projection_radius is not None:
+            super().project_numpy(c[0:3])       # c[0:3] is a view: scaled in place
+        return c
+
+    def estimate_of(self, c):
+        """r_hat (3,) from a controller state (numpy)."""
+        return np.asarray(c)[..., 0:3]
