@@ -14,8 +14,9 @@ from .model import Linearization, Model, load
 from .params import check_parameters, inertia_about_cog, with_cog
 from .vehicle import (CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters, plus_layout,
                       x_layout)
-from .controllers import (AdaptiveFeedbackLinearization, CascadePD, Controller,
-                          FeedbackLinearization, make_controller)
+from .controllers import (AdaptiveFeedbackLinearization, CascadePD, CompositeAdaptive,
+                          Controller, FeedbackLinearization, FeedbackLinearizationIntegral,
+                          make_controller)
 from .plant import TruthOptions
 from .result import Metrics, SimulationResult
 from .batch import BatchResult, simulate_batch

@@ -47,6 +47,11 @@ CONTROLLER_PARAMS = {
 }
 CONTROLLER_PARAMS["adaptive"] = dict(CONTROLLER_PARAMS["fl"], gamma="number_or_vec3",
                                      projection_radius="number_or_false", Q_scale=NUMBER)
+CONTROLLER_PARAMS["fl_integral"] = dict(CONTROLLER_PARAMS["fl"], integral_pole=NUMBER,
+                                        integral_limit=NUMBER)
+CONTROLLER_PARAMS["composite"] = dict(
+    CONTROLLER_PARAMS["adaptive"], filter_rate=NUMBER, ls_gain=NUMBER, forgetting=NUMBER,
+    covariance_bound=NUMBER, force_weight=NUMBER, allocation=bool, motor_lag=bool)
 TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "dt": NUMBER,
        "path": str, "trajectory": dict, "cog": list, "disturbance": list, "vehicle": dict,
        "controller_model": dict, "controller_params": dict, "truth": dict, "limits": dict,
