@@ -356,12 +356,13 @@ def _result(controller, X, U, table, P, duration, limits, path, elapsed, nf):
     if limits.max_tilt >= np.pi / 2 - 1e-6:     # otherwise the tilt limit catches it first
         _singularity_check(t[:keep], X[:keep])
     x = X[:keep, :12]
-    nc = X.shape[1] - 12 - nf
-    r_hat = X[:keep, 12 + nf:15 + nf] if nc >= 3 else np.zeros((keep, 3))
+    # the adaptive laws keep r_hat in their first three state entries
+    estimating = getattr(controller, "estimates_cog", False)
+    r_hat = X[:keep, 12 + nf:15 + nf] if estimating else np.zeros((keep, 3))
     metrics = Metrics(**position_metrics(t[:keep], x, ref[:keep], duration))
     if idx is not None:
         metrics.diverged, metrics.diverged_at, metrics.diverged_cause = True, float(t[idx]), cause
-    if nc >= 3:
+    if estimating:
         metrics.r_hat_final = r_hat[-1].tolist()
         metrics.r_G_final = r_G[keep - 1].tolist()
     name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))

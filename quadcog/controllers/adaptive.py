@@ -40,6 +40,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
 
     name = "adaptive_feedback_linearization"
     n_state = 3
+    estimates_cog = True          # c starts with r_hat (results report it as the estimate)
 
     def __init__(self, vehicle=None, model=None, *, gamma=0.01, Q=None,
                  projection_radius="default", **kwargs):

@@ -11,7 +11,9 @@
 
 #define CALIBRATION_LOOPS 100000u          /* 2 instructions each */
 
-static char line[512];
+/* one step's line: 4 + QC_NC hex numbers with a space each, newline, NUL */
+#define LINE_NEEDED ((4u + QC_NC) * (2u * sizeof(qc_real) + 1u) + 2u)
+static char line[LINE_NEEDED > 512u ? LINE_NEEDED : 512u];
 
 static char *put_hex(char *p, const qc_real *v)
 {
