@@ -8,7 +8,8 @@ i.e. the smallest eigenvalue of ``I_O^-1/2 I_G I_O^-1/2`` (the *inertia ratio*, 
 O, 0 on the rim where M turns singular) is at least ``MARGIN``. Below it, M^-1 (formed by block
 elimination through I_G^-1) loses digits as 1 / ratio does, and at the rim itself the
 generated dynamics return NaN. Each parameter must also lie within a sane scale (SMALLEST,
-LARGEST below), so that the model's products and inverses stay finite. Every runtime check of parameters uses this module.
+LARGEST below), so that the model's products and inverses stay finite. Every runtime check of
+parameters uses this module.
 """
 import numpy as np
 

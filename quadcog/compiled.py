@@ -4,7 +4,7 @@ import warnings
 import casadi as ca
 
 from .build import compile_library, find_compiler
-from .errors import QuadcogWarning
+from .errors import CompileError, QuadcogWarning
 
 _warned = False
 
@@ -26,4 +26,13 @@ def compile_function(fn, flags=None):
     gen.add(fn)
     kwargs = {} if flags is None else {"flags": flags}
     lib = compile_library(gen.dump().encode(), fn.name(), cc, **kwargs)
-    return ca.external(fn.name(), str(lib))
+    return external(fn.name(), lib)
+
+
+def external(name, lib):
+    """The function ``name`` of the verified library ``lib`` (from ``compile_library``)."""
+    try:
+        return ca.external(name, str(lib))
+    except RuntimeError as e:
+        raise CompileError(f"{lib}: cannot load {name!r} ({str(e).strip().splitlines()[-1]})") \
+            from None

@@ -1,7 +1,8 @@
 """Read generated/: the manifest, integrity of every file, the CasADi functions."""
 import hashlib
 import json
-from pathlib import Path
+from pathlib import Path, PurePosixPath
+import re
 
 import casadi as ca
 
@@ -11,6 +12,7 @@ from .paths import generated_dir, shipped_generated_dir
 
 MANIFEST = "manifest.json"
 C_SOURCE = "c/quadcog_gen.c"
+_HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
 def _fix(folder):
@@ -25,34 +27,97 @@ def _sha256(path):
 
 
 def read_manifest(folder=None):
-    """The manifest as a dict; GeneratedFilesError when missing or unreadable."""
+    """The manifest as a dict, its shape checked ("files": {relative path: SHA-256 hex},
+    "functions": {name: ...}); GeneratedFilesError when missing, unreadable or malformed."""
     folder = Path(folder or generated_dir())
     path = folder / MANIFEST
     if not path.is_file():
         raise GeneratedFilesError(f"{path} is missing; {_fix(folder)}")
     try:
-        manifest = json.loads(path.read_text())
-        manifest["files"], manifest["functions"]
-    except (ValueError, KeyError, TypeError) as e:
-        raise GeneratedFilesError(f"{path} is corrupted ({e}); {_fix(folder)}") from None
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, RecursionError) as e:      # bad JSON or UTF-8, absurd nesting
+        raise GeneratedFilesError(f"{path} is corrupted ({type(e).__name__}: "
+                                  f"{str(e)[:200]}); {_fix(folder)}") from None
+    except OSError as e:
+        raise GeneratedFilesError(f"{path} cannot be read ({e.strerror}); {_fix(folder)}") \
+            from None
+    bad = lambda what: GeneratedFilesError(f"{path} is corrupted: {what}; {_fix(folder)}")
+    if not isinstance(manifest, dict):
+        raise bad(f"expected a JSON object, got {type(manifest).__name__}")
+    for key in ("files", "functions"):
+        if not isinstance(manifest.get(key), dict):
+            raise bad(f"expected an object {key!r} (name -> entry), got "
+                      f"{type(manifest.get(key)).__name__ if key in manifest else 'nothing'}")
+    for rel, digest in manifest["files"].items():
+        parts = PurePosixPath(rel).parts
+        if not parts or rel.startswith("/") or "\\" in rel or any(
+                p in ("", ".", "..") for p in parts) or rel != "/".join(parts):
+            raise bad(f"'files' entry {rel[:100]!r} is not a relative path inside the folder")
+        if not (isinstance(digest, str) and _HEX64.fullmatch(digest)):
+            raise bad(f"'files' entry {rel!r} has no SHA-256 (64 hex digits), got "
+                      f"{str(digest)[:80]!r}")
     return manifest
 
 
+# Subfolders the manifest covers (besides the top-level files); others, such as embedded/,
+# are written and checked by their own exporters.
+COVERED = ("c", "casadi")
+
+
+def _files_in(folder):
+    """Relative paths of the files of a generated folder that the manifest must list."""
+    out = set()
+    for p in [*folder.iterdir(), *(q for sub in COVERED if (folder / sub).is_dir()
+                                   for q in (folder / sub).rglob("*"))]:
+        rel = p.relative_to(folder)
+        if p.is_file() and rel.as_posix() != MANIFEST:
+            out.add(rel.as_posix())
+    return out
+
+
+def required_files():
+    """The files the runtime reads: the C source and one CasADi file per function."""
+    return {C_SOURCE} | {f"casadi/{name}.casadi" for name in FUNCTIONS}
+
+
 def verify(folder=None, only=None):
-    """Check the SHA-256 of every generated file (or of the names in ``only``)."""
+    """Check the SHA-256 of every generated file (or of the names in ``only``) against the
+    manifest. The manifest must list every file of the folder and every file the runtime
+    reads, so removing an entry (or emptying "files") does not switch a check off."""
     folder = Path(folder or generated_dir())
     manifest = read_manifest(folder)
+    listed = manifest["files"]
     missing = [f for f in FUNCTIONS if f not in manifest["functions"]]
     if missing:
         raise GeneratedFilesError(
             f"{folder / MANIFEST} lists no function {missing[0]!r}; {_fix(folder)}")
-    for rel, digest in manifest["files"].items():
+    try:
+        present = _files_in(folder)
+    except OSError as e:
+        raise GeneratedFilesError(f"{folder} cannot be read ({e.strerror}); {_fix(folder)}") \
+            from None
+    for rel in sorted(required_files() | present):
+        if rel not in listed:
+            where = folder / rel
+            raise GeneratedFilesError(
+                f"{where} is not listed in {folder / MANIFEST} (its 'files' entry was removed "
+                f"or the file was added by hand), so it cannot be checked; {_fix(folder)}")
+    for rel, digest in listed.items():
         if only is not None and rel not in only:
             continue
         path = folder / rel
         if not path.is_file():
-            raise GeneratedFilesError(f"{path} is missing; {_fix(folder)}")
-        if _sha256(path) != digest:
+            raise GeneratedFilesError(
+                f"{path} is missing (listed in {MANIFEST}"
+                + ("" if rel in required_files() or rel in present else
+                   ", a name the derivation never writes: the manifest may be corrupted")
+                + f"); {_fix(folder)}")
+        try:
+            ok = _sha256(path) == digest
+        except OSError as e:
+            raise GeneratedFilesError(f"{path} cannot be read ({e.strerror}); {_fix(folder)}") \
+                from None
+        if not ok:
             raise GeneratedFilesError(
                 f"{path} does not match its SHA-256 in {MANIFEST} (edited or corrupted); {_fix(folder)}")
     return manifest

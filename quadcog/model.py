@@ -8,6 +8,7 @@ import casadi as ca
 import numpy as np
 
 from .build import compile_library, find_compiler
+from .compiled import external
 from .conventions import FUNCTIONS, N_PARAM
 from .errors import InputError, QuadcogWarning
 from .fastcall import FastCall
@@ -163,7 +164,7 @@ class _Library:
                     verify(self.folder, only={C_SOURCE})
                     lib = compile_library((self.folder / C_SOURCE).read_bytes(), "quadcog_gen",
                                           self.cc)
-                    self._functions = {n: ca.external(n, str(lib)) for n in FUNCTIONS}
+                    self._functions = {n: external(n, lib) for n in FUNCTIONS}
         return self._functions
 
 

@@ -47,7 +47,9 @@ def plain(value):
         if len(value) > _MAX_ITEMS_SHOWN:
             return f"a {type(value).__name__} of {len(value)} items"
         inner = ", ".join(plain(v) for v in value)
-        return f"[{inner}]" if isinstance(value, list) else f"({inner}{',' if len(value) == 1 else ''})"
+        if isinstance(value, list):
+            return f"[{inner}]"
+        return f"({inner}{',' if len(value) == 1 else ''})"
     if isinstance(value, dict):
         return "a table" if not value else f"a table with keys {', '.join(map(str, value))}"
     if value is None:
@@ -214,7 +216,7 @@ def array(value, where, shape=None, finite=True, what=None, error=InputError):
     """
     what = what or ("an array of real numbers" if shape is None
                     else f"an array of shape {_shape_text(shape)}")
-    if isinstance(value, (str, bytes, dict)) or value is None or isinstance(value, (bool, np.bool_)):
+    if isinstance(value, (str, bytes, dict, bool, np.bool_)) or value is None:
         fail(where, what, value, error)
     if isinstance(value, np.ndarray):
         if value.dtype.kind not in "iuf":
