@@ -21,6 +21,7 @@ from .plant import TruthOptions
 from .result import Metrics, SimulationResult
 from .batch import BatchResult, simulate_batch
 from .simulation import Limits, simulate
+from .sweeps import sweep
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
 

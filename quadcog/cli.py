@@ -28,6 +28,13 @@ def main(argv=None):
                         help="pd, fl, adaptive (any name of quadcog.controllers.BY_NAME)")
     export.add_argument("--precision", default="float32", choices=("float32", "double"))
     export.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
+    sweep = sub.add_parser("sweep", help="fly a sweep file (TOML) locally or on Dask")
+    sweep.add_argument("sweep", help="sweep file, or the name of a shipped one (failure-map)")
+    sweep.add_argument("--out", type=Path, required=True,
+                       help="results folder; run again with the same folder to resume")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, help="start a Dask LocalCluster of N processes")
+    where.add_argument("--scheduler", help="address of a running Dask scheduler")
     args = ap.parse_args(argv)
     try:
         if getattr(args, "out", None) is not None:
@@ -55,6 +62,9 @@ def main(argv=None):
             from .embedded import export_controller
             for path in export_controller(args.controller, args.precision, args.out):
                 print(f"wrote {path}")
+        elif args.command == "sweep":
+            from .sweeps.runner import run_cli
+            run_cli(args.sweep, args.out, workers=args.workers, scheduler=args.scheduler)
         elif args.command == "analyze":
             from .analysis import analyze
             analyze(args.out, grid=args.grid)

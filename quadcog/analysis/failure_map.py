@@ -1,16 +1,16 @@
 """Where each controller fails: tail RMS position error after a CoG step at hover, over a grid
-of CoG offsets (x_G, y_G) in the rotor plane, through the batch simulator."""
+of CoG offsets (x_G, y_G) in the rotor plane: the shipped sweep file ``failure-map``."""
 import time
 
 import casadi as ca
 import numpy as np
 
-from ..controllers import AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization
+from ..controllers import (AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization,
+                           make_controller)
 from ..controllers.adaptive import admissible_estimate_radius
 from ..errors import ParameterError
 from ..params import check_parameters, inertia_about_cog, with_cog
 from .. import config
-from ..batch import simulate_batch
 from ..simulation import RK4_LIMIT
 from ..vehicle import HUMMINGBIRD, default_parameters
 from ..trajectory import Hover
@@ -64,14 +64,16 @@ def rk4_stiffness(controller, params, dt=None):
                      range(params.shape[0])]) * dt
 
 
-def failure_map(grid=41, half_width=HUMMINGBIRD.arm_length, duration=20.0, t_step=1.0, threads=2,
-                controllers=None, threshold=THRESHOLD, progress=None):
+def failure_map(grid=41, half_width=HUMMINGBIRD.arm_length, duration=20.0, t_step=1.0,
+                controllers=("pd", "fl", "adaptive"), threshold=THRESHOLD, progress=None):
     """Tail RMS position error (m; the tail is the last ``config.defaults["metrics.tail_fraction"]``
-    of each run) after a CoG step at hover.
+    of each run) after a CoG step at hover: the shipped sweep ``failure-map``
+    (``quadcog/sweeps/failure-map.toml``, also ``quadcog sweep failure-map --out DIR``) with
+    its grid, duration, step time, controllers and threshold set from the arguments.
 
     grid: points per axis; the offsets are x_G, y_G = linspace(-half_width, half_width, grid)
     (m), z_G = 0. duration: s per flight (fixed RK4, dt = 1 ms); the CoG steps from 0 to
-    (x_G, y_G, 0) at t_step (s). controllers: {name: Controller} (default: pd, fl, adaptive).
+    (x_G, y_G, 0) at t_step (s). controllers: short names ("pd", "fl", "adaptive").
     Inadmissible offsets (quadcog.check_parameters raises ParameterError) are not simulated.
     threshold: tail RMS (m) above which a run counts as failed (diverged runs always do).
     progress: callable(fraction) for the whole map, or None.
@@ -81,41 +83,50 @@ def failure_map(grid=41, half_width=HUMMINGBIRD.arm_length, duration=20.0, t_ste
     diverged_at (s, NaN if not), survive_fraction (of the admissible offsets), rk4_stiff (number
     of admissible points with |lambda|_max dt > RK4_LIMIT), seconds; and the totals.
     """
+    from ..sweeps.runner import sweep
+    from ..sweeps.spec import from_dict, read_sweep_file
     t0 = time.perf_counter()
-    controllers = controllers or default_controllers()
+    data, path = read_sweep_file("failure-map")
+    data["set"].update({"duration": float(duration), "cog[0].t": float(t_step)})
+    data["threshold"] = float(threshold)
+    dims = {d["key"]: d for d in data["dimension"]}
+    dims["controller"]["values"] = list(controllers)
+    for key in ("cog[0].r[0]", "cog[0].r[1]"):
+        dims[key]["range"] = {"start": -float(half_width), "stop": float(half_width),
+                              "num": int(grid)}
+    spec = from_dict(data, str(path), path.parent)
+    total = len(spec.flights)
+    done = [0]
+
+    def report(n_new):
+        done[0] += n_new
+        progress(done[0] / total)
+    result = sweep(spec, None, progress=report if progress else False)
+    cols = result.columns
     xs = np.linspace(-half_width, half_width, grid)
     ys = xs.copy()
-    adm, lam = admissibility(xs, ys)
-    idx = np.argwhere(adm)
-    vehicles = [HUMMINGBIRD.with_cog((xs[j], ys[i], 0.0)) for i, j in idx]
-    params = np.array([v.parameters() for v in vehicles]).reshape(-1, 14)
+    _, lam = admissibility(xs, ys)
+    shape = (len(controllers), grid, grid)           # rows: controller, y_G, x_G
+    adm = cols["admissible"].reshape(shape)[0]
+    params = np.array([HUMMINGBIRD.with_cog((x, y, 0.0)).parameters()
+                       for x, y in zip(cols["cog[0].r[0]"].reshape(shape)[0][adm],
+                                       cols["cog[0].r[1]"].reshape(shape)[0][adm])])
     out = {"x_G": xs, "y_G": ys, "admissible": adm, "lambda_min": lam,
            "n_points": int(adm.size), "n_admissible": int(adm.sum()), "duration": duration,
            "t_step": t_step, "threshold": threshold,
            "tail_fraction": config.defaults["metrics.tail_fraction"], "controllers": {}}
-    n_ctl = len(controllers)
-    shape = lambda t: float(t >= t_step)
-    for k, (name, ctl) in enumerate(controllers.items()):
-        sub = (lambda f, k=k: progress((k + f) / n_ctl)) if progress else None
-        t1 = time.perf_counter()
-        tail = np.full(adm.shape, np.nan)
-        div = np.zeros(adm.shape, dtype=bool)
-        div_at = np.full(adm.shape, np.nan)
-        stiff = 0
-        if len(params):
-            br = simulate_batch(ctl, vehicles, "hover", duration=duration,
-                                cog_shape=shape, threads=threads, progress=sub)
-            tail[adm] = br.rms_position_error_tail
-            div[adm] = br.diverged
-            div_at[adm] = br.diverged_at
-            stiff = int(np.sum(rk4_stiffness(ctl, params) > RK4_LIMIT))
-        failed = adm & (div | (tail > threshold))
+    for k, name in enumerate(controllers):
+        tail = cols["rms_position_error_tail"].reshape(shape)[k]
+        div = cols["diverged"].reshape(shape)[k]
+        failed = cols["failed"].reshape(shape)[k]
+        stiff = int(np.sum(rk4_stiffness(make_controller(name), params) > RK4_LIMIT)) \
+            if len(params) else 0
         out["controllers"][name] = {
             "label": LABELS.get(name, name), "tail_rms": tail, "diverged": div,
-            "diverged_at": div_at, "failed": failed,
+            "diverged_at": cols["diverged_at"].reshape(shape)[k], "failed": failed,
             "survive_fraction": float(np.sum(adm & ~failed) / max(adm.sum(), 1)),
             "n_diverged": int(div.sum()), "n_failed": int(failed.sum()),
-            "rk4_stiff": stiff, "seconds": time.perf_counter() - t1}
+            "rk4_stiff": stiff, "seconds": result.seconds / len(controllers)}
     out["seconds"] = time.perf_counter() - t0
     return out
 

@@ -1,0 +1,104 @@
+"""Fly one chunk of a sweep: the flights are grouped by everything but their truth CoG, and
+each group is one batch of the compiled closed-loop step.
+
+A chunk is a plain dict (the base scenario data, the flights' values) and its result a dict of
+columns, so it travels to a Dask worker and back without any compiled object: the worker builds
+or loads the compiled code itself (from the disk cache, keyed by its source).
+"""
+import copy
+import json
+
+import numpy as np
+
+from ..scenario import parse
+from ..simulation import start_at_reference
+from .spec import set_key
+
+METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
+           "final_position_error", "diverged", "diverged_at")
+_controllers = {}           # group key -> controller, per process
+
+
+def make_job(sweep, chunk_index, flights):
+    """The picklable description of one chunk."""
+    return {"chunk": chunk_index, "base": sweep.base, "source": sweep.source,
+            "threshold": sweep.threshold,
+            "dimensions": [(d.key, d.width) for d in sweep.dimensions],
+            "flights": [(f.index, f.values, f.admissible) for f in flights]}
+
+
+def _group_key(data):
+    """What flights must share to fly in one batch: all but the truth CoG (the vehicle's
+    x_G, y_G, z_G and the ``r`` of each CoG change)."""
+    d = copy.deepcopy(data)
+    for k in ("x_G", "y_G", "z_G"):
+        d.get("vehicle", {}).pop(k, None)
+    for change in d.get("cog", []):
+        change.pop("r", None)
+    return json.dumps(d, sort_keys=True)
+
+
+def run_chunk(job, threads=1):
+    """Fly the flights of ``job`` (see ``make_job``); returns {column: numpy array}, one row
+    per flight in flight order. Deterministic: the same job gives the same bits anywhere."""
+    flights = job["flights"]
+    n = len(flights)
+    metrics = {k: np.full(n, np.nan) for k in METRICS}
+    metrics["diverged"] = np.zeros(n, dtype=bool)
+    groups = {}
+    scenarios = {}
+    for row, (index, values, admissible) in enumerate(flights):
+        data = copy.deepcopy(job["base"])
+        for key, value in values.items():
+            set_key(data, key, value)
+        scenarios[row] = parse(data, f"{job['source']} (flight {index})")
+        if admissible:
+            groups.setdefault(_group_key(data), []).append(row)
+    for key, rows in groups.items():
+        result = fly_group(key, [scenarios[r] for r in rows], threads)
+        for name in METRICS:
+            metrics[name][rows] = result[name]
+    columns = {"flight": np.array([f[0] for f in flights], dtype=np.int64)}
+    for key, width in job["dimensions"]:
+        values = [f[1][key] for f in flights]
+        if width == 1:
+            columns[key] = np.array(values)
+        else:
+            arr = np.array(values, dtype=float).reshape(n, width)
+            for i in range(width):
+                columns[f"{key}[{i}]"] = arr[:, i]
+    if "controller" not in columns:
+        columns["controller"] = np.array([scenarios[r].controller for r in range(n)])
+    columns["admissible"] = np.array([f[2] for f in flights], dtype=bool)
+    columns.update(metrics)
+    tail = metrics["rms_position_error_tail"]
+    with np.errstate(invalid="ignore"):
+        columns["failed"] = columns["admissible"] & (metrics["diverged"]
+                                                     | ~(tail <= job["threshold"]))
+    return columns
+
+
+def cog_steps(scenario):
+    """(J, 2) start times and ramps of the scenario's CoG changes, and (J, 3) the increments
+    d_j = r_j - r_{j-1}: r_G(t) = r_G(vehicle) + sum_j s_j(t) d_j."""
+    changes = scenario.cog.changes
+    r = np.array([c.r for c in changes], dtype=float).reshape(-1, 3)
+    d = np.diff(np.vstack([np.zeros((1, 3)), r]), axis=0)
+    return d
+
+
+def fly_group(key, scenarios, threads=1):
+    """Metrics of scenarios that differ only in their truth CoG, flown as one batch."""
+    from ..vectorized import fly_batch            # the batch engine
+    s0 = scenarios[0]
+    ctl = _controllers.get(key)
+    if ctl is None:
+        ctl = _controllers[key] = s0.make_controller()
+    D = np.array([cog_steps(s).ravel() for s in scenarios]).reshape(len(scenarios), -1)
+    x0 = start_at_reference(s0.trajectory(0.0))
+    x0[:3] += np.asarray(s0.initial_offset)
+    r = fly_batch(ctl, [s.vehicle for s in scenarios], D, s0.trajectory, duration=s0.duration, dt=s0.dt,
+                  cog_times=[(c.t, c.ramp) for c in s0.cog.changes],
+                  disturbances=s0.disturbances, truth=s0.truth, limits=s0.limits, x0=x0,
+                  threads=threads)
+    return {name: getattr(r, name) for name in METRICS}

@@ -1,0 +1,527 @@
+"""Sweep files (TOML): a base scenario, fixed settings and the dimensions to vary, expanded
+into a deterministic list of flights.
+
+Every flight is the base scenario with some keys replaced. A key names a scenario value the
+way the scenario file spells it: ``controller``, ``duration``, ``vehicle.m``,
+``controller_params.gamma``, ``cog[0].r`` (a 3-vector), ``cog[0].r[1]`` (one component),
+``cog[0].ramp``, ``trajectory.radius``... Every flight is validated by the scenario parser, so
+a sweep accepts exactly what a scenario file accepts. The keys of a sweep file are listed in
+README.md ("Sweeps").
+"""
+from dataclasses import dataclass, field
+import copy
+import hashlib
+import itertools
+import json
+import math
+from pathlib import Path
+import re
+import tomllib
+
+import numpy as np
+
+from ..admissibility import admissible_radius
+from ..catalog import scenario_path
+from ..errors import InputError, ParameterError
+from ..params import check_parameters, with_cog
+from ..scenario import ScenarioError, parse
+
+SUFFIX = ".toml"
+MODES = ("grid", "monte-carlo")
+TOP = {"name", "description", "scenario", "mode", "samples", "seed", "chunk", "threshold",
+       "inadmissible", "set", "dimension"}
+SOURCES = ("values", "range", "uniform", "normal", "ball")
+DEFAULT_CHUNK = 64          # flights per chunk: the unit of scheduling, retry and resume
+DEFAULT_THRESHOLD = 0.5     # m: tail RMS above this (or a diverged run) counts as failed
+
+
+class SweepError(InputError):
+    """A sweep file is malformed: the message names the file, the key and what was expected."""
+
+
+_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]|\.")
+
+
+def parse_key(key):
+    """``"cog[0].r[1]"`` -> ``["cog", 0, "r", 1]``; None when the key is not well formed."""
+    if not isinstance(key, str) or not key or key[0] in ".[":
+        return None
+    tokens, pos, expect_name = [], 0, True
+    while pos < len(key):
+        m = _TOKEN.match(key, pos)
+        if m is None:
+            return None
+        if m.group(1) is not None:
+            if not expect_name:
+                return None
+            tokens.append(m.group(1))
+            expect_name = False
+        elif m.group(2) is not None:
+            if expect_name:
+                return None
+            tokens.append(int(m.group(2)))
+        else:
+            if expect_name:
+                return None
+            expect_name = True
+        pos = m.end()
+    return None if expect_name else tokens
+
+
+def set_key(data, key, value):
+    """Set ``value`` at ``key`` in the nested scenario dict ``data`` (in place).
+
+    Tables on the way are created; arrays must already hold the index (the base scenario
+    says how many CoG changes there are). Raises KeyError with a readable reason."""
+    tokens = parse_key(key)
+    if tokens is None:
+        raise KeyError(f"not a key (expected names joined by '.', with [index] for arrays, "
+                       f"like 'cog[0].r[1]')")
+    node = data
+    for here, nxt in zip(tokens, tokens[1:]):
+        if isinstance(here, int):
+            if not isinstance(node, list) or here >= len(node):
+                raise KeyError(f"the base scenario has no entry [{here}] there")
+            node = node[here]
+        else:
+            if not isinstance(node, dict):
+                raise KeyError(f"{here!r} is inside a value that is not a table")
+            if here not in node:
+                if isinstance(nxt, int):
+                    raise KeyError(f"the base scenario has no array {here!r}")
+                node[here] = {}
+            node = node[here]
+    last = tokens[-1]
+    if isinstance(last, int):
+        if not isinstance(node, list) or last >= len(node):
+            raise KeyError(f"the base scenario has no entry [{last}] there")
+        node[last] = value
+    else:
+        if not isinstance(node, dict):
+            raise KeyError(f"{last!r} is inside a value that is not a table")
+        node[last] = value
+
+
+def _plain(v):
+    """numpy scalars/arrays -> Python numbers/lists (TOML-like values)."""
+    if isinstance(v, np.ndarray):
+        return [_plain(x) for x in v.tolist()]
+    if isinstance(v, (np.floating,)):
+        return float(v)
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    return v
+
+
+@dataclass
+class Dimension:
+    """One varied key: ``values`` (a list: grid values, or the pool Monte-Carlo draws from)
+    or ``sampler`` (a callable(rng, n) -> n values) with ``n`` draws in a grid."""
+    key: str
+    kind: str
+    values: list = None
+    sampler: object = None
+    n: int = None
+    random: bool = False
+    width: int = 1              # columns in the table: 3 for a vector value
+
+    def columns(self):
+        return [self.key] if self.width == 1 else [f"{self.key}[{i}]" for i in range(self.width)]
+
+
+@dataclass
+class Flight:
+    """One flight: its index, the values of the varied keys, and whether its CoG is admissible
+    (inadmissible grid points are kept as rows without metrics when ``inadmissible = "skip"``)."""
+    index: int
+    values: dict
+    admissible: bool = True
+
+
+@dataclass
+class Sweep:
+    """A validated sweep: the base scenario data (dict, with the fixed settings applied), the
+    dimensions and the expanded flights."""
+    name: str
+    description: str
+    source: str
+    base: dict
+    base_source: str
+    mode: str
+    seed: int
+    chunk: int
+    threshold: float
+    dimensions: list
+    flights: list = field(default_factory=list)
+
+    @property
+    def columns(self):
+        return [c for d in self.dimensions for c in d.columns()]
+
+    def flight_data(self, flight):
+        """The scenario dict of one flight."""
+        data = copy.deepcopy(self.base)
+        for key, value in flight.values.items():
+            set_key(data, key, value)
+        return data
+
+    def chunks(self):
+        """[(chunk index, flights)]: consecutive runs of ``chunk`` flights, fixed by the file
+        alone (never by the scheduler), so results do not depend on where they ran."""
+        return [(c, self.flights[k:k + self.chunk])
+                for c, k in enumerate(range(0, len(self.flights), self.chunk))]
+
+    def fingerprint(self):
+        """SHA-256 of what determines the results: the base data, the settings and every
+        flight's values. A results folder remembers it, so that resuming never mixes sweeps."""
+        text = json.dumps({"base": self.base, "threshold": self.threshold, "chunk": self.chunk,
+                           "flights": [(f.index, f.values, f.admissible) for f in self.flights]},
+                          sort_keys=True, default=_plain)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _err(source, key, message):
+    return SweepError(f"{source}: key {key!r}: {message}")
+
+
+def _number(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _field_err(source, where, message):
+    """``where`` = (dimension key, field): the error names the key, the message the field."""
+    key, fld = where
+    return _err(source, key, f"{fld}: {message}")
+
+
+def _table(spec, where, source, required, optional=()):
+    if not isinstance(spec, dict):
+        raise _field_err(source, where, f"expected a table with {', '.join(required)}, got "
+                         f"{spec!r}")
+    for k in spec:
+        if k not in required and k not in optional:
+            raise _field_err(source, where, f"{k!r} is unknown; expected one of "
+                             f"{', '.join(list(required) + list(optional))}")
+    for k in required:
+        if k not in spec:
+            raise _field_err(source, where, f"missing {k!r}")
+    for k, v in spec.items():
+        if k != "plane" and not _number(v):
+            raise _field_err(source, where, f"{k}: expected a finite number, got {v!r}")
+    return spec
+
+
+def _count(spec, where, source, mode):
+    if mode == "monte-carlo":
+        if "n" in spec:
+            raise _field_err(source, where, "n is not used with mode = \"monte-carlo\" (every "
+                       "flight draws once; set the top-level 'samples')")
+        return None
+    if "n" not in spec:
+        raise _field_err(source, where, "missing 'n' (the number of samples in the grid)")
+    n = spec["n"]
+    if not isinstance(n, int) or n < 1:
+        raise _field_err(source, where, f"n: expected a whole number >= 1, got {n!r}")
+    return n
+
+
+def _range_values(spec, where, source):
+    if not isinstance(spec, dict):
+        raise _field_err(source, where, f"expected a table {{start, stop, num}} or "
+                         f"{{start, stop, step}}, got {spec!r}")
+    has_num, has_step = "num" in spec, "step" in spec
+    if has_num == has_step:
+        raise _field_err(source, where, "expected exactly one of 'num' (points, stop included) and "
+                   "'step'")
+    _table(spec, where, source, ("start", "stop", "num" if has_num else "step"))
+    start, stop = float(spec["start"]), float(spec["stop"])
+    if has_num:
+        num = spec["num"]
+        if not isinstance(num, int) or num < 1:
+            raise _field_err(source, where, f"empty range: num must be a whole number >= 1, "
+                             f"got {num!r}")
+        return np.linspace(start, stop, num).tolist()
+    step = float(spec["step"])
+    if step == 0 or (stop - start) / step < 0:
+        raise _field_err(source, where, f"empty range: from {start} to {stop} in steps of "
+                         f"{step}")
+    count = int(math.floor((stop - start) / step + 1e-9)) + 1
+    return [start + i * step for i in range(count)]
+
+
+def _dimension(i, spec, source, mode):
+    where = f"dimension[{i}]"
+    if not isinstance(spec, dict):
+        raise _err(source, where, f"expected a table, got {spec!r}")
+    key = spec.get("key")
+    if not isinstance(key, str) or parse_key(key) is None:
+        raise _err(source, f"{where}.key", f"expected a scenario key such as 'vehicle.m' or "
+                   f"'cog[0].r[1]', got {key!r}")
+    for k in spec:
+        if k != "key" and k not in SOURCES:
+            raise _err(source, f"{where}.{k}", f"unknown; expected 'key' and one of "
+                       f"{', '.join(SOURCES)}")
+    given = [k for k in SOURCES if k in spec]
+    if len(given) != 1:
+        raise _err(source, key, f"expected exactly one of {', '.join(SOURCES)}, got "
+                   f"{', '.join(given) or 'none'}")
+    kind, value = given[0], spec[given[0]]
+    w = (key, kind)
+    if kind == "values":
+        if not isinstance(value, list) or not value:
+            raise _err(source, key, f"'values' must be a non-empty array, got {value!r}")
+        width = len(value[0]) if isinstance(value[0], list) else 1
+        return Dimension(key, kind, values=list(value), width=width)
+    if kind == "range":
+        values = _range_values(value, w, source)
+        return Dimension(key, kind, values=values)
+    if kind == "uniform":
+        _table(value, w, source, ("low", "high"), ("n",))
+        lo, hi = float(value["low"]), float(value["high"])
+        if not hi > lo:
+            raise _field_err(source, w, f"empty range: low = {lo} must be below high = {hi}")
+        return Dimension(key, kind, sampler=lambda rng, n: rng.uniform(lo, hi, n).tolist(),
+                         n=_count(value, w, source, mode), random=True)
+    if kind == "normal":
+        _table(value, w, source, ("mean", "std"), ("n",))
+        mu, sd = float(value["mean"]), float(value["std"])
+        if not sd > 0:
+            raise _field_err(source, w, f"std: expected a positive number, got {sd}")
+        return Dimension(key, kind, sampler=lambda rng, n: rng.normal(mu, sd, n).tolist(),
+                         n=_count(value, w, source, mode), random=True)
+    # ball: uniform inside a ball of CoG offsets (3-vectors), optionally in the rotor plane
+    _table(value, w, source, ("radius",), ("n", "plane"))
+    radius = float(value["radius"])
+    plane = value.get("plane", "xyz")
+    if plane not in ("xyz", "xy"):
+        raise _field_err(source, w, f"plane: expected \"xy\" or \"xyz\", got {plane!r}")
+    if not radius > 0:
+        raise _field_err(source, w, f"radius: expected a positive number of metres, got "
+                         f"{radius}")
+    dim = 2 if plane == "xy" else 3
+
+    def ball(rng, n):
+        v = rng.normal(size=(n, dim))
+        v *= (radius * rng.uniform(size=n) ** (1.0 / dim)
+              / np.linalg.norm(v, axis=1))[:, None]
+        if dim == 2:
+            v = np.hstack([v, np.zeros((n, 1))])
+        return v.tolist()
+    return Dimension(key, kind, sampler=ball, n=_count(value, w, source, mode), random=True,
+                     width=3)
+
+
+def _expand(dims, mode, samples, seed):
+    """[{key: value}] in a fixed order: grid = all combinations, first dimension slowest;
+    Monte-Carlo = ``samples`` independent draws. Dimension i draws from its own stream
+    (seed, i), so adding a dimension does not change the others' samples."""
+    rngs = [np.random.default_rng([seed, i]) for i in range(len(dims))]
+    if mode == "grid":
+        pools = [d.values if d.values is not None else d.sampler(rng, d.n)
+                 for d, rng in zip(dims, rngs)]
+        return [dict(zip((d.key for d in dims), combo)) for combo in itertools.product(*pools)]
+    columns = []
+    for d, rng in zip(dims, rngs):
+        if d.values is not None:
+            columns.append([d.values[k] for k in rng.integers(0, len(d.values), samples)])
+        else:
+            columns.append(d.sampler(rng, samples))
+    return [dict(zip((d.key for d in dims), row)) for row in zip(*columns)]
+
+
+def cog_admissible(scenario):
+    """None when the vehicle with every CoG change of ``scenario`` is admissible, else the
+    reason (the ParameterError message)."""
+    P = scenario.vehicle.parameters()
+    try:
+        for change in scenario.cog.changes:
+            check_parameters(with_cog(P, P[11:14] + np.asarray(change.r)))
+    except ParameterError as e:
+        return str(e)
+    return None
+
+
+def from_dict(data, source="<sweep>", folder=None):
+    """A validated Sweep from a parsed sweep file ``data``; ``source`` names it in errors and
+    ``folder`` resolves a relative base-scenario path (default: the current folder)."""
+    if not isinstance(data, dict):
+        raise SweepError(f"{source}: expected a table at the top level")
+    for k in data:
+        if k not in TOP:
+            raise _err(source, k, f"unknown; expected one of {', '.join(sorted(TOP))}")
+    if "scenario" not in data:
+        raise SweepError(f"{source}: missing key 'scenario' (a shipped scenario name or a "
+                         f"scenario file, relative to the sweep file)")
+    mode = data.get("mode", "grid")
+    if mode not in MODES:
+        raise _err(source, "mode", f"expected one of {', '.join(MODES)}, got {mode!r}")
+    ints = {"seed": 0, "chunk": DEFAULT_CHUNK, "samples": None}
+    for k, default in ints.items():
+        v = data.get(k, default)
+        if v is not None and (not isinstance(v, int) or isinstance(v, bool) or v < 0
+                              or (k != "seed" and v < 1)):
+            raise _err(source, k, f"expected a whole number{' >= 1' if k != 'seed' else ''}, "
+                       f"got {v!r}")
+        ints[k] = v
+    if mode == "monte-carlo" and ints["samples"] is None:
+        raise _err(source, "samples", "missing: mode = \"monte-carlo\" needs the flight count")
+    if mode == "grid" and ints["samples"] is not None:
+        raise _err(source, "samples", "only used with mode = \"monte-carlo\"")
+    threshold = data.get("threshold", DEFAULT_THRESHOLD)
+    if not _number(threshold) or threshold <= 0:
+        raise _err(source, "threshold", f"expected a positive number of metres, got "
+                   f"{threshold!r}")
+    inadmissible = data.get("inadmissible", "error")
+    if inadmissible not in ("error", "skip"):
+        raise _err(source, "inadmissible", f"expected \"error\" or \"skip\", got "
+                   f"{inadmissible!r}")
+    for k in ("name", "description"):
+        if k in data and not isinstance(data[k], str):
+            raise _err(source, k, f"expected a string, got {data[k]!r}")
+
+    spec = data["scenario"]
+    if not isinstance(spec, str):
+        raise _err(source, "scenario", f"expected a string, got {spec!r}")
+    candidate = Path(folder or ".") / spec
+    try:
+        base_path = candidate if candidate.is_file() else scenario_path(spec)
+        base = tomllib.loads(Path(base_path).read_text(encoding="utf-8"))
+    except (ScenarioError, OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise _err(source, "scenario", str(e)) from None
+    base_source = str(base_path)
+    fixed = data.get("set", {})
+    if not isinstance(fixed, dict):
+        raise _err(source, "set", f"expected a table of scenario keys, got {fixed!r}")
+    for key, value in fixed.items():
+        try:
+            set_key(base, key, value)
+        except KeyError as e:
+            raise _err(source, f"set.{key}", e.args[0]) from None
+    try:
+        parse(base, base_source)
+    except ScenarioError as e:
+        raise _err(source, "set", f"the base scenario with these settings is not valid: "
+                   f"{e}") from None
+
+    raw = data.get("dimension", [])
+    if not isinstance(raw, list) or not raw:
+        raise _err(source, "dimension", "expected at least one [[dimension]] table")
+    dims = [_dimension(i, d, source, mode) for i, d in enumerate(raw)]
+    keys = [d.key for d in dims]
+    if len(set(keys)) != len(keys):
+        dup = next(k for k in keys if keys.count(k) > 1)
+        raise _err(source, dup, "appears in two dimensions")
+    sweep = Sweep(name=data.get("name", Path(source).stem), description=data.get("description", ""),
+                  source=source, base=base, base_source=base_source, mode=mode,
+                  seed=ints["seed"], chunk=ints["chunk"], threshold=float(threshold),
+                  dimensions=dims)
+    combos = _expand(dims, mode, ints["samples"], ints["seed"])
+    if not combos:
+        raise SweepError(f"{source}: the sweep has no flights")
+    _validate_flights(sweep, combos, inadmissible == "skip")
+    return sweep
+
+
+def _validate_flights(sweep, combos, skip):
+    """Parse every flight as a scenario (errors name the sweep file and the varied key) and
+    check its CoG; fills ``sweep.flights``."""
+    by_key = {d.key: d for d in sweep.dimensions}
+    for index, values in enumerate(combos):
+        values = {k: _plain(v) for k, v in values.items()}
+        data = copy.deepcopy(sweep.base)
+        for key, value in values.items():
+            try:
+                set_key(data, key, value)
+            except KeyError as e:
+                raise _err(sweep.source, key, e.args[0]) from None
+        try:
+            scenario = parse(data, f"{sweep.source} (flight {index})")
+        except ScenarioError as e:
+            raise _err(sweep.source, _culprit(e, values), f"flight {index} "
+                       f"({_describe(values)}) is not a valid scenario: {e}") from None
+        reason = cog_admissible(scenario)
+        admissible = reason is None
+        if not admissible:
+            random = [k for k in values if by_key[k].random]
+            if random or not skip:
+                key = random[0] if random else _cog_key(values)
+                hint = ("samples must stay inside the admissible CoG ball (radius "
+                        f"{admissible_radius(scenario.vehicle.parameters()):.4g} m "
+                        "for this vehicle)" if random else
+                        "set inadmissible = \"skip\" to keep such grid points as rows "
+                        "without metrics")
+                raise _err(sweep.source, key, f"flight {index} ({_describe(values)}) has an "
+                           f"inadmissible CoG: {reason}; {hint}")
+        sweep.flights.append(Flight(index, values, admissible))
+
+
+def _culprit(error, values):
+    """The varied key a scenario error is about (the first one its message names)."""
+    text = str(error)
+    named = [k for k in values if f"'{k.split('[')[0]}" in text or f"'{k}" in text]
+    return named[0] if named else next(iter(values))
+
+
+def _cog_key(values):
+    cog = [k for k in values if k.startswith("cog") or k.startswith("vehicle")]
+    return cog[0] if cog else next(iter(values))
+
+
+def _describe(values):
+    return ", ".join(f"{k} = {v}" for k, v in values.items())
+
+
+def sweep_folder():
+    """The folder of the sweep files that ship with quadcog."""
+    from importlib import resources
+    return Path(str(resources.files("quadcog") / "sweeps"))
+
+
+def sweep_names():
+    """Names of the shipped sweep files, sorted."""
+    return tuple(sorted(p.stem for p in sweep_folder().glob(f"*{SUFFIX}")))
+
+
+def sweep_path(spec):
+    """A sweep file path, or the name of a shipped one (``"failure-map"``)."""
+    path = Path(spec)
+    if path.is_file():
+        return path
+    name = path.name[:-len(SUFFIX)] if path.name.endswith(SUFFIX) else path.name
+    if path.name == str(spec) and name in sweep_names():
+        return sweep_folder() / f"{name}{SUFFIX}"
+    raise SweepError(f"{spec}: no such sweep file, and no shipped sweep of that name "
+                     f"(shipped: {', '.join(sweep_names())})")
+
+
+def read_sweep_file(spec):
+    """(parsed TOML dict, path) of a sweep file or shipped name."""
+    path = sweep_path(spec)
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8")), path
+    except tomllib.TOMLDecodeError as e:
+        raise SweepError(f"{path}: not valid TOML ({e})") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise SweepError(f"{path}: cannot be read ({e})") from None
+
+
+def load_sweep(spec, **settings):
+    """Read and validate a sweep file (a path or a shipped name).
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+        The sweep file, or the name of a shipped sweep (``"failure-map"``).
+    **settings
+        Top-level keys of the sweep file to replace before validation (``seed=3``,
+        ``set={...}``), as in the file.
+
+    Returns
+    -------
+    Sweep
+    """
+    data, path = read_sweep_file(spec)
+    data.update(settings)
+    return from_dict(data, str(path), path.parent)
