@@ -18,6 +18,7 @@ from .controllers import (AdaptiveFeedbackLinearization, CascadePD, CompositeAda
                           Controller, FeedbackLinearization, FeedbackLinearizationIntegral,
                           make_controller)
 from .plant import TruthOptions
+from .sensing import Sensed, Sensing
 from .result import Metrics, SimulationResult
 from .batch import BatchResult, simulate_batch
 from .simulation import Limits, simulate

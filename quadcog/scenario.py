@@ -17,6 +17,7 @@ import numpy as np
 from . import config
 from .catalog import scenario_path
 from .controllers import BY_NAME, make_controller
+from .sensing import Sensed, Sensing
 from .conventions import STATE_NAMES
 from .errors import InputError
 from .plant import TruthOptions
@@ -55,12 +56,15 @@ CONTROLLER_PARAMS["composite"] = dict(
 TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "dt": NUMBER,
        "path": str, "trajectory": dict, "cog": list, "disturbance": list, "vehicle": dict,
        "controller_model": dict, "controller_params": dict, "truth": dict, "limits": dict,
+       "sensing": dict,
        "initial_offset": "vec3"}
 # every Vehicle field, and a preset to start from
 VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
                   "name": str}.get(name, NUMBER) for name in FIELD_NAMES}
 VEHICLE["preset"] = str
 TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
+SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,
+           "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}
 LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}
 COG = {"t": NUMBER, "r": "vec3", "ramp": NUMBER}
 DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3"}
@@ -82,6 +86,7 @@ class Scenario:
     controller_model: object = None               # what the controller believes (a Vehicle)
     controller_params: dict = field(default_factory=dict)
     truth: TruthOptions = field(default_factory=TruthOptions)
+    sensing: Sensing | None = None
     limits: Limits = field(default_factory=Limits)
     initial_offset: tuple = (0.0, 0.0, 0.0)
     source: str = "<scenario>"
@@ -93,7 +98,8 @@ class Scenario:
             params["Q"] = np.eye(8) * params.pop("Q_scale")
         if params.get("projection_radius") is False:
             params["projection_radius"] = None
-        return make_controller(self.controller, vehicle=self.model_vehicle(), **params)
+        ctl = make_controller(self.controller, vehicle=self.model_vehicle(), **params)
+        return ctl if self.sensing is None else Sensed(ctl, self.sensing, self.dt)
 
     def model_vehicle(self):
         """The controller's model: ``controller_model``, or the truth vehicle with r_G = 0."""
@@ -226,6 +232,14 @@ def parse(data, source="<scenario>"):
     _validate(cparams, CONTROLLER_PARAMS[controller], source, "controller_params.",
               f" for controller {controller!r}")
     truth, limits = data.get("truth", {}), data.get("limits", {})
+    sensing = data.get("sensing")
+    if sensing is not None:
+        _validate(sensing, SENSING, source, "sensing.")
+        if "seed" in sensing:
+            if sensing["seed"] != int(sensing["seed"]):
+                raise ScenarioError(f"{source}: sensing.seed: expected an integer, got "
+                                    f"{sensing['seed']!r}")
+            sensing = dict(sensing, seed=int(sensing["seed"]))
     _validate(truth, TRUTH, source, "truth.")
     _validate(limits, LIMITS, source, "limits.")
     cog, pulses = _cog_changes(data, source), _disturbances(data, source)
@@ -237,6 +251,7 @@ def parse(data, source="<scenario>"):
             disturbances=pulses, vehicle=vehicle, controller_model=controller_model,
             controller_params=dict(cparams),
             truth=TruthOptions(**truth),
+            sensing=None if sensing is None else Sensing(**sensing),
             limits=Limits(
                 limits.get("max_position_error", config.defaults["limits.max_position_error"]),
                 math.radians(limits.get("max_tilt_deg", config.defaults["limits.max_tilt_deg"]))),
