@@ -1,73 +1,225 @@
-"""The `quadcog` command: tour, scenarios, run, paper, analyze."""
+"""The `quadcog` command.
+
+One pair of functions per subcommand: ``add_<name>(sub)`` declares it (a one-line ``help``
+for the list, a ``description`` for its own --help, its arguments) and sets ``func`` to
+``cmd_<name>(args)``, which runs it. To add a subcommand, write the pair and append
+``add_<name>`` to SUBCOMMANDS; errors (QuadcogError, OSError) are turned into one line and
+exit status 2 by ``main``.
+"""
 import argparse
 from pathlib import Path
 import sys
+import warnings
 
 from .errors import QuadcogError
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(prog="quadcog", description="quadrotor with a moving CoG")
-    sub = ap.add_subparsers(dest="command", required=True)
-    sub.add_parser("tour", help="evaluate the generated functions at hover and print them")
-    sub.add_parser("scenarios", help="list the shipped scenarios with their descriptions")
-    run = sub.add_parser("run", help="run one scenario: a file (TOML) or a shipped name")
-    run.add_argument("scenario", help="scenario file (see README 'Scenario files') or the name "
-                                      "of a shipped one (`quadcog scenarios` lists them)")
-    run.add_argument("--out", type=Path, required=True, help="folder for metrics, CSV, plots")
-    paper = sub.add_parser("paper", help="reproduce the paper's figures and claims")
-    paper.add_argument("--out", type=Path, required=True, help="output folder")
-    analyze = sub.add_parser("analyze", help="PD design, zero dynamics, adaptive design, "
-                                             "failure map")
-    analyze.add_argument("--out", type=Path, required=True, help="output folder")
-    analyze.add_argument("--grid", type=int, default=41,
-                         help="failure-map points per axis (default 41)")
-    export = sub.add_parser("export", help="write a controller as a C99 module for a flight "
-                                           "controller (README: On a flight controller)")
-    export.add_argument("--controller", required=True,
-                        help="pd, fl, adaptive (any name of quadcog.controllers.BY_NAME)")
-    export.add_argument("--precision", default="float32", choices=("float32", "double"))
-    export.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
-    sweep = sub.add_parser("sweep", help="fly a sweep file (TOML) locally or on Dask")
-    sweep.add_argument("sweep", help="sweep file, or the name of a shipped one (failure-map)")
-    sweep.add_argument("--out", type=Path, required=True,
-                       help="results folder; run again with the same folder to resume")
-    where = sweep.add_mutually_exclusive_group()
+def _out_dir(path):
+    """Create the output folder ``path``; QuadcogError naming --out if it cannot be made."""
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise QuadcogError(f"--out {path}: cannot create the folder ({e.strerror})") from None
+    return Path(path)
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
+
+
+def add_tour(sub):
+    p = sub.add_parser("tour", help="evaluate the generated functions at hover and print them",
+                       description="Load the generated model and print every generated "
+                                   "function evaluated at hover.")
+    p.set_defaults(func=cmd_tour)
+
+
+def cmd_tour(args):
+    from .tour import tour
+    tour()
+
+
+def add_scenarios(sub):
+    p = sub.add_parser("scenarios", help="list the shipped scenarios with their descriptions",
+                       description="List the scenarios that ship with quadcog; `quadcog run "
+                                   "NAME` runs one.")
+    p.set_defaults(func=cmd_scenarios)
+
+
+def cmd_scenarios(args):
+    from .catalog import shipped_scenarios
+    scenarios = shipped_scenarios()
+    width = max(map(len, scenarios), default=0)
+    for name, description in scenarios.items():
+        print(f"{name:<{width}}  {description}")
+
+
+def add_run(sub):
+    p = sub.add_parser(
+        "run", help="fly one scenario (a shipped name or a TOML file) and write its results",
+        description="Fly one scenario and write metrics.json, vehicle.json, the sampled\n"
+                    "trajectory (trajectory.csv; column names carry units) and flight.png.",
+        epilog="examples:\n  quadcog run fig7\n  quadcog run fig6 --set controller=fl\n"
+               "  quadcog run my.toml --set vehicle.m=0.8 --set 'cog=[{t=1, r=[0.03, 0, 0]}]'",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scenario", help="scenario file (see README 'Scenario files') or the name "
+                                    "of a shipped one (`quadcog scenarios` lists them)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="folder for the results (default: out/<scenario> in this folder)")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="KEY=VALUE",
+                   help="override a scenario key (dotted: vehicle.m=0.8, controller=adaptive, "
+                        "controller_params.gamma=0.02; VALUE in TOML syntax); repeatable; "
+                        "validated like the file")
+    p.add_argument("--plot", action=argparse.BooleanOptionalAction, default=True,
+                   help="draw flight.png (default: yes)")
+    p.add_argument("--animate", action="store_true",
+                   help="also write flight.gif, a 3D animation (as `quadcog animate`)")
+    p.add_argument("--every", type=_positive_int, default=1, metavar="N",
+                   help="write every N-th sample (and the last) to the table (default: 1)")
+    p.add_argument("--format", dest="fmt", choices=("csv", "parquet"), default="csv",
+                   help="table format (parquet needs pyarrow; default: csv)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_run)
+
+
+def cmd_run(args):
+    from .scenario import default_out, run_file
+    out = _out_dir(args.out if args.out is not None else default_out(args.scenario))
+    run_file(args.scenario, out, progress=not args.quiet, overrides=args.overrides,
+             plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate)
+
+
+def add_animate(sub):
+    p = sub.add_parser("animate", help="animate a run folder as a 3D GIF",
+                       description="Read RUN_DIR (written by `quadcog run`) and write a GIF of "
+                                   "the flight in 3D: body axes, rotors, the CoG offset to scale, "
+                                   "the trail and the reference, with the time.")
+    p.add_argument("run_dir", type=Path, help="folder written by `quadcog run`")
+    p.add_argument("--output", type=Path, default=None,
+                   help="GIF to write (default: RUN_DIR/flight.gif)")
+    p.add_argument("--fps", type=_positive_int, default=15, help="frames per second (default 15)")
+    p.add_argument("--speed", type=float, default=1.0,
+                   help="simulated seconds per wall-clock second (default 1)")
+    p.add_argument("--max-frames", type=_positive_int, default=120,
+                   help="at most this many frames; the speed goes up to fit (default 120)")
+    p.set_defaults(func=cmd_animate)
+
+
+def cmd_animate(args):
+    from .animate import animate_run
+    path = animate_run(args.run_dir, args.output, fps=args.fps, speed=args.speed,
+                       max_frames=args.max_frames)
+    print(f"wrote {path}")
+
+
+def add_paper(sub):
+    p = sub.add_parser("paper", help="reproduce the paper's figures and claims",
+                       description="Run the paper's Figs. 3-8 as scenarios, draw each figure "
+                                   "and write summary.md / summary.json with a verdict per "
+                                   "claim.")
+    p.add_argument("--out", type=Path, default=Path("out/paper"),
+                   help="output folder (default: out/paper)")
+    p.set_defaults(func=cmd_paper)
+
+
+def cmd_paper(args):
+    from .paper import run_paper
+    run_paper(_out_dir(args.out))
+
+
+def add_analyze(sub):
+    p = sub.add_parser("analyze", help="PD margins, zero dynamics, adaptive design, failure map",
+                       description="Cascade PD margins and singular values (python-control), "
+                                   "zero dynamics for moving CoG, the adaptive law's Lyapunov "
+                                   "function along Fig. 6, and the failure map over CoG "
+                                   "offsets.")
+    p.add_argument("--out", type=Path, default=Path("out/analysis"),
+                   help="output folder (default: out/analysis)")
+    p.add_argument("--grid", type=_positive_int, default=41,
+                   help="failure-map points per axis (default 41)")
+    p.set_defaults(func=cmd_analyze)
+
+
+def cmd_analyze(args):
+    from .analysis import analyze
+    analyze(_out_dir(args.out), grid=args.grid)
+
+
+def add_export(sub):
+    p = sub.add_parser("export", help="write a controller as a C99 module for a flight "
+                                      "controller (README: On a flight controller)",
+                       description="Write one controller's law as a self-contained C99 module "
+                                   "(.h and .c) in float32 or double.")
+    p.add_argument("--controller", required=True,
+                   help="pd, fl, adaptive (any name of quadcog.controllers.BY_NAME)")
+    p.add_argument("--precision", default="float32", choices=("float32", "double"))
+    p.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
+    p.set_defaults(func=cmd_export)
+
+
+def cmd_export(args):
+    from .embedded import export_controller
+    for path in export_controller(args.controller, args.precision, _out_dir(args.out)):
+        print(f"wrote {path}")
+
+
+def add_sweep(sub):
+    p = sub.add_parser("sweep", help="fly a sweep file (TOML) locally or on Dask",
+                       description="Fly every flight of a sweep file (scenario keys as lists, "
+                                   "ranges or samples) and write one table, a summary and "
+                                   "plots; resumable.")
+    p.add_argument("sweep", help="sweep file, or the name of a shipped one (failure-map)")
+    p.add_argument("--out", type=Path, required=True,
+                   help="results folder; run again with the same folder to resume")
+    where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, help="start a Dask LocalCluster of N processes")
     where.add_argument("--scheduler", help="address of a running Dask scheduler")
-    args = ap.parse_args(argv)
+    p.set_defaults(func=cmd_sweep)
+
+
+def cmd_sweep(args):
+    from .sweeps.runner import run_cli
+    run_cli(args.sweep, _out_dir(args.out), workers=args.workers, scheduler=args.scheduler)
+
+
+SUBCOMMANDS = [add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
+               add_export, add_sweep]
+
+
+def _version():
+    from . import __version__
+    return f"quadcog {__version__}"
+
+
+def parser():
+    """The argument parser of the `quadcog` command."""
+    ap = argparse.ArgumentParser(prog="quadcog",
+                                 description="Quadrotor with a moving centre of gravity: "
+                                             "simulate, reproduce the paper, analyse.")
+    ap.add_argument("--version", action="version", version=_version())
+    sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in SUBCOMMANDS:
+        add(sub)
+    return ap
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"quadcog: warning: {message}", file=sys.stderr)
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
     try:
-        if getattr(args, "out", None) is not None:
-            try:
-                args.out.mkdir(parents=True, exist_ok=True)
-            except OSError as e:
-                raise QuadcogError(f"--out {args.out}: cannot create the folder "
-                                   f"({e.strerror})") from None
-        if args.command == "tour":
-            from .tour import tour
-            tour()
-        elif args.command == "scenarios":
-            from .catalog import shipped_scenarios
-            scenarios = shipped_scenarios()
-            width = max(map(len, scenarios), default=0)
-            for name, description in scenarios.items():
-                print(f"{name:<{width}}  {description}")
-        elif args.command == "run":
-            from .scenario import run_file
-            run_file(args.scenario, args.out)
-        elif args.command == "paper":
-            from .paper import run_paper
-            run_paper(args.out)
-        elif args.command == "export":
-            from .embedded import export_controller
-            for path in export_controller(args.controller, args.precision, args.out):
-                print(f"wrote {path}")
-        elif args.command == "sweep":
-            from .sweeps.runner import run_cli
-            run_cli(args.sweep, args.out, workers=args.workers, scheduler=args.scheduler)
-        elif args.command == "analyze":
-            from .analysis import analyze
-            analyze(args.out, grid=args.grid)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning      # one line, no source location
+            args.func(args)
     except QuadcogError as e:
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2

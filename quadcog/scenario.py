@@ -3,7 +3,7 @@
 A scenario names a controller, a trajectory, CoG changes, disturbances, the truth vehicle
 (``[vehicle]``) and what the controller believes (``[controller_model]``), controller
 parameters and truth-model switches; `quadcog run FILE --out DIR` writes
-metrics.json, trajectory.csv and flight.png. The keys are documented in README.md.
+metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are documented in README.md.
 """
 from dataclasses import dataclass, field
 import csv
@@ -11,6 +11,7 @@ import json
 import math
 from pathlib import Path
 import tomllib
+import warnings
 
 import numpy as np
 
@@ -18,7 +19,7 @@ from . import config
 from .catalog import scenario_path
 from .controllers import BY_NAME, make_controller
 from .sensing import Sensed, Sensing
-from .conventions import STATE_NAMES
+from .columns import trajectory_columns
 from .errors import InputError
 from .plant import TruthOptions
 from .progress import ProgressBar
@@ -277,9 +278,10 @@ def _vehicle(data, key, base, source):
         raise ScenarioError(f"{source}: key {key!r}: {e}") from None
 
 
-def load_scenario(path):
+def load_scenario(path, overrides=()):
     """Read and validate a scenario: a file path or the name of a shipped scenario ("fig6";
-    see ``quadcog.catalog.scenario_path``)."""
+    see ``quadcog.catalog.scenario_path``). ``overrides``: ``--set`` texts ("vehicle.m=0.8",
+    see ``quadcog.overrides``), applied before the validation, which then names them."""
     path = scenario_path(path)
     if path.is_dir():
         raise ScenarioError(f"{path}: is a folder, not a scenario file")
@@ -293,11 +295,50 @@ def load_scenario(path):
         raise ScenarioError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     except OSError as e:
         raise ScenarioError(f"{path}: cannot be read ({e.strerror})") from None
-    return parse(data, str(path))
+    source = str(path)
+    if overrides:
+        from .overrides import apply_overrides
+        data, notes = apply_overrides(data, overrides)
+        for note in notes:
+            warnings.warn(f"{path}: {note}", stacklevel=2)
+        source = f"{path} with " + " ".join(f"--set {o}" for o in overrides)
+    return parse(data, source)
 
 
-def write_outputs(result, scenario, out):
-    """metrics.json, trajectory.csv and flight.png of one run into folder ``out``."""
+def write_table(result, path, every=1, fmt="csv"):
+    """The run's samples (every ``every``-th, and the last) into ``path`` as CSV or Parquet
+    (``fmt``), with the column names of ``quadcog.columns.trajectory_columns()`` (units in the
+    names). Returns the path written."""
+    if not (isinstance(every, int) and not isinstance(every, bool) and every >= 1):
+        raise InputError(f"every: expected a whole number >= 1 (write every N-th sample), "
+                         f"got {every!r}")
+    data = np.hstack([result.t[:, None], result.x, result.U, result.ref, result.r_hat,
+                      result.r_G])
+    rows = np.unique(np.r_[np.arange(0, len(data), every), len(data) - 1])
+    data = data[rows]
+    names = trajectory_columns()
+    path = Path(path)
+    if fmt == "parquet":
+        try:
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+        except ImportError:
+            raise InputError("format 'parquet' needs pyarrow: pip install pyarrow "
+                             "(or use the default, csv)") from None
+        pq.write_table(pa.table({n: data[:, k] for k, n in enumerate(names)}), path)
+    elif fmt == "csv":
+        with open(path, "w", newline="") as fh:
+            writer = csv.writer(fh)
+            writer.writerow(names)
+            writer.writerows(np.round(data, 10).tolist())
+    else:
+        raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
+    return path
+
+
+def write_outputs(result, scenario, out, plot=True, every=1, fmt="csv"):
+    """metrics.json, vehicle.json, trajectory.csv (or .parquet: ``fmt``; every ``every``-th
+    sample) and, with ``plot``, flight.png of one run into folder ``out``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     metrics = result.metrics.as_dict()
@@ -305,17 +346,12 @@ def write_outputs(result, scenario, out):
                    duration=scenario.duration, dt=scenario.dt,
                    simulated_until=float(result.t[-1]), wall_time_s=result.info.get("seconds"))
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
-    header = (["t"] + list(STATE_NAMES) + ["U1", "U2", "U3", "U4"]
-              + [f"ref_{n}" for n in ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az",
-                                      "jx", "jy", "jz", "yaw", "yaw_rate")]
-              + ["r_hat_x", "r_hat_y", "r_hat_z", "r_G_x", "r_G_y", "r_G_z"])
-    data = np.hstack([result.t[:, None], result.x, result.U, result.ref, result.r_hat,
-                      result.r_G])
-    with open(out / "trajectory.csv", "w", newline="") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(header)
-        writer.writerows(np.round(data, 10).tolist())
-    result.plot(out / "flight.png", title=f"{scenario.name} ({scenario.controller})")
+    (out / "vehicle.json").write_text(json.dumps(scenario.vehicle.as_dict(), indent=2) + "\n")
+    write_table(result, out / f"trajectory.{fmt}", every=every, fmt=fmt)
+    if plot:
+        from .plots import plot_flight
+        plot_flight(result, out / "flight.png", name=scenario.name,
+                    disturbances=scenario.disturbances)
     return metrics
 
 
@@ -329,18 +365,31 @@ def run_with_progress(scenario, label=None, progress=True):
             bar.close()
 
 
-def run_file(path, out, progress=True):
-    """`quadcog run`: load, simulate with a progress bar, write the outputs; returns metrics."""
-    scenario = load_scenario(path)
+def run_file(path, out=None, progress=True, overrides=(), plot=True, every=1, fmt="csv",
+             animate=False):
+    """`quadcog run`: load (with ``overrides``), simulate with a progress bar, write the
+    outputs into ``out`` (default ``out/<scenario>`` in the current folder); returns metrics."""
+    scenario = load_scenario(path, overrides)
+    out = Path(out) if out is not None else default_out(path)
     try:
         result = run_with_progress(scenario, progress=progress)
     except ScenarioError:
         raise
     except InputError as e:                 # e.g. dt too large for the closed loop
         raise ScenarioError(f"{scenario.source}: {e}") from None
-    metrics = write_outputs(result, scenario, out)
+    metrics = write_outputs(result, scenario, out, plot=plot, every=every, fmt=fmt)
+    written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else [])
+    if animate:
+        from .animate import animate_run
+        animate_run(out, out / "flight.gif")
+        written.append("flight.gif")
     status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_cause']})"
               if metrics["diverged"] else
               f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")
-    print(f"{scenario.name}: {status}; wrote {out}/metrics.json, trajectory.csv, flight.png")
+    print(f"{scenario.name}: {status}; wrote {out}/{', '.join(written)}")
     return metrics
+
+
+def default_out(scenario):
+    """``out/<stem>`` for a scenario name or file path: where `quadcog run` writes by default."""
+    return Path("out") / Path(str(scenario)).stem

@@ -102,7 +102,7 @@ rotor_saturation = true
     assert m["r_G_final"] == [0.02, 0.0, 0.0] and not m["diverged"]
     rows = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)
     header = (out / "trajectory.csv").read_text().splitlines()[0].split(",")
-    assert rows.shape == (3001, len(header)) and header[:4] == ["t", "x", "y", "z"]
+    assert rows.shape == (3001, len(header)) and header[:4] == ["t_s", "x_m", "y_m", "z_m"]
     assert (out / "flight.png").stat().st_size > 10_000
     assert "demo" in res.stderr          # the progress bar's final line
 
