@@ -193,7 +193,9 @@ def _build_into(source_bytes, stem, cc, flags, out):
     with _exclusive(out.parent / f"{out.stem}.lock"):
         if is_verified(out):
             return out
-        if out.exists() or out.is_symlink():
+        # without a recorded digest (a library of an earlier version, or one put there by
+        # hand) the library is simply rebuilt; with one that does not match, it was damaged
+        if (out.exists() or out.is_symlink()) and _digest_path(out).exists():
             warnings.warn(f"cached library {out} does not match the SHA-256 recorded when it "
                           f"was built (damaged, replaced or left by an older quadcog); "
                           f"rebuilding it", QuadcogWarning, stacklevel=4)

@@ -60,8 +60,11 @@ def test_damaged_library_is_rebuilt(tmp_path, damage):
         lib.unlink()
         lib.symlink_to(other)
     assert not is_verified(lib)
-    with pytest.warns(quadcog.QuadcogWarning, match="does not match the SHA-256 recorded"):
+    if damage == "no digest":                   # e.g. left by an earlier version: no warning
         again = compile_library(TWICE, "t", folder=tmp_path)
+    else:
+        with pytest.warns(quadcog.QuadcogWarning, match="does not match the SHA-256 recorded"):
+            again = compile_library(TWICE, "t", folder=tmp_path)
     assert again == lib and not lib.is_symlink() and file_digest(lib) == good
     assert _f(again, 1.5) == 3.0
 
