@@ -226,6 +226,9 @@ def main(argv=None):
     except OSError as e:
         print(f"quadcog: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:       # Ctrl-C: files being written were not committed
+        print("quadcog: interrupted", file=sys.stderr)
+        return 130                  # 128 + SIGINT, as shells report it
     return 0
 
 

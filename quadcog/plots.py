@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .outputs import plot_text
+
 # how a controller (its ``name`` attribute) is called in titles
 CONTROLLER_LABELS = {"cascade_pd": "cascade PD", "feedback_linearization": "feedback linearization",
                      "adaptive_feedback_linearization": "adaptive FL"}
@@ -119,8 +121,9 @@ def plot_flight(result, path=None, name=None, title=None, disturbances=None):
                          columnspacing=1.0)
         for key in ("T", "M"):
             ax[key].set_xlabel("time (s)")
-        fig.suptitle(f"{title or flight_title(result.controller, name)}, "
-                     f"{status_text(result.metrics)}")
+        # plot_text: a '$' in a scenario name must not start mathtext (savefig would fail)
+        fig.suptitle(plot_text(f"{title or flight_title(result.controller, name)}, "
+                               f"{status_text(result.metrics)}"))
         fig.tight_layout()
         if path is not None:
             Path(path).parent.mkdir(parents=True, exist_ok=True)

@@ -6,8 +6,6 @@ parameters and truth-model switches; `quadcog run FILE --out DIR` writes
 metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are documented in README.md.
 """
 from dataclasses import dataclass, field
-import csv
-import json
 import math
 from pathlib import Path
 import tomllib
@@ -15,12 +13,13 @@ import warnings
 
 import numpy as np
 
-from . import config
+from . import config, validate
 from .catalog import scenario_path
 from .controllers import BY_NAME, make_controller
 from .sensing import Sensed, Sensing
 from .columns import trajectory_columns
 from .errors import InputError
+from .outputs import RunFiles, strict_json, write_csv
 from .plant import TruthOptions
 from .progress import ProgressBar
 from .simulation import Limits, simulate, start_at_reference
@@ -99,7 +98,12 @@ class Scenario:
             params["Q"] = np.eye(8) * params.pop("Q_scale")
         if params.get("projection_radius") is False:
             params["projection_radius"] = None
-        ctl = make_controller(self.controller, vehicle=self.model_vehicle(), **params)
+        try:
+            ctl = make_controller(self.controller, vehicle=self.model_vehicle(), **params)
+        except ScenarioError:
+            raise
+        except InputError as e:         # a setting the controller's design refuses
+            raise ScenarioError(f"{self.source}: key 'controller_params': {e}") from None
         return ctl if self.sensing is None else Sensed(ctl, self.sensing, self.dt)
 
     def model_vehicle(self):
@@ -121,35 +125,38 @@ class Scenario:
                         progress=progress)
 
 
-def _type_name(kind):
-    return {str: "a string", bool: "true or false", dict: "a table", list: "an array of tables",
-            "vec3": "an array of 3 numbers", "vec": "an array of numbers",
-            "number_or_vec3": "a number or an array of 3 numbers",
-            "number_or_false": "a number or false",
-            "pairs4": "an array of 4 arrays [x, y] of numbers"}.get(
-        kind, "a number" if kind == NUMBER else str(kind))
-
-
 def _check(value, kind, where):
-    def is_num(v):
-        return isinstance(v, NUMBER) and not isinstance(v, bool) and math.isfinite(v)
-    ok = {
-        "vec3": lambda v: isinstance(v, list) and len(v) == 3 and all(map(is_num, v)),
-        "pairs4": lambda v: isinstance(v, list) and len(v) == 4 and all(
-            isinstance(r, list) and len(r) == 2 and all(map(is_num, r)) for r in v),
-        "vec": lambda v: isinstance(v, list) and len(v) > 0 and all(map(is_num, v)),
-        "number_or_vec3": lambda v: is_num(v) or (isinstance(v, list) and len(v) == 3
-                                                  and all(map(is_num, v))),
-        "number_or_false": lambda v: v is False or is_num(v),
-    }
-    if kind in ok:
-        good = ok[kind](value)
-    elif kind == NUMBER:
-        good = is_num(value)
-    else:
-        good = isinstance(value, kind)
-    if not good:
-        raise ScenarioError(f"{where}: expected {_type_name(kind)}, got {value!r}")
+    """``value`` if it is of ``kind`` (a schema entry), else ScenarioError naming ``where``.
+    The checks are those of quadcog.validate, shared with the API."""
+    err = dict(error=ScenarioError)
+    if kind == NUMBER:
+        validate.real(value, where, **err)
+    elif kind == "vec3":
+        validate.array(value, where, (3,), what="an array of 3 numbers", **err)
+    elif kind == "vec":
+        a = validate.array(value, where, (None,), what="an array of numbers", **err)
+        if a.size == 0:
+            validate.fail(where, "a non-empty array of numbers", value, ScenarioError)
+    elif kind == "pairs4":
+        validate.array(value, where, (4, 2), what="an array of 4 arrays [x, y] of numbers",
+                       **err)
+    elif kind == "number_or_vec3":
+        if not (isinstance(value, list) and len(value) == 3):
+            validate.real(value, where, **err) if not isinstance(value, list) else \
+                validate.fail(where, "a number or an array of 3 numbers", value, ScenarioError)
+        else:
+            validate.array(value, where, (3,), **err)
+    elif kind == "number_or_false":
+        if value is not False:
+            validate.real(value, where, **err)
+    elif kind is bool:
+        validate.flag(value, where, **err)
+    elif kind is list:                       # an array of tables
+        if not (isinstance(value, list) and all(isinstance(v, dict) for v in value)):
+            validate.fail(where, "an array of tables ([[...]] entries)", value, ScenarioError)
+    elif not isinstance(value, kind):
+        validate.fail(where, {str: "a string", dict: "a table"}.get(kind, str(kind)), value,
+                      ScenarioError)
     return value
 
 
@@ -177,10 +184,10 @@ def _entries(data, key, schema, source, required):
 def _cog_changes(data, source):
     changes, last = [], -math.inf
     for where, entry in _entries(data, "cog", COG, source, ("t", "r")):
-        t, ramp = entry["t"], entry.get("ramp", 0.0)
-        if t < 0 or ramp < 0:
-            raise ScenarioError(f"{source}: key {where!r}: t and ramp must be >= 0 s, got "
-                                f"t = {t}, ramp = {ramp}")
+        t = validate.nonnegative(entry["t"], f"{source}: key {where + '.t'!r}", "s",
+                                 ScenarioError)
+        ramp = validate.nonnegative(entry.get("ramp", 0.0), f"{source}: key {where + '.ramp'!r}",
+                                    "s", ScenarioError)
         if t < last:
             raise ScenarioError(f"{source}: key {where + '.t'!r}: expected entries in time "
                                 f"order; t = {t} s starts before the previous change ends at "
@@ -208,22 +215,21 @@ def parse(data, source="<scenario>"):
         if key not in data:
             raise ScenarioError(f"{source}: missing key {key!r}")
     w = lambda key: f"{source}: key {key!r}"
-    controller = data["controller"]
-    if controller not in BY_NAME:
-        raise ScenarioError(f"{w('controller')}: expected one of {', '.join(BY_NAME)}, got "
-                            f"{controller!r}")
-    for key in ("duration", "dt"):
-        if key in data and data[key] <= 0:
-            raise ScenarioError(f"{w(key)}: expected a positive number of seconds, got "
-                                f"{data[key]!r}")
-    if data.get("path", "compiled") not in ("compiled", "python"):
-        raise ScenarioError(f"{w('path')}: expected 'compiled' or 'python', got "
-                            f"{data['path']!r}")
+    controller = validate.choice(data["controller"], w("controller"), tuple(BY_NAME),
+                                 ScenarioError)
+    duration = validate.positive(data["duration"], w("duration"), "s", ScenarioError)
+    dt = validate.positive(data.get("dt", config.defaults["simulate.dt"]), w("dt"), "s",
+                           ScenarioError)
+    validate.step_count(duration, dt, config.defaults["simulate.max_steps"], source,
+                        ScenarioError)
+    validate.choice(data.get("path", "compiled"), w("path"), ("compiled", "python"),
+                    ScenarioError)
     traj = dict(data.get("trajectory", {"kind": "hover"}))
-    kind = traj.pop("kind", None)
-    if kind not in TRAJECTORIES:
-        raise ScenarioError(f"{w('trajectory.kind')}: expected one of "
-                            f"{', '.join(TRAJECTORIES)}, got {kind!r}")
+    if "kind" not in traj:
+        raise ScenarioError(f"{w('trajectory')}: missing key 'kind' (one of "
+                            f"{', '.join(TRAJECTORIES)})")
+    kind = validate.choice(traj.pop("kind"), w("trajectory.kind"), tuple(TRAJECTORIES),
+                           ScenarioError)
     cls, schema = TRAJECTORIES[kind]
     _validate(traj, schema, source, "trajectory.", f" for kind {kind!r}")
     vehicle = _vehicle(data, "vehicle", None, source)
@@ -243,19 +249,30 @@ def parse(data, source="<scenario>"):
             sensing = dict(sensing, seed=int(sensing["seed"]))
     _validate(truth, TRUTH, source, "truth.")
     _validate(limits, LIMITS, source, "limits.")
+    max_error = validate.positive(
+        limits.get("max_position_error", config.defaults["limits.max_position_error"]),
+        w("limits.max_position_error"), "m", ScenarioError)
+    max_tilt_deg = validate.real(
+        limits.get("max_tilt_deg", config.defaults["limits.max_tilt_deg"]),
+        w("limits.max_tilt_deg"), lo=0.0, lo_open=True, hi=180.0, unit="deg",
+        error=ScenarioError)
+    offset = [float(v) for v in data.get("initial_offset", (0.0, 0.0, 0.0))]
+    if not math.hypot(*offset) < max_error:     # (hypot: no overflow for 1e200)
+        raise ScenarioError(f"{w('initial_offset')}: expected an offset shorter than "
+                            f"limits.max_position_error = {max_error:g} m (a run that starts "
+                            f"diverged), got {validate.plain(offset)}, "
+                            f"{math.hypot(*offset):.3g} m long")
     cog, pulses = _cog_changes(data, source), _disturbances(data, source)
     try:
         return Scenario(
-            name=data["name"], controller=controller, duration=float(data["duration"]),
-            dt=float(data.get("dt", config.defaults["simulate.dt"])), description=data.get("description", ""),
+            name=data["name"], controller=controller, duration=duration, dt=dt,
+            description=data.get("description", ""),
             path=data.get("path", "compiled"), trajectory=cls(**traj), cog=cog,
             disturbances=pulses, vehicle=vehicle, controller_model=controller_model,
             controller_params=dict(cparams),
             truth=TruthOptions(**truth),
             sensing=None if sensing is None else Sensing(**sensing),
-            limits=Limits(
-                limits.get("max_position_error", config.defaults["limits.max_position_error"]),
-                math.radians(limits.get("max_tilt_deg", config.defaults["limits.max_tilt_deg"]))),
+            limits=Limits(max_error, math.radians(max_tilt_deg)),
             initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source)
     except InputError as e:
         raise ScenarioError(f"{source}: {e}") from None
@@ -268,10 +285,8 @@ def _vehicle(data, key, base, source):
     _validate(table, VEHICLE, source, f"{key}.", " vehicle field")
     preset = table.pop("preset", None)
     if preset is not None:
-        if preset not in PRESETS:
-            raise ScenarioError(f"{source}: key '{key}.preset': expected one of "
-                                f"{', '.join(PRESETS)}, got {preset!r}")
-        base = PRESETS[preset]
+        base = PRESETS[validate.choice(preset, f"{source}: key '{key}.preset'", tuple(PRESETS),
+                                       ScenarioError)]
     try:
         return (base or HUMMINGBIRD).replace(**table)
     except InputError as e:
@@ -288,9 +303,13 @@ def load_scenario(path, overrides=()):
     if not path.is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        # utf-8-sig: a byte order mark (as some editors write) is not part of the TOML
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except tomllib.TOMLDecodeError as e:
         raise ScenarioError(f"{path}: not valid TOML ({e})") from None
+    except RecursionError:
+        raise ScenarioError(f"{path}: arrays or tables nested too deeply to read (expected "
+                            f"the flat layout of README 'Scenario files')") from None
     except UnicodeDecodeError as e:
         raise ScenarioError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     except OSError as e:
@@ -308,14 +327,18 @@ def load_scenario(path, overrides=()):
 def write_table(result, path, every=1, fmt="csv"):
     """The run's samples (every ``every``-th, and the last) into ``path`` as CSV or Parquet
     (``fmt``), with the column names of ``quadcog.columns.trajectory_columns()`` (units in the
-    names). Returns the path written."""
+    names). The CSV is written block by block (``quadcog.outputs.write_csv``): no memory
+    beyond the result arrays. Returns the path written."""
     if not (isinstance(every, int) and not isinstance(every, bool) and every >= 1):
         raise InputError(f"every: expected a whole number >= 1 (write every N-th sample), "
                          f"got {every!r}")
-    data = np.hstack([result.t[:, None], result.x, result.U, result.ref, result.r_hat,
-                      result.r_G])
-    rows = np.unique(np.r_[np.arange(0, len(data), every), len(data) - 1])
-    data = data[rows]
+    if fmt not in ("csv", "parquet"):
+        raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
+    columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G]
+    n = len(result.t)
+    if every > 1:
+        rows = np.unique(np.r_[np.arange(0, n, every), n - 1])
+        columns, n = [c[rows] for c in columns], len(rows)
     names = trajectory_columns()
     path = Path(path)
     if fmt == "parquet":
@@ -325,33 +348,37 @@ def write_table(result, path, every=1, fmt="csv"):
         except ImportError:
             raise InputError("format 'parquet' needs pyarrow: pip install pyarrow "
                              "(or use the default, csv)") from None
-        pq.write_table(pa.table({n: data[:, k] for k, n in enumerate(names)}), path)
-    elif fmt == "csv":
-        with open(path, "w", newline="") as fh:
-            writer = csv.writer(fh)
-            writer.writerow(names)
-            writer.writerows(np.round(data, 10).tolist())
+        data = np.hstack([np.asarray(c, dtype=float).reshape(n, -1) for c in columns])
+        pq.write_table(pa.table({name: data[:, k] for k, name in enumerate(names)}), path)
     else:
-        raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
+        with open(path, "w", newline="") as fh:
+            write_csv(fh, names, columns, n)
     return path
+
+
+def output_files(fmt="csv", plot=True):
+    """The files ``write_outputs`` writes, in its order."""
+    return ("metrics.json", "vehicle.json", f"trajectory.{fmt}") + (("flight.png",) if plot
+                                                                      else ())
 
 
 def write_outputs(result, scenario, out, plot=True, every=1, fmt="csv"):
     """metrics.json, vehicle.json, trajectory.csv (or .parquet: ``fmt``; every ``every``-th
-    sample) and, with ``plot``, flight.png of one run into folder ``out``."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    sample) and, with ``plot``, flight.png of one run into folder ``out``: all of them or
+    none (``quadcog.outputs.RunFiles``), so an error or Ctrl-C while writing leaves the
+    folder's previous files as they were. metrics.json and vehicle.json are strict JSON."""
     metrics = result.metrics.as_dict()
     metrics.update(name=scenario.name, controller=scenario.controller,
                    duration=scenario.duration, dt=scenario.dt,
                    simulated_until=float(result.t[-1]), wall_time_s=result.info.get("seconds"))
-    (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
-    (out / "vehicle.json").write_text(json.dumps(scenario.vehicle.as_dict(), indent=2) + "\n")
-    write_table(result, out / f"trajectory.{fmt}", every=every, fmt=fmt)
-    if plot:
-        from .plots import plot_flight
-        plot_flight(result, out / "flight.png", name=scenario.name,
-                    disturbances=scenario.disturbances)
+    with RunFiles(out) as files:
+        write_table(result, files.path(f"trajectory.{fmt}"), every=every, fmt=fmt)
+        if plot:
+            from .plots import plot_flight
+            plot_flight(result, files.path("flight.png"), name=scenario.name,
+                        disturbances=scenario.disturbances)
+        files.path("vehicle.json").write_text(strict_json(scenario.vehicle.as_dict()))
+        files.path("metrics.json").write_text(strict_json(metrics))
     return metrics
 
 

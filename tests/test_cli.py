@@ -82,10 +82,11 @@ def test_set_overrides_reach_the_flight(tmp_path):
 
 
 @pytest.mark.parametrize("setting, words", [
-    ("vehicle.m=abc", ["vehicle.m", "expected a number", "'abc'", "--set vehicle.m=abc"]),
+    ("vehicle.m=abc", ["vehicle.m", "expected a finite real number", "'abc'",
+                       "--set vehicle.m=abc"]),
     ("vehicle.m=-1", ["vehicle", "m"]),
     ("nope=1", ["'nope'", "unknown"]),
-    ("controller=xyz", ["'controller'", "pd, fl, adaptive", "'xyz'"]),
+    ("controller=xyz", ["'controller'", "'pd', 'fl', 'adaptive'", "'xyz'"]),
     ("duration", ["KEY=VALUE"]),
     ("cog.5.t=1", ["cog.5", "entry"]),
 ])

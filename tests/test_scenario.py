@@ -23,13 +23,13 @@ def test_builtin_scenarios_parse():
 
 @pytest.mark.parametrize("data, message", [
     (dict(BASE, colour="red"), "key 'colour': unknown; expected one of"),
-    (dict(BASE, duration="long"), "key 'duration': expected a number, got 'long'"),
-    (dict(BASE, duration=-2.0), "key 'duration': expected a positive number of seconds"),
-    (dict(BASE, controller="lqr"), "key 'controller': expected one of pd, fl, adaptive"),
+    (dict(BASE, duration="long"), "key 'duration': expected a finite real number, got 'long'"),
+    (dict(BASE, duration=-2.0), r"key 'duration': expected a positive number \(s\), got -2.0"),
+    (dict(BASE, controller="lqr"), "key 'controller': expected one of 'pd', 'fl', 'adaptive'"),
     ({"name": "t", "controller": "fl"}, "missing key 'duration'"),
-    (dict(BASE, trajectory={"kind": "square"}), "trajectory.kind': expected one of hover"),
+    (dict(BASE, trajectory={"kind": "square"}), "trajectory.kind': expected one of 'hover'"),
     (dict(BASE, trajectory={"kind": "circle", "radius": "big"}),
-     "trajectory.radius': expected a number"),
+     "trajectory.radius': expected a finite real number"),
     (dict(BASE, trajectory={"kind": "hover", "radius": 1.0}), "unknown for kind 'hover'"),
     (dict(BASE, trajectory={"kind": "circle", "radius": -1.0}), "circle radius must be a positive"),
     (dict(BASE, cog=[{"t": 2.0, "r": [0.01, 0, 0]}, {"t": 1.0, "r": [0, 0, 0]}]),
