@@ -54,8 +54,8 @@ paper: compile
 report: $(STAMP)
 	@command -v pdflatex >/dev/null || { echo "pdflatex not found; install TeX Live (as root):"; \
 	  echo "  apt-get update && apt-get install -y --no-install-recommends $(TEXLIVE)"; exit 1; }
-	$(PY) -m derive.verify --out $(OUT)/report/verification.tex --points 200
-	$(PY) -m derive.build_report --out $(OUT)/report --paper $(OUT)/paper
+	$(PY) -m report.verify --out $(OUT)/report/verification.tex --points 200
+	$(PY) -m report.build --out $(OUT)/report --paper $(OUT)/paper
 
 analyze: compile
 	$(PY) -m quadcog analyze --out $(OUT)/analysis

@@ -6,9 +6,10 @@ import random
 
 import sympy as sp
 
-from .symbols import phi, psi, state, theta, z
+from .contract import output_symbols
+from .symbols import state
 
-OUTPUTS = sp.Matrix([z, phi, theta, psi])
+OUTPUTS = sp.Matrix(output_symbols())
 
 
 @dataclass(frozen=True)

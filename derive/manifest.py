@@ -1,5 +1,12 @@
-"""generated/manifest.json: versions, hashes of every generated file and derive/ source,
-and the instruction count of every exported function."""
+"""generated/manifest.json: versions, the contract of the generated functions (which the
+runtime reads), the hash of every generated file and of every source that shapes them, and the
+instruction count of every exported function.
+
+The sources are exactly the modules that ``derive.pipeline`` imports, directly or through each
+other, plus the templates: editing anything else (the PDF builder, the README, a test, the
+command line of ``python -m derive``) never makes generated/ stale.
+"""
+import ast
 import hashlib
 import json
 from pathlib import Path
@@ -9,27 +16,61 @@ import casadi
 import sympy
 
 from .compare import is_foreign
+from .contract import describe
 from .headers import NOTICE
 
 DERIVE_DIR = Path(__file__).parent
 MANIFEST = "manifest.json"
+ENTRY = "pipeline"           # the module whose import closure writes generated/
 
 
 def sha256(path):
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def derive_sources():
-    """Every file the derivation is made from, relative to the repository root."""
-    files = sorted(p for p in DERIVE_DIR.rglob("*")
-                   if p.is_file() and "__pycache__" not in p.parts)
-    return {p.relative_to(DERIVE_DIR.parent).as_posix(): sha256(p) for p in files}
+def _local_imports(path):
+    """Names of the derive modules that the module at ``path`` imports (relative imports)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.ImportFrom) and node.level == 1:
+            if node.module:
+                names.add(node.module.split(".")[0])
+            else:
+                names.update(alias.name for alias in node.names)
+    return names
+
+
+def source_files(derive_dir=DERIVE_DIR):
+    """The files whose content shapes generated/: the import closure of ``pipeline`` inside
+    ``derive_dir`` and everything under its templates/ folder; sorted paths."""
+    derive_dir = Path(derive_dir)
+    seen, todo = set(), [ENTRY]
+    while todo:
+        name = todo.pop()
+        path = derive_dir / f"{name}.py"
+        if name in seen or not path.is_file():
+            continue
+        seen.add(name)
+        todo.extend(_local_imports(path))
+    files = [derive_dir / f"{name}.py" for name in seen]
+    files += [p for p in (derive_dir / "templates").rglob("*") if p.is_file()]
+    return sorted(files)
+
+
+def derive_sources(derive_dir=DERIVE_DIR):
+    """{path relative to the repository root: SHA-256} of ``source_files``."""
+    derive_dir = Path(derive_dir)
+    return {p.relative_to(derive_dir.parent).as_posix(): sha256(p)
+            for p in source_files(derive_dir)}
 
 
 def build_manifest(out_dir, functions):
     out_dir = Path(out_dir)
     files = sorted(p for p in out_dir.rglob("*") if p.is_file() and p.name != MANIFEST
                    and not is_foreign(p.relative_to(out_dir)))
+    contract = describe(functions)
+    for name, fn in functions.items():
+        contract["functions"][name]["instructions"] = fn.n_instructions()
     return {
         "_comment": NOTICE,
         "versions": {
@@ -37,9 +78,9 @@ def build_manifest(out_dir, functions):
             "sympy": sympy.__version__,
             "casadi": casadi.__version__,
         },
-        "functions": {name: {"inputs": fn.name_in(), "outputs": fn.name_out(),
-                             "instructions": fn.n_instructions()}
-                      for name, fn in functions.items()},
+        "vectors": contract["vectors"],
+        "outputs": contract["outputs"],
+        "functions": contract["functions"],
         "files": {p.relative_to(out_dir).as_posix(): sha256(p) for p in files},
         "sources": derive_sources(),
     }
@@ -50,8 +91,9 @@ def write_manifest(out_dir, functions):
     (Path(out_dir) / MANIFEST).write_text(text)
 
 
-def is_fresh(out_dir):
-    """True when the manifest's source hashes equal derive/ now and every file matches."""
+def is_fresh(out_dir, derive_dir=DERIVE_DIR):
+    """True when the manifest's source hashes equal ``derive_dir``'s sources now and every
+    generated file matches its hash."""
     path = Path(out_dir) / MANIFEST
     try:
         manifest = json.loads(path.read_text())
@@ -59,4 +101,4 @@ def is_fresh(out_dir):
                        for rel, digest in manifest["files"].items())
     except (OSError, ValueError, KeyError):
         return False
-    return files_ok and manifest.get("sources") == derive_sources()
+    return files_ok and manifest.get("sources") == derive_sources(derive_dir)

@@ -4,7 +4,7 @@ Everything printed here is computed from the derived model. The only expressions
 are the paper's printed equations (``_paper_*``), kept solely to compute, for the comparison
 table, how the derived equations differ from them. The text is deterministic (no numbers from
 a run): the verification table and the paper's results are \\input by the template from files
-that ``make report`` writes next to it (derive/verify.py, derive/build_report.py).
+that ``make report`` writes next to it (report/verify.py, report/build.py).
 """
 import functools
 from pathlib import Path
@@ -16,14 +16,14 @@ import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
 from . import symbols as sym
-from .export import FUNCTION_SPECS
+from .contract import FUNCTIONS, VECTORS
 from .headers import tex_header
 from .newton_euler import NU_DOT, solve_accelerations
 
 TEMPLATE = Path(__file__).parent / "templates" / "report.tex"
 
 # Widths in pt of 10 pt type: the text block is 17 cm (484 pt) wide. _width estimates the
-# printed width of a formula; derive/build_report.py fails on any real overflow over 10 pt.
+# printed width of a formula; report/build.py fails on any real overflow over 10 pt.
 TEXT_WIDTH = 470           # what a display line may use, with a little slack
 CONTINUATION = 20          # \qquad at the start of a continuation line
 PAIR_GAP = 30              # between the two entries of a line that holds two
@@ -424,8 +424,8 @@ def _shape(matrix):
 
 def _function_table(model):
     lines = []
-    for spec in FUNCTION_SPECS:
-        inputs = ", ".join(rf"\code{{{_escape(n)}}}\,({len(s)})" for n, s in spec.inputs)
+    for spec in FUNCTIONS:
+        inputs = ", ".join(rf"\code{{{_escape(n)}}}\,({len(VECTORS[n][1])})" for n in spec.inputs)
         outputs = ", ".join(rf"\code{{{_escape(n)}}}\,({_shape(get(model))})"
                             for n, get in spec.outputs)
         text = _FUNCTION_TEXT.get(spec.name, _escape(spec.doc))

@@ -25,8 +25,6 @@ c_x, c_y, c_z, c_phi, c_theta, c_psi = sp.symbols(
 x_G, y_G, z_G = sp.symbols("x_G y_G z_G", real=True)
 r_G = sp.Matrix([x_G, y_G, z_G])
 params = sp.Matrix([m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x_G, y_G, z_G])
-PARAM_NAMES = ("m", "g", "Ixx", "Iyy", "Izz", "c_x", "c_y", "c_z",
-               "c_phi", "c_theta", "c_psi", "x_G", "y_G", "z_G")
 
 # Products of inertia about O, for the truth model whose I_O changes with r_G (docs/model.md
 # sec. 5); the controller's model keeps I_O diagonal.

@@ -1,12 +1,22 @@
-"""Names, orders and model facts of the public contract (docs/model.md sec. 1), each defined
-once here and imported wherever it is needed; numpy only."""
+"""The public contract (docs/model.md sec. 1) as the runtime sees it, and the model facts
+that several modules use, each defined once and imported wherever it is needed.
+
+The names and orders of the vectors and the signatures of the generated functions are defined
+in derive/contract.py; ``make derive`` writes them into generated/manifest.json, and they are
+read from there (the copy that ships with the package) when quadcog is imported.
+"""
 import numpy as np
 
-STATE_NAMES = ("x", "y", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")
-INPUT_NAMES = ("U1", "U2", "U3", "U4")
-PARAM_NAMES = ("m", "g", "Ixx", "Iyy", "Izz", "c_x", "c_y", "c_z",
-               "c_phi", "c_theta", "c_psi", "x_G", "y_G", "z_G")
-OUTPUT_NAMES = ("z", "phi", "theta", "psi")
+from .generated import read_contract
+
+CONTRACT = read_contract()
+STATE_NAMES = CONTRACT.vectors["x"]
+INPUT_NAMES = CONTRACT.vectors["U"]
+PARAM_NAMES = CONTRACT.vectors["p"]
+OUTPUT_NAMES = CONTRACT.outputs
+# name -> (inputs ((argument, length), ...), outputs ((name, shape), ...)): the generated
+# functions of generated_dir(); a Model of another folder reads that folder's.
+FUNCTIONS = CONTRACT.functions
 
 N_STATE, N_INPUT, N_PARAM = len(STATE_NAMES), len(INPUT_NAMES), len(PARAM_NAMES)
 
@@ -41,19 +51,3 @@ def hover_trim(p):
     mg = p[IDX["m"]] * p[IDX["g"]]
     return np.array([mg, mg * p[IDX["y_G"]], -mg * p[IDX["x_G"]], 0.0])
 
-
-# name -> (inputs with their lengths, outputs with their shapes): the generated functions.
-FUNCTIONS = {
-    "dynamics": ((("x", 12), ("U", 4), ("p", 14)), (("xdot", (12,)),)),
-    "mass_matrix": ((("p", 14),), (("M", (6, 6)),)),
-    "inverse_mass_matrix": ((("p", 14),), (("M_inv", (6, 6)),)),
-    "coriolis": ((("x", 12), ("p", 14)), (("C", (6, 6)),)),
-    "damping": ((("p", 14),), (("D", (6, 6)),)),
-    "gravity": ((("x", 12), ("p", 14)), (("g_G", (6,)),)),
-    "regressor": ((("x", 12), ("vartheta", 6), ("p", 14)), (("Phi", (6, 3)),)),
-    "decoupling": ((("x", 12), ("p", 14)), (("alpha", (4, 4)),)),
-    "drift": ((("x", 12), ("p", 14)), (("b", (4,)),)),
-    "linearization": ((("x", 12), ("U", 4), ("p", 14)), (("A", (12, 12)), ("B", (12, 4)))),
-    "truth_dynamics": ((("x", 12), ("U", 4), ("p", 14), ("I_products", 3), ("wrench", 6)),
-                       (("xdot", (12,)),)),
-}

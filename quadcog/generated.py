@@ -1,12 +1,11 @@
-"""Read generated/: the manifest, integrity of every file, the CasADi functions."""
+"""Read generated/: the manifest, the contract of the generated functions written into it by
+derive/contract.py, the integrity of every file, the CasADi functions."""
+from collections import namedtuple
 import hashlib
 import json
 from pathlib import Path, PurePosixPath
 import re
 
-import casadi as ca
-
-from .conventions import FUNCTIONS
 from .errors import GeneratedFilesError
 from .paths import generated_dir, shipped_generated_dir
 
@@ -44,7 +43,7 @@ def read_manifest(folder=None):
     bad = lambda what: GeneratedFilesError(f"{path} is corrupted: {what}; {_fix(folder)}")
     if not isinstance(manifest, dict):
         raise bad(f"expected a JSON object, got {type(manifest).__name__}")
-    for key in ("files", "functions"):
+    for key in ("files", "functions", "vectors"):
         if not isinstance(manifest.get(key), dict):
             raise bad(f"expected an object {key!r} (name -> entry), got "
                       f"{type(manifest.get(key)).__name__ if key in manifest else 'nothing'}")
@@ -56,7 +55,31 @@ def read_manifest(folder=None):
         if not (isinstance(digest, str) and _HEX64.fullmatch(digest)):
             raise bad(f"'files' entry {rel!r} has no SHA-256 (64 hex digits), got "
                       f"{str(digest)[:80]!r}")
+    if not isinstance(manifest.get("outputs"), list):
+        raise bad("expected a list 'outputs' (the names of y)")
     return manifest
+
+
+Contract = namedtuple("Contract", "vectors outputs functions")
+Contract.__doc__ = """The public contract of the generated functions, as derive/ wrote it:
+vectors {argument name: entry names}, outputs (the names of y), functions {name: (inputs
+((argument, length), ...), outputs ((name, shape), ...))}."""
+
+
+def read_contract(folder=None):
+    """The Contract recorded in the manifest of ``folder`` (default: generated_dir())."""
+    folder = Path(folder or generated_dir())
+    manifest = read_manifest(folder)
+    try:
+        functions = {
+            name: (tuple((str(a), int(n)) for a, n in spec["inputs"]),
+                   tuple((str(o), tuple(int(k) for k in shape)) for o, shape in spec["outputs"]))
+            for name, spec in manifest["functions"].items()}
+        vectors = {name: tuple(map(str, entries)) for name, entries in manifest["vectors"].items()}
+        return Contract(vectors, tuple(map(str, manifest["outputs"])), functions)
+    except (ValueError, KeyError, TypeError, AttributeError) as e:
+        raise GeneratedFilesError(f"{folder / MANIFEST} has no readable contract ({e!r}); "
+                                  f"{_fix(folder)}") from None
 
 
 # Subfolders the manifest covers (besides the top-level files); others, such as embedded/,
@@ -75,28 +98,34 @@ def _files_in(folder):
     return out
 
 
-def required_files():
-    """The files the runtime reads: the C source and one CasADi file per function."""
-    return {C_SOURCE} | {f"casadi/{name}.casadi" for name in FUNCTIONS}
+def required_files(folder=None):
+    """The files the runtime reads: the C source and one CasADi file per function of the
+    contract of ``folder``."""
+    return {C_SOURCE} | {f"casadi/{name}.casadi" for name in read_contract(folder).functions}
 
 
 def verify(folder=None, only=None):
     """Check the SHA-256 of every generated file (or of the names in ``only``) against the
     manifest. The manifest must list every file of the folder and every file the runtime
-    reads, so removing an entry (or emptying "files") does not switch a check off."""
+    reads, so removing an entry (or emptying "files") does not switch a check off; and the
+    folder's vectors must be the ones this runtime was imported with."""
     folder = Path(folder or generated_dir())
     manifest = read_manifest(folder)
     listed = manifest["files"]
-    missing = [f for f in FUNCTIONS if f not in manifest["functions"]]
-    if missing:
+    from .conventions import CONTRACT          # conventions reads its contract through here
+    theirs = read_contract(folder)
+    if theirs.vectors != CONTRACT.vectors or theirs.outputs != CONTRACT.outputs:
         raise GeneratedFilesError(
-            f"{folder / MANIFEST} lists no function {missing[0]!r}; {_fix(folder)}")
+            f"{folder / MANIFEST} orders the vectors {theirs.vectors} (outputs "
+            f"{theirs.outputs}), but quadcog was imported with {CONTRACT.vectors} (outputs "
+            f"{CONTRACT.outputs}) from {generated_dir()}; {_fix(folder)}")
+    required = required_files(folder)
     try:
         present = _files_in(folder)
     except OSError as e:
         raise GeneratedFilesError(f"{folder} cannot be read ({e.strerror}); {_fix(folder)}") \
             from None
-    for rel in sorted(required_files() | present):
+    for rel in sorted(required | present):
         if rel not in listed:
             where = folder / rel
             raise GeneratedFilesError(
@@ -109,7 +138,7 @@ def verify(folder=None, only=None):
         if not path.is_file():
             raise GeneratedFilesError(
                 f"{path} is missing (listed in {MANIFEST}"
-                + ("" if rel in required_files() or rel in present else
+                + ("" if rel in required or rel in present else
                    ", a name the derivation never writes: the manifest may be corrupted")
                 + f"); {_fix(folder)}")
         try:
@@ -119,12 +148,14 @@ def verify(folder=None, only=None):
                 from None
         if not ok:
             raise GeneratedFilesError(
-                f"{path} does not match its SHA-256 in {MANIFEST} (edited or corrupted); {_fix(folder)}")
+                f"{path} does not match its SHA-256 in {MANIFEST} (edited or corrupted); "
+                f"{_fix(folder)}")
     return manifest
 
 
 def load_casadi_function(name, folder=None):
     """One generated function through CasADi's serializer (checked against the manifest)."""
+    import casadi as ca
     folder = Path(folder or generated_dir())
     rel = f"casadi/{name}.casadi"
     verify(folder, only={rel})

@@ -9,10 +9,9 @@ import numpy as np
 
 from .build import compile_library, find_compiler
 from .compiled import external
-from .conventions import FUNCTIONS, N_PARAM
 from .errors import InputError, QuadcogWarning
 from .fastcall import FastCall
-from .generated import C_SOURCE, load_casadi_function, verify
+from .generated import C_SOURCE, load_casadi_function, read_contract, verify
 from .params import check_parameters
 from .paths import generated_dir
 from .validate import vector
@@ -46,22 +45,41 @@ class Model:
         self._calls = {}
         self._last_p = None
 
+    @property
+    def functions(self):
+        """{name: (inputs ((argument, length), ...), outputs ((name, shape), ...))}: the
+        generated functions of this folder, as its manifest declares them."""
+        return self._library.contract
+
+    def _known(self, name):
+        if name not in self._library.contract:
+            raise InputError(f"unknown function {name!r}; expected one of "
+                             f"{tuple(self._library.contract)}")
+
+    def call(self, name, *args, out=None):
+        """Evaluate the generated function ``name`` on numpy arguments, in the order and with
+        the lengths of ``functions[name]``; one array per output (a tuple when several)."""
+        self._known(name)
+        if len(args) != len(self._library.contract[name][0]):
+            raise InputError(f"{name} takes {len(self._library.contract[name][0])} arguments "
+                             f"{tuple(a for a, _ in self._library.contract[name][0])}, got "
+                             f"{len(args)}")
+        return self._call(name, args, out)
+
     def casadi_function(self, name):
         """The generated CasADi Function ``name`` (SX), callable on SX/MX symbols."""
-        if name not in FUNCTIONS:
-            raise InputError(f"unknown function {name!r}; expected one of {tuple(FUNCTIONS)}")
+        self._known(name)
         if name not in self._symbolic:
             self._symbolic[name] = load_casadi_function(name, self.folder)
         return self._symbolic[name]
 
     def fast(self, name):
         """A new FastCall (preallocated buffers) of the compiled function ``name``."""
-        if name not in FUNCTIONS:
-            raise InputError(f"unknown function {name!r}; expected one of {tuple(FUNCTIONS)}")
+        self._known(name)
         return FastCall(self._library.functions()[name])
 
     def _call(self, name, args, out):
-        spec_in, spec_out = FUNCTIONS[name]
+        spec_in, spec_out = self._library.contract[name]
         call = self._calls.get(name)
         if call is None:
             call = self._calls[name] = self.fast(name)
@@ -80,7 +98,9 @@ class Model:
                                      f"got {np.shape(dst)}")
                 dst[...] = src
             results = list(outs)
-        return results[0] if len(results) == 1 else Linearization(*results)
+        if len(results) == 1:
+            return results[0]
+        return Linearization(*results) if name == "linearization" else tuple(results)
 
     def _check_p(self, p):
         p = np.asarray(p, dtype=float)
@@ -144,6 +164,7 @@ class _Library:
     def __init__(self, folder):
         global _warned_no_compiler
         self.folder = folder
+        self.contract = read_contract(folder).functions
         self.cc = find_compiler()
         self.backend = "c" if self.cc else "casadi-vm"
         if self.cc is None and not _warned_no_compiler:
@@ -159,12 +180,13 @@ class _Library:
         with self._lock:
             if self._functions is None:
                 if self.cc is None:
-                    self._functions = {n: load_casadi_function(n, self.folder) for n in FUNCTIONS}
+                    self._functions = {n: load_casadi_function(n, self.folder)
+                                       for n in self.contract}
                 else:
                     verify(self.folder, only={C_SOURCE})
                     lib = compile_library((self.folder / C_SOURCE).read_bytes(), "quadcog_gen",
                                           self.cc)
-                    self._functions = {n: external(n, lib) for n in FUNCTIONS}
+                    self._functions = {n: external(n, lib) for n in self.contract}
         return self._functions
 
 

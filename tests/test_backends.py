@@ -5,7 +5,7 @@ import sympy as sp
 
 from conftest import assert_close
 from derive import symbols as sym
-from derive.export import FUNCTION_SPECS
+from derive.contract import FUNCTIONS as SPECS, VECTORS
 from quadcog.conventions import FUNCTIONS
 
 RTOL = 1e-12
@@ -19,13 +19,13 @@ def lambdified(derived):
     whole chain is SymPy's."""
     gammas = list(sym.I_G_INV_SYMBOLS)
     out = {}
-    for spec in FUNCTION_SPECS:
-        inputs = [list(symbols) for _, symbols in spec.inputs]
+    for spec in SPECS:
+        inputs = [list(VECTORS[name][1]) for name in spec.inputs]
         definitions = spec.placeholders(derived)
         gamma_fn = sp.lambdify(inputs, [definitions[s] for s in gammas], "numpy")
         fns = [sp.lambdify(inputs + [gammas], getter(derived), "numpy", cse=True)
                for _, getter in spec.outputs]
-        names = [n for n, _ in spec.inputs]
+        names = list(spec.inputs)
         out[spec.name] = (names, fns, gamma_fn)
     return out
 

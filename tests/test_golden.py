@@ -1,6 +1,7 @@
 """generated/ is what derive/ produces, byte for byte, whatever the hash seed."""
 import json
 import os
+import shutil
 from pathlib import Path
 import subprocess
 import sys
@@ -76,3 +77,31 @@ def test_manifest_hashes_and_versions():
     assert manifest["versions"]["casadi"] == casadi.__version__
     for name, info in manifest["functions"].items():
         assert info["instructions"] > 0, name
+
+
+def test_staleness_follows_exactly_the_sources_of_generated(tmp_path):
+    """Editing the PDF builder, the README, a test or derive's command line leaves generated/
+    fresh; editing a module of the derivation or the report template makes it stale."""
+    from derive.manifest import is_fresh, source_files
+    for part in ("derive", "generated", "report", "tests"):
+        shutil.copytree(ROOT / part, tmp_path / part,
+                        ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "README.md", tmp_path / "README.md")
+    derive_dir, out = tmp_path / "derive", tmp_path / "generated"
+    assert is_fresh(out, derive_dir)
+    harmless = ["report/build.py", "README.md", "tests/test_golden.py", "derive/__main__.py"]
+    for rel in harmless:
+        with open(tmp_path / rel, "a") as fh:
+            fh.write("\n# edited\n")
+        assert is_fresh(out, derive_dir), f"editing {rel} made generated/ stale"
+    for rel in ("derive/newton_euler.py", "derive/templates/report.tex", "derive/contract.py"):
+        path = tmp_path / rel
+        original = path.read_bytes()
+        path.write_bytes(original + b"\n")
+        assert not is_fresh(out, derive_dir), f"editing {rel} did not make generated/ stale"
+        path.write_bytes(original)
+        assert is_fresh(out, derive_dir)
+    # exactly: every module that derive/pipeline.py imports, and nothing derive does not run
+    names = {p.name for p in source_files(derive_dir)}
+    assert {"pipeline.py", "newton_euler.py", "export.py", "report.py", "report.tex"} <= names
+    assert not names & {"__main__.py", "__init__.py"}

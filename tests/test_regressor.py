@@ -9,20 +9,6 @@ def _lhs(model, x, v, p):
     return model.mass_matrix(p) @ v + model.coriolis(x, p) @ x[6:] + model.gravity(x, p)
 
 
-def test_regressor_identity(model, points):
-    for k, (x, U, p, v) in enumerate(points):
-        p0 = quadcog.with_cog(p, [0, 0, 0])
-        diff = _lhs(model, x, v, p) - _lhs(model, x, v, p0)
-        assert_close(diff, model.regressor(x, v, p) @ p[11:14], 1e-12, "regressor identity", k)
-
-
-def test_regressor_independent_of_r_G(model, points):
-    rng = np.random.default_rng(5)
-    for k, (x, U, p, v) in enumerate(points):
-        q = quadcog.with_cog(p, rng.uniform(-0.02, 0.02, 3))
-        assert_close(model.regressor(x, v, q), model.regressor(x, v, p), 1e-13, "Phi(r)", k)
-
-
 def test_linear_in_r_G(model, points):
     """Superposition: Phi r1 + Phi r2 = Phi (r1 + r2)."""
     rng = np.random.default_rng(6)

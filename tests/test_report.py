@@ -1,4 +1,5 @@
-"""The report as a PDF (derive/build_report.py) and its verification table (derive/verify.py).
+"""The report as a PDF (report/build.py) and its verification table (report/verify.py, from
+the identities of report/identities.py).
 
 The PDF tests need pdflatex (Debian: texlive-latex-base, texlive-latex-recommended); they are
 skipped without it, and CI installs it. They fail on a LaTeX error and on an overfull box
@@ -14,7 +15,7 @@ import zlib
 
 import pytest
 
-from derive import build_report, verify
+from report import build as build_report, identities, verify
 
 ROOT = Path(__file__).resolve().parent.parent
 REPORT = ROOT / "generated" / "report.tex"
@@ -86,9 +87,9 @@ def _pdf_text(pdf):
 
 @pytest.fixture(scope="module")
 def verification_fragment(tmp_path_factory):
-    """`python -m derive.verify` run for real, with few points."""
+    """`python -m report.verify` run for real, with few points."""
     out = tmp_path_factory.mktemp("verify") / "verification.tex"
-    res = subprocess.run([sys.executable, "-m", "derive.verify", "--out", str(out),
+    res = subprocess.run([sys.executable, "-m", "report.verify", "--out", str(out),
                           "--points", "12", "--seed", "7"], cwd=ROOT, capture_output=True,
                          text=True, timeout=300)
     assert res.returncode == 0, res.stdout + res.stderr
@@ -98,7 +99,7 @@ def verification_fragment(tmp_path_factory):
 def test_verification_table_comes_from_a_run(verification_fragment):
     rows = parse_table(verification_fragment)
     skipped = verification_fragment.count("skipped: no C compiler")      # C vs VM, no compiler
-    assert len(rows) + skipped == len(verify.CHECKS), verification_fragment
+    assert len(rows) + skipped == len(identities.CHECKS), verification_fragment
     assert "at 12 random admissible points (seed 7)" in verification_fragment
     for identity, points, value, bound, ok in rows:
         assert points == 12, identity
@@ -113,7 +114,7 @@ def test_verification_table_comes_from_a_run(verification_fragment):
 
 def test_verification_values_are_the_run_values(model):
     """The table prints what run() measured (rounded), and marks a failure."""
-    results = verify.run(5, seed=3, model=model)
+    results = identities.run(5, seed=3, model=model)
     assert all(r.ok for r in results), [(r.check.tex, r.value) for r in results if not r.ok]
     text = verify.table(results, 3, model.backend, 0.1)
     rows = parse_table(text)
@@ -121,7 +122,7 @@ def test_verification_values_are_the_run_values(model):
     assert len(rows) == len(measured)
     for r, (_, _, value, _, _) in zip(measured, rows):
         assert value == pytest.approx(r.value, rel=0.06, abs=1e-300), r.check.tex
-    bad = verify.Result(verify.CHECKS[0], 5, 1.0, False)
+    bad = identities.Result(identities.CHECKS[0], 5, 1.0, False)
     assert r"\textbf{FAILED}" in verify.table([bad], 3, "c", 0.1)
 
 
@@ -235,7 +236,7 @@ def test_build_fails_on_latex_error(tmp_path):
 @needs_pdflatex
 def test_command_line_build(tmp_path):
     out = tmp_path / "report"
-    res = subprocess.run([sys.executable, "-m", "derive.build_report", "--out", str(out),
+    res = subprocess.run([sys.executable, "-m", "report.build", "--out", str(out),
                           "--paper", str(tmp_path / "no-paper")], cwd=ROOT,
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stdout + res.stderr

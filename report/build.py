@@ -1,13 +1,13 @@
-"""``python -m derive.build_report``: build generated/report.tex into a PDF with pdflatex.
+"""``python -m report.build``: build generated/report.tex into a PDF with pdflatex.
 
 The build happens in a folder of its own (``out/report/`` by default; never in generated/):
 report.tex is copied there, ``out/paper`` (the results of ``quadcog paper``) is copied to
 ``<build>/paper`` when it exists, and a ``verification.tex`` already in the build folder
-(written by ``python -m derive.verify``) is picked up by the report. pdflatex runs twice
+(written by ``python -m report.verify``) is picked up by the report. pdflatex runs twice
 (nonstopmode, halt-on-error). The build fails, printing what is wrong, on a LaTeX error and on
 any overfull box wider than ``--max-overfull`` pt (10 by default).
 
-    python -m derive.build_report --out out/report
+    python -m report.build --out out/report
 """
 import argparse
 from dataclasses import dataclass, field
@@ -221,7 +221,7 @@ def render_png(pdf, resolution=80):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m derive.build_report", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m report.build", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT,
                     help="build folder (default: out/report); the PDF is OUT/report.pdf")
@@ -239,12 +239,12 @@ def main(argv=None):
         result = build(args.tex, args.out, args.paper, args.max_overfull)
         pngs = render_png(result.pdf) if args.png else []
     except BuildError as e:
-        sys.stderr.write(f"build_report: error: {e}\n")
+        sys.stderr.write(f"report.build: error: {e}\n")
         return 1
     print(f"wrote {result.pdf} ({result.pages} pages; largest overfull box "
           f"{result.largest_overfull:.1f} pt, limit {args.max_overfull:g} pt)")
     print("  verification table: " + ("included" if result.verification else
-          "absent (run `python -m derive.verify --out "
+          "absent (run `python -m report.verify --out "
           f"{args.out / 'verification.tex'}`, or `make report`)"))
     print("  paper results: " + ("included" if result.paper else
           f"absent ({args.paper}/report_fragment.tex not found; run `make paper`)"))
