@@ -11,7 +11,7 @@ OUT ?= out
 all: paper
 
 # Create the virtual environment and install quadcog with its test/plot extras.
-$(STAMP): pyproject.toml setup.py
+$(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev]'

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import sysconfig
 import tarfile
+import tomllib
 import zipfile
 
 import pytest
@@ -59,6 +60,24 @@ def wheels(tmp_path_factory):
     (unpacked,) = (tmp / "unpacked").iterdir()
     from_sdist = _wheel(unpacked, tmp / "wheel-from-sdist")
     return from_tree, from_sdist
+
+
+def test_every_package_is_listed():
+    """pyproject.toml lists the packages by hand: every folder of quadcog/ that holds files
+    and every subfolder of generated/ must be there (else the wheel silently lacks it)."""
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(config["packages"])
+    assert config["package-dir"] == {"quadcog._generated": "generated"}
+    needed = set()
+    for base, name in ((ROOT / "quadcog", "quadcog"), (ROOT / "generated", "quadcog._generated")):
+        for folder in [base, *sorted(p for p in base.rglob("*") if p.is_dir())]:
+            rel = folder.relative_to(base).parts
+            if "__pycache__" in rel or not any(p.is_file() for p in folder.iterdir()):
+                continue
+            needed.add(".".join((name, *rel)))
+    missing = sorted(needed - listed)
+    assert not missing, (f"add {missing} to [tool.setuptools] packages in pyproject.toml")
+    assert not sorted(listed - needed), "pyproject.toml lists packages that do not exist"
 
 
 def test_wheel_and_sdist_ship_the_generated_files(wheels):
