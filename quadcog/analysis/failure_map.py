@@ -222,7 +222,8 @@ def plot_failure_map(fm, path):
     leg = fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=9, frameon=True)
     leg.get_frame().set_facecolor("0.6")
     cb = fig.colorbar(mesh, cax=cax)
-    cb.set_label(f"tail RMS position error, last {100 * fm['tail_fraction']:g} % of "
+    cb.set_label(f"tail RMS position error, last "
+                 f"{100 * config.defaults['metrics.tail_fraction']:g} % of "
                  f"{fm['duration']:g} s (m)")
     fig.suptitle(f"CoG step at hover at t = {fm['t_step']:g} s to ($x_G$, $y_G$, 0): "
                  f"{len(xs)} x {len(ys)} grid, arm = {xs[-1]:.0f} cm", y=0.99)
