@@ -21,6 +21,10 @@ ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"
 DEFAULT_OUT = ROOT / "out" / "report"
 DEFAULT_PAPER = ROOT / "out" / "paper"
+DEFAULT_ANALYSIS = ROOT / "out" / "analysis"
+# what the report needs of out/paper and out/analysis: the fragments and the figures (not the
+# trajectories, which would double the size of out/)
+COPIED = (".tex", ".png")
 JOB = "report"
 MAX_OVERFULL = 10.0        # pt
 APT_INSTALL = ("apt-get update && apt-get install -y --no-install-recommends "
@@ -50,6 +54,7 @@ class Build:
     pages: int
     overfull: list = field(default_factory=list)     # every overfull box, any width
     paper: bool = False                               # paper/report_fragment.tex included
+    analysis: bool = False                            # analysis/report_fragment.tex included
     verification: bool = False                        # verification.tex included
 
     @property
@@ -165,8 +170,25 @@ def _run_pdflatex(pdflatex, folder, timeout):
     return log
 
 
+def _copy_results(src, target):
+    """Replace folder ``target`` by the .tex and .png files of ``src`` (when ``src`` has a
+    report_fragment.tex); returns whether it did."""
+    if target.is_symlink() or target.is_file():
+        target.unlink()
+    elif target.exists():
+        shutil.rmtree(target)
+    if src is None or not (Path(src) / "report_fragment.tex").is_file():
+        return False
+    for f in Path(src).rglob("*"):
+        if f.is_file() and f.suffix in COPIED:
+            dest = target / f.relative_to(src)
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(f, dest)
+    return True
+
+
 def build(tex=GENERATED / "report.tex", out=DEFAULT_OUT, paper=DEFAULT_PAPER,
-          max_overfull=MAX_OVERFULL, timeout=300):
+          max_overfull=MAX_OVERFULL, timeout=300, analysis=DEFAULT_ANALYSIS):
     """Build ``tex`` into ``out``/report.pdf; returns a Build, raises BuildError."""
     tex, out = Path(tex), Path(out)
     if _inside(out, GENERATED):
@@ -183,20 +205,14 @@ def build(tex=GENERATED / "report.tex", out=DEFAULT_OUT, paper=DEFAULT_PAPER,
         shutil.copyfile(tex, out / f"{JOB}.tex")
     for stale in (f"{JOB}.aux", f"{JOB}.pdf", f"{JOB}.out", f"{JOB}.toc"):
         (out / stale).unlink(missing_ok=True)
-    target = out / "paper"
-    if target.is_symlink() or target.is_file():
-        target.unlink()
-    elif target.exists():
-        shutil.rmtree(target)
-    has_paper = paper is not None and (Path(paper) / "report_fragment.tex").is_file()
-    if has_paper:
-        shutil.copytree(paper, target)
+    has_paper = _copy_results(paper, out / "paper")
+    has_analysis = _copy_results(analysis, out / "analysis")
     for _ in range(2):            # the second run resolves references and longtable widths
         log = _run_pdflatex(pdflatex, out, timeout)
     overfull = parse_overfull(log)
     pages = re.search(r"Output written on \S+ \((\d+) pages?", log)
     result = Build(out / f"{JOB}.pdf", int(pages.group(1)) if pages else 0, overfull,
-                   has_paper, (out / "verification.tex").is_file())
+                   has_paper, has_analysis, (out / "verification.tex").is_file())
     too_wide = [o for o in overfull if o.points > max_overfull]
     if too_wide:
         report = "\n\n".join(f"{o.points:.1f} pt too wide, {o.file} lines "
@@ -230,13 +246,17 @@ def main(argv=None):
     ap.add_argument("--paper", type=Path, default=DEFAULT_PAPER,
                     help="results of `quadcog paper`, copied to OUT/paper when they exist "
                          "(default: out/paper)")
+    ap.add_argument("--analysis", type=Path, default=DEFAULT_ANALYSIS,
+                    help="results of `quadcog analyze`, copied to OUT/analysis when they exist "
+                         "(default: out/analysis)")
     ap.add_argument("--max-overfull", type=float, default=MAX_OVERFULL,
                     help="fail on overfull boxes wider than this many pt (default: 10)")
     ap.add_argument("--png", action="store_true",
                     help="also render every page to OUT/report-page-N.png (pdftoppm)")
     args = ap.parse_args(argv)
     try:
-        result = build(args.tex, args.out, args.paper, args.max_overfull)
+        result = build(args.tex, args.out, args.paper, args.max_overfull,
+                       analysis=args.analysis)
         pngs = render_png(result.pdf) if args.png else []
     except BuildError as e:
         sys.stderr.write(f"report.build: error: {e}\n")
@@ -248,6 +268,8 @@ def main(argv=None):
           f"{args.out / 'verification.tex'}`, or `make report`)"))
     print("  paper results: " + ("included" if result.paper else
           f"absent ({args.paper}/report_fragment.tex not found; run `make paper`)"))
+    print("  analysis: " + ("included" if result.analysis else
+          f"absent ({args.analysis}/report_fragment.tex not found; run `make analyze`)"))
     if pngs:
         print(f"  pages as PNG: {pngs[0].parent}/{result.pdf.stem}-page-*.png")
     return 0

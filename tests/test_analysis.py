@@ -6,8 +6,8 @@ import pytest
 import quadcog
 from quadcog.analysis.adaptive_design import design_checks, lyapunov_study
 from quadcog.analysis.failure_map import failure_map, plot_failure_map, save_failure_map
-from quadcog.analysis.frequency import (channel_loop, gain_range_by_eigenvalues, loop_transfer,
-                                        siso_margins)
+from quadcog.analysis.frequency import channel_loop, channel_margins, gain_range_by_eigenvalues
+from quadcog.analysis.linear import hover_statespace
 from quadcog.analysis.pd_design import pd_design
 from quadcog.analysis.report import jsonable
 from quadcog.analysis.zero_dynamics import (nonlinear_check, rg_sensitivity,
@@ -72,7 +72,7 @@ def test_margin_finder_on_a_textbook_loop():
     # so the gain margin is 20 log10(3) = 9.54 dB; the gain range from eigenvalues is (0, 3).
     A = np.array([[0.0, 1, 0], [0, 0, 1], [0, -2, -3]])
     b, k = np.array([0.0, 0, 1]), np.array([2.0, 0, 0])
-    m = siso_margins(A, b, k)
+    m = channel_margins(A, b, k)
     assert m["phase_crossover_rad_s"] == pytest.approx(np.sqrt(2), rel=1e-9)
     assert m["gain_margin_db"] == pytest.approx(20 * np.log10(3), abs=1e-8)
     wc = m["gain_crossover_rad_s"]
@@ -81,8 +81,30 @@ def test_margin_finder_on_a_textbook_loop():
     assert m["phase_margin_deg"] == pytest.approx(180 + np.degrees(np.angle(Lc)), abs=1e-8)
     k_lo, k_hi = gain_range_by_eigenvalues(A, b[:, None], k[None, :], 0)
     assert k_hi == pytest.approx(3.0, rel=1e-9) and k_lo == 0.0
-    L = loop_transfer(A, b[:, None], k[None, :], [0.7])[0, 0, 0]
-    assert L == pytest.approx(2 / (0.7j * (0.7j + 1) * (0.7j + 2)), rel=1e-12)
+
+
+def test_hover_statespace_is_the_numerical_jacobian():
+    """A and B of the control.StateSpace against central differences of the generated
+    dynamics at the hover trim, with the CoG off centre (so the trim holds a moment)."""
+    model = quadcog.load()
+    v = quadcog.HUMMINGBIRD.with_cog((0.02, -0.01, 0.0))
+    sys = hover_statespace(v, outputs=("x", "y", "z", "psi"))
+    p = v.parameters()
+    x0 = np.zeros(12)
+    x0[2] = 1.0
+    U0 = quadcog.hover_trim(p)
+    assert np.abs(model.dynamics(x0, U0, p)).max() < 1e-12       # it is an equilibrium
+    h = 1e-6
+    A = np.column_stack([(model.dynamics(x0 + h * e, U0, p) - model.dynamics(x0 - h * e, U0, p))
+                         / (2 * h) for e in np.eye(12)])
+    B = np.column_stack([(model.dynamics(x0, U0 + h * e, p) - model.dynamics(x0, U0 - h * e, p))
+                         / (2 * h) for e in np.eye(4)])
+    assert np.allclose(sys.A, A, atol=1e-7) and np.allclose(sys.B, B, atol=1e-7)
+    assert sys.output_labels == ["x", "y", "z", "psi"] and sys.input_labels == ["U1", "U2",
+                                                                                  "U3", "U4"]
+    assert np.array_equal(sys.C[3], np.eye(12)[5]) and not np.any(sys.D)
+    with pytest.raises(quadcog.InputError, match="'nope'"):
+        hover_statespace(outputs=("x", "nope"))
 
 
 # -- 2. zero dynamics ---------------------------------------------------------------------------
@@ -207,3 +229,27 @@ def test_failure_map_small_grid(tmp_path):
 def test_jsonable_handles_inf_nan_complex():
     assert jsonable({"a": np.array([1.0, np.inf]), "b": complex(1, -2), "c": np.nan}) == \
         {"a": [1.0, "inf"], "b": [1.0, -2.0], "c": "nan"}
+
+
+def test_latex_text_escapes_every_special_character():
+    from quadcog.analysis.report import _tex
+    out = _tex(r"V_dot = -e^T Q e, 10 % & #1 {a} ~b $c <d> \e")
+    plain = out.replace(r"\_", "").replace(r"\^{}", "").replace(r"\%", "").replace(r"\&", "")
+    plain = plain.replace(r"\#", "").replace(r"\{", "").replace(r"\}", "").replace(r"\$", "")
+    plain = plain.replace(r"\textasciitilde{}", "").replace("$<$", "").replace("$>$", "")
+    assert not set(plain) & set("_^%&#{}~$<>\\"), out
+
+
+def test_report_copies_only_fragments_and_figures(tmp_path):
+    """`make report` must not copy the runs' trajectories a second time."""
+    from report.build import _copy_results
+    src = tmp_path / "paper"
+    (src / "fig6").mkdir(parents=True)
+    (src / "report_fragment.tex").write_text("x")
+    (src / "fig6" / "flight.png").write_bytes(b"png")
+    (src / "fig6" / "trajectory.csv").write_text("t_s\n0\n")
+    assert _copy_results(src, tmp_path / "build" / "paper")
+    got = sorted(p.relative_to(tmp_path / "build").as_posix()
+                 for p in (tmp_path / "build").rglob("*") if p.is_file())
+    assert got == ["paper/fig6/flight.png", "paper/report_fragment.tex"]
+    assert not _copy_results(tmp_path / "nothing", tmp_path / "build" / "analysis")

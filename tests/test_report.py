@@ -131,6 +131,7 @@ def test_generated_report_has_no_run_numbers():
     text = REPORT.read_text()
     assert r"\IfFileExists{verification.tex}{\input{verification.tex}}" in text
     assert r"\IfFileExists{paper/report_fragment.tex}" in text
+    assert r"\IfFileExists{analysis/report_fragment.tex}" in text
     assert r"\input{paper/report_fragment.tex}" in text
     assert "make report" in text and "make paper" in text
     assert "UTC" not in text and "seed" not in text

@@ -3,7 +3,9 @@
 ``analyze(out_dir)`` runs four parts and writes PNGs, analysis.json and analysis.md:
 
 1. ``pd_design``: closed-loop eigenvalues, MIMO Bode (singular values) and per-channel margins
-   of the cascade PD (``frequency`` holds the numpy/scipy frequency-response tools).
+   of the cascade PD through python-control (``frequency``: margins and the independent
+   eigenvalue check; ``linear``: ``hover_statespace``, the hover linearization as a
+   ``control.StateSpace``, and the loop L(s)).
 2. ``zero_dynamics``: the zero dynamics of y = [z, phi, theta, psi] from the generated model by
    AD, at several CoG offsets and held attitudes, with a nonlinear simulation check.
 3. ``adaptive_design``: the error-model matrices and the Lyapunov function along the Fig. 6
@@ -16,6 +18,7 @@ import time
 
 import numpy as np
 
+from .. import config
 from ..conventions import IDX
 from ..vehicle import default_parameters
 from ..progress import ProgressBar
@@ -23,10 +26,11 @@ from .adaptive_design import design_checks, lyapunov_study, plot_lyapunov
 from .failure_map import (adaptive_failures_vs_projection, failure_map, plot_failure_map,
                           save_failure_map)
 from .pd_design import pd_design, plot_sigma
-from .report import write_json, write_markdown
+from .linear import hover_statespace, loop_statespace
+from .report import write_json, write_latex, write_markdown
 from .zero_dynamics import plot_zero_dynamics, zero_dynamics_study
 
-__all__ = ["analyze", "pd_design", "zero_dynamics_study", "design_checks", "lyapunov_study",
+__all__ = ["analyze", "hover_statespace", "loop_statespace", "pd_design", "zero_dynamics_study", "design_checks", "lyapunov_study",
            "failure_map"]
 
 
@@ -165,6 +169,7 @@ def _fm_summary(fm, grid):
     p = default_parameters()
     return {"grid": grid, "half_width": float(fm["x_G"][-1]), "duration": fm["duration"],
             "t_step": fm["t_step"], "threshold": fm["threshold"], "n_points": fm["n_points"],
+            "tail_fraction": fm.get("tail_fraction", config.defaults["metrics.tail_fraction"]),
             "n_admissible": fm["n_admissible"],
             "admissible_radius": float(np.sqrt(min(p[IDX["Ixx"]], p[IDX["Iyy"]]) / p[IDX["m"]])),
             "controllers": ctls, "seconds": fm["seconds"],
@@ -178,7 +183,8 @@ def analyze(out_dir, grid=41, progress=True, duration=20.0):
     [-arm, arm]^2 m, arm = the Hummingbird's 0.17 m). progress: print part names and a
     progress bar for the failure map on stderr. duration: seconds per failure-map flight.
     Writes pd_sigma.png, zero_dynamics.png, lyapunov.png, failure_map.png, failure_map.npz,
-    failure_map.json, analysis.json and analysis.md. Returns the summary dict (the numbers of
+    failure_map.json, analysis.json, analysis.md and report_fragment.tex (the PDF's analysis
+    section). Returns the summary dict (the numbers of
     analysis.json, as Python/numpy values; complex eigenvalues stay complex).
     """
     out = Path(out_dir)
@@ -226,5 +232,6 @@ def analyze(out_dir, grid=41, progress=True, duration=20.0):
     summary["seconds"] = time.perf_counter() - t0
     write_json(summary, out / "analysis.json")
     write_markdown(summary, out / "analysis.md")
+    write_latex(summary, out / "report_fragment.tex")
     _say(progress, f"analysis: wrote {out} in {summary['seconds']:.1f} s")
     return summary

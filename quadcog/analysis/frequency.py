@@ -1,31 +1,12 @@
-"""Frequency responses of a state-feedback loop and SISO stability margins (numpy/scipy only).
+"""Margins of a state-feedback loop through python-control, and an independent check.
 
 The loop is broken at the plant input: the plant x_dot = A x + B u is closed by u = -K x, so
-the loop transfer matrix is L(s) = K (s I - A)^{-1} B and the closed loop is stable exactly when
-det(I + L) has no zeros in the closed right half plane (A - B K Hurwitz).
+the loop transfer matrix is L(s) = K (s I - A)^{-1} B (``linear.loop_statespace``) and the
+closed loop is stable exactly when A - B K is Hurwitz. ``channel_margins`` reads the SISO
+margins of one input channel with ``control.stability_margins``; ``gain_range_by_eigenvalues``
+finds the same gain range from eigenvalues only (no frequency response), the cross-check.
 """
 import numpy as np
-from scipy.optimize import brentq
-
-
-def loop_transfer(A, B, K, omega):
-    """L(j omega) = K (j omega I - A)^{-1} B at each frequency.
-
-    A: (n, n) plant matrix (1/s); B: (n, m) input matrix; K: (m, n) feedback gain
-    (u = -K x, in the units of u per unit of x); omega: (N,) frequencies in rad/s.
-    Returns (N, m, m) complex (dimensionless: input units per input unit).
-    """
-    A, B, K = (np.asarray(a, dtype=float) for a in (A, B, K))
-    omega = np.atleast_1d(np.asarray(omega, dtype=float))
-    n, m = B.shape
-    lhs = 1j * omega[:, None, None] * np.eye(n) - A              # (N, n, n)
-    X = np.linalg.solve(lhs, np.broadcast_to(B.astype(complex), (omega.size, n, m)))
-    return K @ X
-
-
-def singular_values(L):
-    """Singular values, largest first, of each matrix in L (N, m, m) -> (N, m)."""
-    return np.linalg.svd(L, compute_uv=False)
 
 
 def channel_loop(A, B, K, i):
@@ -40,61 +21,32 @@ def channel_loop(A, B, K, i):
     return A_i, B[:, i], K[i]
 
 
-def siso_response(A_i, b_i, k_i, omega):
-    """L_i(j omega) = k_i (j omega I - A_i)^{-1} b_i, (N,) complex, for omega (N,) in rad/s."""
-    return loop_transfer(A_i, b_i[:, None], k_i[None, :], omega)[:, 0, 0]
+def channel_margins(A_i, b_i, k_i):
+    """Gain and phase margins of L_i(s) = k_i (s I - A_i)^{-1} b_i by
+    ``control.stability_margins`` (all crossovers).
 
-
-def _refine(fun, w, idx):
-    """Roots of fun(log w) between grid points idx and idx + 1 (log-frequency brentq)."""
-    roots = []
-    for k in idx:
-        a, b = np.log(w[k]), np.log(w[k + 1])
-        roots.append(float(np.exp(brentq(lambda s: fun(np.exp(s)), a, b, xtol=1e-14))))
-    return roots
-
-
-def siso_margins(A_i, b_i, k_i, w_min=1e-3, w_max=1e4, n_grid=20000):
-    """Gain and phase margins of the SISO loop L_i(s) = k_i (s I - A_i)^{-1} b_i.
-
-    A_i: (n, n), b_i: (n,), k_i: (n,); frequencies searched on a log grid w_min..w_max (rad/s)
-    and refined with brentq. Gain crossovers: |L_i(j w)| = 1; phase margin there
-    180 deg + angle(L_i) wrapped to (-180, 180]. Phase crossovers: Im L_i = 0 with Re L_i < 0
-    (phase -180 deg mod 360); the gain margin there is -20 log10 |L_i| dB: positive = the loop
-    gain may grow by that much (upper margin), negative = it may shrink by that much (lower
-    margin, a conditionally stable loop). Returns a dict with phase_margin_deg (the smallest
-    over the gain crossovers, inf if none), phase_crossover/gain_crossover lists (rad/s),
-    gain_margin_db (the upper margin, inf if there is no phase crossover with |L| < 1),
-    lower_gain_margin_db (-inf if none: the gain may be reduced to zero) and the lists of all
-    crossovers found.
+    Returns a dict: phase_margin_deg (the smallest over the gain crossovers, inf if none) and
+    gain_crossover_rad_s; gain_margin_db, the upper margin (how much the gain may grow: the
+    smallest positive one, inf if none) at phase_crossover_rad_s; lower_gain_margin_db (how much
+    it may shrink, negative: a conditionally stable loop; -inf if the gain may go to zero) at
+    lower_phase_crossover_rad_s; and the lists of all crossovers.
     """
-    w = np.logspace(np.log10(w_min), np.log10(w_max), n_grid)
-    L = siso_response(A_i, b_i, k_i, w)
-    resp = lambda x: siso_response(A_i, b_i, k_i, np.array([x]))[0]
-    mag = np.log(np.abs(L))
-    gc = _refine(lambda x: np.log(abs(resp(x))), w, np.flatnonzero(np.diff(np.sign(mag)) != 0))
-    im = L.imag
-    cand = np.flatnonzero((np.diff(np.sign(im)) != 0) & (L.real[:-1] + L.real[1:] < 0))
-    pc = [x for x in _refine(lambda x: resp(x).imag, w, cand) if resp(x).real < 0]
-    pms = []
-    for x in gc:
-        pm = 180.0 + np.degrees(np.angle(resp(x)))
-        pms.append(float(pm - 360.0 if pm > 180.0 else pm))
-    gms = [float(-20 * np.log10(abs(resp(x)))) for x in pc]
-    upper = [g for g in gms if g > 0]
-    lower = [g for g in gms if g < 0]
+    import control
+    L = control.ss(A_i, np.asarray(b_i, float)[:, None], np.asarray(k_i, float)[None, :], 0.0)
+    gm, pm, _, wpc, wgc, _ = control.stability_margins(L, returnall=True)
+    gms = [float(20 * np.log10(g)) for g in np.atleast_1d(gm)]
+    pc, gc = [float(w) for w in np.atleast_1d(wpc)], [float(w) for w in np.atleast_1d(wgc)]
+    pms = [float(p) for p in np.atleast_1d(pm)]
+    upper = [(g, w) for g, w in zip(gms, pc) if g > 0]
+    lower = [(g, w) for g, w in zip(gms, pc) if g < 0]
     k_pm = int(np.argmin(pms)) if pms else None
-    k_up = int(np.argmin(upper)) if upper else None
-    k_lo = int(np.argmax(lower)) if lower else None
+    up = min(upper) if upper else (float("inf"), float("nan"))
+    lo = max(lower) if lower else (float("-inf"), float("nan"))
     return {
         "phase_margin_deg": pms[k_pm] if pms else float("inf"),
         "gain_crossover_rad_s": gc[k_pm] if pms else float("nan"),
-        "gain_margin_db": upper[k_up] if upper else float("inf"),
-        "phase_crossover_rad_s": ([x for x, g in zip(pc, gms) if g > 0][k_up]
-                                  if upper else float("nan")),
-        "lower_gain_margin_db": lower[k_lo] if lower else float("-inf"),
-        "lower_phase_crossover_rad_s": ([x for x, g in zip(pc, gms) if g < 0][k_lo]
-                                        if lower else float("nan")),
+        "gain_margin_db": up[0], "phase_crossover_rad_s": up[1],
+        "lower_gain_margin_db": lo[0], "lower_phase_crossover_rad_s": lo[1],
         "all_gain_crossovers_rad_s": gc, "all_phase_margins_deg": pms,
         "all_phase_crossovers_rad_s": pc, "all_gain_margins_db": gms,
     }

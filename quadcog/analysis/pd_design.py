@@ -1,10 +1,11 @@
 """The cascade PD design checked as the paper does: closed-loop eigenvalues and a MIMO Bode
-(singular value) analysis of the loop broken at the plant input, with per-channel margins."""
+(singular value) analysis of the loop broken at the plant input, with per-channel margins,
+through python-control (``control.singular_values_response``, ``control.stability_margins``)."""
 import numpy as np
 
 from ..controllers import CascadePD
-from .frequency import (channel_loop, gain_range_by_eigenvalues, loop_transfer, siso_margins,
-                        singular_values)
+from .frequency import channel_loop, channel_margins, gain_range_by_eigenvalues
+from .linear import loop_statespace
 
 CHANNELS = ("U1 thrust (z loop)", "U2 roll moment (y-phi loop)",
             "U3 pitch moment (x-theta loop)", "U4 yaw moment (psi loop)")
@@ -23,21 +24,24 @@ def pd_design(controller=None, omega=OMEGA):
     (N,) = sigma_min(I + L^{-1}); their minima over omega with the frequency; the guaranteed
     simultaneous gain (dB) and phase (deg) margins that sigma_min(I + L) >= a implies
     (gain in [1/(1 + a), 1/(1 - a)], phase +-2 asin(a / 2)); and margins, one dict per input
-    channel from ``siso_margins`` (that channel broken, the others closed) plus the stable
-    gain interval found independently from eigenvalues.
+    channel from ``channel_margins`` (that channel broken, the others closed) plus the stable
+    gain interval found independently from eigenvalues; loop, the ``control.StateSpace`` of L.
     """
+    import control
     ctl = controller or CascadePD()
     A, B, K = ctl.A, ctl.B, ctl.K
     eig = np.linalg.eigvals(A - B @ K)
-    L = loop_transfer(A, B, K, omega)
+    loop = loop_statespace(A, B, K)
     I = np.eye(B.shape[1])
-    sigma = singular_values(L)
-    rd = singular_values(I + L)[:, -1]
-    ird = singular_values(I + np.linalg.inv(L))[:, -1]
+    sv = lambda sys: np.asarray(control.singular_values_response(sys, omega).magnitude)[:, 0].T
+    sigma = sv(loop)                                      # (N, m), largest first
+    rd = sv(loop + I)[:, -1]
+    L = np.moveaxis(np.asarray(loop.frequency_response(omega).complex), -1, 0)   # (N, m, m)
+    ird = np.linalg.svd(I + np.linalg.inv(L), compute_uv=False)[:, -1]
     a = float(rd.min())
     margins = []
     for i, name in enumerate(CHANNELS):
-        m = siso_margins(*channel_loop(A, B, K, i))
+        m = channel_margins(*channel_loop(A, B, K, i))
         k_lo, k_hi = gain_range_by_eigenvalues(A, B, K, i)
         m["channel"] = name
         m["eigenvalue_gain_range"] = [k_lo, k_hi]
@@ -57,7 +61,7 @@ def pd_design(controller=None, omega=OMEGA):
         "min_sigma_inverse_return_difference_at_rad_s": float(omega[np.argmin(ird)]),
         "guaranteed_simultaneous_gain_margin_db": gm,
         "guaranteed_simultaneous_phase_margin_deg": float(np.degrees(2 * np.arcsin(min(a, 2) / 2))),
-        "margins": margins,
+        "margins": margins, "loop": loop,
     }
 
 

@@ -223,3 +223,105 @@ def write_markdown(summary, path):
     """Write ``markdown(summary)`` to path."""
     with open(path, "w") as fh:
         fh.write(markdown(summary))
+
+
+def _tex(s):
+    """Plain text for LaTeX: every special character escaped."""
+    s = str(s).replace("\\", "/").replace("{", r"\{").replace("}", r"\}")
+    for a, b in (("%", r"\%"), ("_", r"\_"), ("#", r"\#"), ("&", r"\&"), ("$", r"\$"),
+                 ("^", r"\^{}"), ("~", r"\textasciitilde{}"), ("<", r"$<$"), (">", r"$>$")):
+        s = s.replace(a, b)
+    return s
+
+
+def _num(v, digits=3):
+    """A number for LaTeX: inf as $\\infty$, nan as a dash."""
+    if v is None:
+        return "--"
+    v = float(v)
+    if math.isnan(v):
+        return "--"
+    if math.isinf(v):
+        return r"$\infty$" if v > 0 else r"$-\infty$"
+    return f"{v:.{digits}g}"
+
+
+def latex_fragment(s):
+    """The analysis section of the PDF report (a str of LaTeX) from the summary dict of
+    ``analyze``; its figures are referenced as ``analysis/<name>.png``."""
+    pd, zd, ad, fm = s["pd_design"], s["zero_dynamics"], s["adaptive"], s["failure_map"]
+    out = [r"\section{Analysis of the designs}\label{sec:analysis}",
+           r"Written by \texttt{quadcog analyze}; the numbers below are from that run "
+           r"(\texttt{analysis.md} and \texttt{analysis.json} hold all of them).", "",
+           r"\subsection{Cascade PD: margins and singular values}",
+           r"The loop is broken at the plant input, $L(s) = K (sI - A)^{-1} B$ with the hover "
+           r"linearization $A, B$ at $r_G = 0$ and the equivalent state feedback $K$. Largest "
+           rf"real part of the closed-loop eigenvalues: {_num(pd['max_real_eigenvalue'])}\,1/s. "
+           r"Per-channel margins from \texttt{control.stability\_margins} (that input broken, "
+           r"the other three closed); the last column is the stable range of a scalar gain on "
+           r"the channel found from eigenvalues alone, an independent check.", "",
+           r"\begin{center}\small", r"\begin{tabular}{lrrrrr}",
+           r"\toprule channel & PM (deg) & at (rad/s) & upper GM (dB) & lower GM (dB) & "
+           r"gain range (dB) \\ \midrule"]
+    for m in pd["margins"]:
+        lo, hi = m["eigenvalue_gain_range_db"]
+        out.append(f"{_tex(m['channel'])} & {_num(m['phase_margin_deg'], 4)} & "
+                   f"{_num(m['gain_crossover_rad_s'], 3)} & {_num(m['gain_margin_db'], 3)} & "
+                   f"{_num(m['lower_gain_margin_db'], 3)} & [{_num(lo, 3)}, {_num(hi, 3)}] \\\\")
+    g_lo, g_hi = pd["guaranteed_simultaneous_gain_margin_db"]
+    out += [r"\bottomrule", r"\end{tabular}", r"\end{center}",
+            rf"MIMO: $\min_\omega \sigma_{{\min}}(I + L(j\omega)) = "
+            rf"{_num(pd['min_sigma_return_difference'], 4)}$, which guarantees stability for "
+            rf"simultaneous gain changes in [{_num(g_lo)}, {_num(g_hi)}]\,dB or phase changes "
+            rf"of $\pm{_num(pd['guaranteed_simultaneous_phase_margin_deg'])}$\,deg in all four "
+            r"channels at once.", "",
+            r"\begin{figure}[htbp]\centering"
+            r"\includegraphics[width=\linewidth]{analysis/pd_sigma.png}"
+            r"\caption{Singular values of the cascade PD loop $L(j\omega)$ and of the return "
+            r"difference.}\end{figure}", "",
+            r"\subsection{Zero dynamics}",
+            _tex(zd["finding"][0].upper() + zd["finding"][1:]) + ". Largest change of the "
+            rf"eigenvalues over the offsets tried: {_num(zd['max_eig_diff_over_r_G'], 2)}\,1/s; "
+            r"largest $|\partial \dot\zeta / \partial r_G|$ over "
+            rf"{zd['sensitivity']['n_points']} random points of the manifold: "
+            rf"{_num(zd['sensitivity']['max_dzeta_dot_dr'], 2)}.", "",
+            r"\begin{figure}[htbp]\centering"
+            r"\includegraphics[width=0.9\linewidth]{analysis/zero_dynamics.png}"
+            r"\caption{Zero dynamics: the outputs held (identical for every $r_G$) and "
+            r"moving (they differ).}\end{figure}", "",
+            r"\subsection{Adaptive law: Lyapunov function along Fig.~6}",
+            r"$V = e_s^T P e_s + \tilde r^T \Gamma^{-1} \tilde r$ along the Fig.~6 scenario. "
+            r"`rise' is the largest climb of $V$ above its running minimum after the CoG step.",
+            "", r"\begin{center}\small", r"\begin{tabular}{lrrrr}",
+            r"\toprule variant & $V(t_\mathrm{step})$ & max $V$ after & rise & at $t$ (s) \\ "
+            r"\midrule"]
+    for label, v in ad["lyapunov"].items():
+        out.append(f"{_tex(label)} & {_num(v['V_at_step'])} & {_num(v['V_max_after_step'])} & "
+                   f"{_num(v['max_rise'])} ({_num(100 * v['max_rise_relative'])}\\,\\%) & "
+                   f"{_num(v['t_max_rise'])} \\\\")
+    out += [r"\bottomrule", r"\end{tabular}", r"\end{center}", _tex(ad["explanation"]), "",
+            r"\begin{figure}[htbp]\centering"
+            r"\includegraphics[width=0.9\linewidth]{analysis/lyapunov.png}"
+            r"\caption{The Lyapunov function along Fig.~6.}\end{figure}", "",
+            r"\subsection{Failure map}",
+            rf"CoG step at hover to $(x_G, y_G, 0)$ on a {fm['grid']}$\times${fm['grid']} grid; "
+            rf"{fm['n_admissible']} of {fm['n_points']} offsets are admissible. Failure: tail "
+            rf"RMS error over {_num(fm['threshold'])}\,m or diverged.", "",
+            r"\begin{center}\small", r"\begin{tabular}{lrrr}",
+            r"\toprule controller & survives & diverged & survives every offset up to (m) \\ "
+            r"\midrule"]
+    for c in fm["controllers"].values():
+        out.append(f"{_tex(c['label'])} & {100 * c['survive_fraction']:.0f}\\,\\% & "
+                   f"{c['n_diverged']} & {_num(c['survive_radius'], 3)} \\\\")
+    out += [r"\bottomrule", r"\end{tabular}", r"\end{center}",
+            r"\begin{figure}[htbp]\centering"
+            r"\includegraphics[width=\linewidth]{analysis/failure_map.png}"
+            r"\caption{Tail RMS position error after a CoG step, per controller; grey: "
+            r"inadmissible offsets.}\end{figure}", ""]
+    return "\n".join(out) + "\n"
+
+
+def write_latex(summary, path):
+    """Write ``latex_fragment(summary)`` to path."""
+    with open(path, "w") as fh:
+        fh.write(latex_fragment(summary))
