@@ -63,7 +63,8 @@ analyze: compile
 test: $(STAMP)
 	$(PY) -m pytest
 
-# Timing tables (no assertions); writes bench/results.md.
+# Timing tables (no assertions); writes out/bench/results.md (`python bench/publish.py bench`
+# copies it into README.md and bench/results.md).
 bench: compile
 	$(PY) bench/run.py
 

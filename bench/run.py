@@ -1,7 +1,9 @@
 """`make bench`: timings in one run, medians of repeats, ratios beside absolute times.
 
-Prints a Markdown table and writes it to bench/results.md. No assertion: these machines are
-noisy, so what counts is the ratios measured side by side in the same run.
+Prints a Markdown table and writes it to out/bench/results.md (``--out``); the tracked
+bench/results.md and the README's table change only through ``python bench/publish.py bench``.
+No assertion: these machines are noisy, so what counts is the ratios measured side by side in
+the same run.
 """
 import argparse
 import os
@@ -210,6 +212,8 @@ def bench_rotorpy():
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--flights", type=int, default=1000, help="batch size (default 1000)")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench" / "results.md",
+                    help="where to write the table (default: out/bench/results.md)")
     args = ap.parse_args()
     print(f"quadcog bench on {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, CasADi {ca.__version__}, Python {platform.python_version()}")
@@ -223,11 +227,13 @@ def main():
     lines += ["| " + " | ".join(map(str, r)) + " |" for r in rows]
     table = "\n".join(lines)
     print("\n" + table)
-    out = ROOT / "bench" / "results.md"
+    out = args.out
+    out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("# `make bench` results\n\nMedian of repeats, measured in one run on "
                    f"{os.cpu_count()} cores ({platform.machine()}), "
                    f"{time.strftime('%Y-%m-%d')}.\n\n" + table + "\n")
-    print(f"\nwritten to {out.relative_to(ROOT)}")
+    print(f"\nwritten to {out}; `python bench/publish.py bench` copies it into README.md and "
+          "bench/results.md")
 
 
 if __name__ == "__main__":

@@ -127,6 +127,18 @@ def _fragment(rows):
     return "\n".join(lines) + "\n"
 
 
+def readme_table(rows):
+    """The README's table of the claims (Markdown): tail RMS to 0.1 mm, max to 1 mm;
+    ``python bench/publish.py paper`` copies it into README.md."""
+    lines = ["| figure | claim | tail RMS (m) | max (m) | holds |", "|---|---|---|---|---|"]
+    for r in rows:
+        tail = (f"diverged at {r['diverged_at']:.2f} s" if r["diverged"]
+                else f"{r['rms_position_error_tail']:.4f}")
+        lines.append(f"| {r['figure']} | {r['claim']} | {tail} | "
+                     f"{r['max_position_error']:.3f} | **{r['holds']}** |")
+    return "\n".join(lines)
+
+
 def run_paper(out, progress=True):
     """Run the built-in scenarios, draw the figures, write summary.md, summary.json and
     report_fragment.tex into ``out``; returns the summary rows."""
@@ -164,5 +176,7 @@ def run_paper(out, progress=True):
     md += ["", "Figures: `<scenario>/flight.png` for each row, `cog_step_comparison.png`."]
     (out / "summary.md").write_text("\n".join(md) + "\n")
     (out / "report_fragment.tex").write_text(_fragment(rows))
-    print(f"wrote {out}/summary.md, summary.json, report_fragment.tex and the figures")
+    (out / "readme_table.md").write_text(readme_table(rows) + "\n")
+    print(f"wrote {out}/summary.md, summary.json, report_fragment.tex, readme_table.md and the "
+          "figures")
     return rows

@@ -19,6 +19,7 @@ class Metrics:
     diverged_cause: str | None = None
     r_hat_final: list | None = None
     r_G_final: list | None = None
+    reference: dict | None = None    # quadcog.feasibility.ReferenceCheck.as_dict() of the run
 
     def as_dict(self):
         """The metrics as a plain dict (the keys of metrics.json)."""

@@ -25,6 +25,7 @@ from .progress import ProgressBar
 from .simulation import Limits, simulate, start_at_reference
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, Helix, Hover
+from .waypoints import MinimumSnap
 from .vehicle import FIELD_NAMES, HUMMINGBIRD, PRESETS
 
 
@@ -39,6 +40,8 @@ TRAJECTORIES = {
     "figure8": (Figure8, {"center": "vec3", "size": NUMBER, "period": NUMBER, "yaw": NUMBER}),
     "helix": (Helix, {"center": "vec3", "radius": NUMBER, "period": NUMBER,
                       "climb_rate": NUMBER, "yaw": NUMBER}),
+    "waypoints": (MinimumSnap, {"waypoints": "points", "times": "vec", "max_speed": NUMBER,
+                                "max_acceleration": NUMBER, "yaw": NUMBER}),
 }
 CONTROLLER_PARAMS = {
     "pd": {"poles_z": "vec", "poles_psi": "vec", "poles_x": "vec", "poles_y": "vec",
@@ -137,6 +140,12 @@ def _check(value, kind, where):
         a = validate.array(value, where, (None,), what="an array of numbers", **err)
         if a.size == 0:
             validate.fail(where, "a non-empty array of numbers", value, ScenarioError)
+    elif kind == "points":
+        a = validate.array(value, where, (None, 3),
+                           what="an array of at least 2 arrays [x, y, z] of numbers", **err)
+        if a.shape[0] < 2:
+            validate.fail(where, "an array of at least 2 arrays [x, y, z] of numbers", value,
+                          ScenarioError)
     elif kind == "pairs4":
         validate.array(value, where, (4, 2), what="an array of 4 arrays [x, y] of numbers",
                        **err)

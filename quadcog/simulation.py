@@ -8,6 +8,7 @@ CoG is what it does not know)."""
 from dataclasses import dataclass, field
 import math
 import time
+import warnings
 
 import casadi as ca
 import numpy as np
@@ -22,6 +23,7 @@ from .errors import EulerSingularityError, InputError
 from .fastcall import FastCall
 from .model import load
 from .params import check_parameters, with_cog
+from .feasibility import ReferenceWarning, check_reference
 from .plant import Actuation, TruthOptions, initial_rotor_thrusts, plant_step_function
 from .result import Metrics, SimulationResult, position_metrics
 from .timeline import CogProfile, wrench_table
@@ -214,8 +216,22 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=Non
     else:
         X, U = _run_python(controller, P, table, x0, f0, actuation, limits, progress, is_law)
     elapsed = time.perf_counter() - t0
-    return _result(controller, X, U, table, P, duration, limits, path, elapsed,
-                   actuation.n_rotor_states)
+    result = _result(controller, X, U, table, P, duration, limits, path, elapsed,
+                     actuation.n_rotor_states)
+    _check_reference(result, table, vehicle, limits)
+    return result
+
+
+def _check_reference(result, table, vehicle, limits):
+    """Metrics entry ``reference`` and a ReferenceWarning when the reference asks for more
+    acceleration or jerk than the vehicle can give (quadcog.feasibility)."""
+    check = check_reference(table[:, TABLE["t"]], table[:, TABLE["ref"]], vehicle,
+                            limits.max_tilt)
+    result.metrics.reference = check.as_dict()
+    if not check.feasible:
+        warnings.warn(f"the reference asks for more than the vehicle ({vehicle.name}) can "
+                      f"follow from t = {check.first_violation_t:.3f} s: {check.reason}",
+                      ReferenceWarning, stacklevel=3)
 
 
 def chunk_function(controller, actuation, n=CHUNK):

@@ -50,3 +50,26 @@ def test_outputs_written(summary):
         assert (out / name / "flight.png").is_file() and (out / name / "trajectory.csv").is_file()
     tex = (out / "report_fragment.tex").read_text()
     assert "\\includegraphics" in tex and "paper/fig6/flight.png" in tex
+
+
+def test_readme_table_matches_a_fresh_run(summary):
+    """Each number of the README's paper table is the fresh run's within its printed rounding
+    (tail RMS 0.1 mm, max 1 mm, divergence time 10 ms), and the verdicts are the same."""
+    import re
+    from pathlib import Path
+    rows, out = summary
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    block = re.search(r"<!-- BEGIN paper -->\n(.*?)\n<!-- END paper -->", readme, re.S).group(1)
+    fresh = {r["figure"]: r for r in rows.values()}
+    lines = [l for l in block.splitlines()[2:]]
+    assert len(lines) == len(fresh)
+    for line in lines:
+        figure, _, tail, peak, holds = [c.strip() for c in line.strip("|").split("|")]
+        r = fresh[figure]
+        assert holds.strip("*") == r["holds"], figure
+        assert abs(float(peak) - r["max_position_error"]) <= 0.0005 + 1e-12, figure
+        if r["diverged"]:
+            t = float(re.match(r"diverged at ([0-9.]+) s", tail).group(1))
+            assert abs(t - r["diverged_at"]) <= 0.005 + 1e-12, figure
+        else:
+            assert abs(float(tail) - r["rms_position_error_tail"]) <= 0.00005 + 1e-12, figure
