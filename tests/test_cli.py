@@ -36,7 +36,7 @@ def test_every_subcommand_has_a_one_line_help_and_a_description():
 
 def test_run_by_name_from_another_folder_writes_to_out_scenario(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    assert main(["run", "fig3a", *SHORT, "--every", "7"]) == 0
+    assert main(["run", "fig3a", *SHORT, "--every", "7"]) == 0      # with its plot
     out = tmp_path / "out" / "fig3a"
     assert {p.name for p in out.iterdir()} >= {"metrics.json", "trajectory.csv", "flight.png",
                                                "vehicle.json"}
