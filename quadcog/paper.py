@@ -88,9 +88,10 @@ def _comparison_plot(results, out):
     ax.text(1.05, 2e-4, "CoG steps to [6, 6, 0] cm", fontsize=8)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("position error (m), floored at 0.1 mm")
-    ax.set_title("Hover through a CoG step: who survives")
+    ax.set_title("Hover through a CoG step: who survives", pad=24)
     ax.grid(alpha=0.3, which="both")
-    ax.legend()
+    ax.legend(loc="lower left", bbox_to_anchor=(0, 1.0), ncol=3, frameon=False,
+              borderaxespad=0.2)  # off the data
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)

@@ -83,9 +83,11 @@ def plot_sigma(result, path):
             ax.axvline(m["gain_crossover_rad_s"], color="0.8", lw=0.8, zorder=0)
     ax.set_xlabel(r"frequency $\omega$ (rad/s)")
     ax.set_ylabel("singular value (dB)")
-    ax.set_title(r"Cascade PD: $L(j\omega) = K (j\omega I - A)^{-1} B$ (loop broken at $U$)")
+    ax.set_title(r"Cascade PD: $L(j\omega) = K (j\omega I - A)^{-1} B$ (loop broken at $U$)",
+                 pad=26)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper right")
+    ax.legend(loc="lower left", bbox_to_anchor=(0, 1.0), ncol=3, frameon=False, fontsize=9,
+              borderaxespad=0.2)
     bx.semilogx(w, db(result["sigma_min_return_difference"]), "C2", lw=2,
                 label=r"$\sigma_{min}(I + L)$ (return difference)")
     bx.semilogx(w, db(result["sigma_min_inverse_return_difference"]), "C4", lw=2,
@@ -94,9 +96,10 @@ def plot_sigma(result, path):
     bx.set_xlabel(r"frequency $\omega$ (rad/s)")
     bx.set_ylabel("singular value (dB)")
     bx.set_title(f"MIMO robustness: min $\\sigma_{{min}}(I+L)$ = "
-                 f"{result['min_sigma_return_difference']:.3f}")
+                 f"{result['min_sigma_return_difference']:.3f}", pad=26)
     bx.grid(True, which="both", alpha=0.3)
-    bx.legend(loc="upper right")
+    bx.legend(loc="lower left", bbox_to_anchor=(0, 1.0), ncol=2, frameon=False, fontsize=9,
+              borderaxespad=0.2)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
