@@ -141,9 +141,11 @@ def readme_table(rows):
     return "\n".join(lines)
 
 
-def run_paper(out, progress=True):
+def run_paper(out, progress=True, beyond=True):
     """Run the built-in scenarios, draw the figures, write summary.md, summary.json and
-    report_fragment.tex into ``out``; returns the summary rows."""
+    report_fragment.tex into ``out``; with ``beyond``, also the side-by-side comparison of
+    ``quadcog.beyond`` into ``out/beyond`` (its section joins the report fragment). Returns the
+    summary rows."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows, results = [], {}
@@ -178,7 +180,15 @@ def run_paper(out, progress=True):
                   f"**{r['holds']}** | {r['note']} |")
     md += ["", "Figures: `<scenario>/flight.png` for each row, `cog_step_comparison.png`."]
     (out / "summary.md").write_text("\n".join(md) + "\n")
-    (out / "report_fragment.tex").write_text(_fragment(rows))
+    fragment = _fragment(rows)
+    if beyond:
+        from .beyond import run_beyond
+        run_beyond(out / "beyond", progress)
+        fragment += (out / "beyond" / "beyond_fragment.tex").read_text()
+        md += ["", "Beyond the paper: `beyond/beyond.md` (the paper's law, FL with integral "
+               "action and the composite law on every CoG scenario, ideal and real)."]
+        (out / "summary.md").write_text("\n".join(md) + "\n")
+    (out / "report_fragment.tex").write_text(fragment)
     (out / "readme_table.md").write_text(readme_table(rows) + "\n")
     print(f"wrote {out}/summary.md, summary.json, report_fragment.tex, readme_table.md and the "
           "figures")

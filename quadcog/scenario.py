@@ -55,7 +55,8 @@ CONTROLLER_PARAMS["fl_integral"] = dict(CONTROLLER_PARAMS["fl"], integral_pole=N
                                         integral_limit=NUMBER)
 CONTROLLER_PARAMS["composite"] = dict(
     CONTROLLER_PARAMS["adaptive"], filter_rate=NUMBER, ls_gain=NUMBER, forgetting=NUMBER,
-    covariance_bound=NUMBER, force_weight=NUMBER, allocation=bool, motor_lag=bool)
+    covariance_bound=NUMBER, force_weight=NUMBER, allocation=bool, motor_lag=bool,
+    warm_up=NUMBER)
 TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "dt": NUMBER,
        "path": str, "trajectory": dict, "cog": list, "disturbance": list, "vehicle": dict,
        "controller_model": dict, "controller_params": dict, "truth": dict, "limits": dict,

@@ -92,6 +92,7 @@ def test_covariance_update_bounded_and_positive(composite):
         P *= 0.999 * k0 / np.linalg.eigvalsh(P)[-1]
         c[27:33] = P[np.triu_indices(3)]
         c[3:27] = rng.normal(size=24)
+        c[33] = 1.0                          # past the warm-up: the data term is on
         x = np.r_[rng.normal(scale=0.3, size=12)]
         ref = np.zeros(14)
         _, c_dot = law(0.0, x, ref, c)

@@ -10,7 +10,7 @@ from quadcog.paper import run_paper
 @pytest.fixture(scope="module")
 def summary(tmp_path_factory):
     out = tmp_path_factory.mktemp("paper")
-    rows = run_paper(out, progress=False)
+    rows = run_paper(out, progress=False, beyond=False)   # beyond: tests/test_beyond.py
     return {r["scenario"]: r for r in rows}, out
 
 

@@ -38,7 +38,8 @@ The projection onto the ball |r_hat| <= projection_radius is P-weighted so that 
 as it is.
 
 Controller state c (``n_state``): r_hat (3), zeta (6), Psi (18, column-major 6x3), the six
-entries of P (xx, xy, xz, yy, yz, zz) and, with the actuator model, the four rotor thrusts the
+entries of P (xx, xy, xz, yy, yz, zz), a clock (s since the start, it stops counting after
+``warm_up``) and, with ``motor_lag``, the four rotor thrusts the
 controller believes its rotors deliver (``motor_lag``). ``STATE_SLICES`` names them.
 """
 import casadi as ca
@@ -94,6 +95,10 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         yaw first (``allocation.prioritized_input``), so the filter knows what is delivered.
     motor_lag : True: the filter sees the rotor thrusts lagging behind the command with the
         vehicle's motor_time_constant (4 more states); False (default): the command itself.
+    warm_up : seconds from t = 0 during which the prediction error is not used (default
+        5 / filter_rate): the filters start at rest, and while the vehicle starts moving
+        (a trajectory that begins with a velocity) their start-up term exp(-lam t) would
+        otherwise read as a CoG offset.
     Q, projection_radius and the feedback-linearization poles : as AdaptiveFeedbackLinearization.
     """
 
@@ -101,7 +106,7 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
 
     def __init__(self, vehicle=None, model=None, *, gamma=0.01, filter_rate=20.0,
                  ls_gain=200.0, forgetting=8.0, covariance_bound=1.0, force_weight=1.0,
-                 allocation=True, motor_lag=False, **kwargs):
+                 allocation=True, motor_lag=False, warm_up=None, **kwargs):
         super().__init__(vehicle, model, gamma=gamma, **kwargs)
         self.filter_rate = _positive("filter_rate", filter_rate)
         self.ls_gain = _positive("ls_gain", ls_gain)
@@ -111,19 +116,23 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         if not (np.isfinite(force_weight) and force_weight >= 0):
             raise InputError(f"force_weight must be a number >= 0, got {force_weight!r}")
         self.force_weight = force_weight
+        warm_up = 5.0 / self.filter_rate if warm_up is None else float(warm_up)
+        if not (np.isfinite(warm_up) and warm_up >= 0):
+            raise InputError(f"warm_up must be a number of seconds >= 0, got {warm_up!r}")
+        self.warm_up = warm_up
         for name, flag in (("allocation", allocation), ("motor_lag", motor_lag)):
             if not isinstance(flag, (bool, np.bool_)):
                 raise InputError(f"{name} must be True or False, got {flag!r}")
         self.allocation, self.motor_lag = bool(allocation), bool(motor_lag)
         self.motor_states = 4 if (self.motor_lag and self.vehicle.motor_time_constant > 0) else 0
-        self.n_state = 33 + self.motor_states
+        self.n_state = 34 + self.motor_states
         v = self.vehicle
         mg = v.m * v.g
         self.row_scale = np.r_[[v.arm_length / mg] * 3, [1.0 / mg] * 3]
         self.row_weight = self.ls_gain * np.r_[[self.force_weight] * 3, [1.0] * 3]
 
     STATE_SLICES = {"r_hat": slice(0, 3), "zeta": slice(3, 9), "Psi": slice(9, 27),
-                    "P": slice(27, 33), "rotor_thrusts": slice(33, 37)}
+                    "P": slice(27, 33), "clock": slice(33, 34), "rotor_thrusts": slice(34, 38)}
 
     def initial_state(self):
         """r_hat = the model's r_G, filters at rest, P = k0 I, believed rotor thrusts at the model's hover."""
@@ -131,7 +140,7 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         c[0:3] = self.vehicle.r_G
         c[27:33] = self.covariance_bound * np.array([1, 0, 0, 1, 0, 1.0])
         if self.motor_states:
-            c[33:37] = self.vehicle.rotor_thrusts(self.vehicle.hover_input())
+            c[34:38] = self.vehicle.rotor_thrusts(self.vehicle.hover_input())
         return c
 
     def delivered_input(self, U, f_hat):
@@ -164,11 +173,16 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         r_hat, zeta = c[0:3], c[3:9]
         Psi = ca.reshape(c[9:27], 6, 3)
         P = unpack_covariance(c[27:33])
-        f_hat = c[33:33 + self.motor_states]
+        f_hat = c[34:34 + self.motor_states]
         U, e_s, Phi, B = self.parts(x, ref, r_hat)
         U_a, U, f_hat_dot = self.delivered_input(U, f_hat)
         z, Y, zeta_dot, Psi_dot = self.filtered_regression(x, U_a, zeta, Psi)
-        S, G = ca.DM(self.row_scale), ca.DM(np.diag(self.row_weight))
+        S = ca.DM(self.row_scale)
+        # the filters start at rest, so z - Y r starts at -lam M nu(0) and decays as
+        # exp(-lam t): learn from the prediction error only once that has died out
+        # (a clock state rather than t: the exported step does not take the time)
+        clock = c[33]
+        G = ca.if_else(clock >= self.warm_up, 1.0, 0.0) * ca.DM(np.diag(self.row_weight))
         Y_n, z_n = S * Y, S * z                       # rows scaled to metres of CoG
         kappa = ca.DM(self.gamma / self.covariance_bound)
         tau = -kappa * (Phi.T @ (B.T @ (ca.DM(self.P) @ e_s))) - Y_n.T @ (G @ (Y_n @ r_hat - z_n))
@@ -184,7 +198,8 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         k0 = self.covariance_bound
         P_dot = (self.forgetting * P @ (ca.DM.eye(3) - P / k0)
                  - P @ Y_n.T @ G @ Y_n @ P)
-        c_dot = ca.vertcat(r_dot, zeta_dot, ca.vec(Psi_dot), pack_covariance(P_dot), f_hat_dot)
+        c_dot = ca.vertcat(r_dot, zeta_dot, ca.vec(Psi_dot), pack_covariance(P_dot),
+                           ca.fmin(1.0, ca.fmax(0.0, self.warm_up + 1.0 - clock)), f_hat_dot)
         return U, c_dot
 
     def project(self, c):

@@ -14,8 +14,8 @@
  *   all in the ground frame, then yaw (rad) and yaw rate (rad/s).
  * U (4) = [U1 thrust along body z (N), U2, U3, U4 body moments about O (N m)]; map to rotor
  *   thrusts with the inverse of the vehicle's mixer.
- * c (33) = the controller state (33 entries; the adaptive laws: r_hat, the CoG estimate, m, body axes).
- *   quadcog_composite_init sets it to [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1]
+ * c (34) = the controller state (34 entries; the adaptive laws: r_hat, the CoG estimate, m, body axes).
+ *   quadcog_composite_init sets it to [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1, 0]
  *
  * Nominal vehicle parameters baked into the code (the controller's model):
  *   m        = 0.68 kg
@@ -55,10 +55,11 @@
  *   ls_gain = 200
  *   max_tilt = 0.6
  *   motor_states = 0
- *   n_state = 33
+ *   n_state = 34
  *   projection_radius = 0.0963869
  *   row_scale = [0.0254842, 0.0254842, 0.0254842, 0.149907, 0.149907, 0.149907]
  *   row_weight = [200, 200, 200, 200, 200, 200]
+ *   warm_up = 0.25
  *
  * No heap, no globals, no I/O; only <math.h>. Re-entrant: all state is in c[].
  */
@@ -73,7 +74,7 @@ typedef double qc_real;
 #endif
 
 /* size of the controller state c */
-#define QUADCOG_COMPOSITE_NC 33
+#define QUADCOG_COMPOSITE_NC 34
 
 #ifdef __cplusplus
 extern "C" {
