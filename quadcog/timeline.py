@@ -3,6 +3,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import validate
+from .admissibility import LARGEST
 from .errors import InputError
 
 
@@ -21,21 +23,28 @@ class CogProfile:
 
     def __post_init__(self):
         clean, last = [], -np.inf
+        if isinstance(self.changes, (str, bytes, dict)) or not hasattr(self.changes, "__iter__"):
+            validate.fail("cog", "a CogProfile or a list of changes (t, r[, ramp])", self.changes)
         for i, c in enumerate(self.changes):
+            where = f"cog change {i}"
             if not isinstance(c, CogChange):
-                c = CogChange(*c) if isinstance(c, (tuple, list)) else CogChange(**c)
-            r = np.asarray(c.r, dtype=float)
-            if r.shape != (3,) or not np.isfinite(r).all():
-                raise InputError(f"cog change {i}: r must be 3 finite numbers (m), got {c.r!r}")
-            if not (np.isfinite(c.t) and c.t >= 0):
-                raise InputError(f"cog change {i}: t must be >= 0 s, got {c.t!r}")
-            if not (np.isfinite(c.ramp) and c.ramp >= 0):
-                raise InputError(f"cog change {i}: ramp must be >= 0 s, got {c.ramp!r}")
+                if isinstance(c, (tuple, list)) and 2 <= len(c) <= 3:
+                    c = CogChange(*c)
+                elif isinstance(c, dict):
+                    try:
+                        c = CogChange(**c)
+                    except TypeError:
+                        validate.fail(where, "a table with keys t, r and ramp", c)
+                else:
+                    validate.fail(where, "a CogChange or a tuple (t, r[, ramp])", c)
+            r = validate.array(c.r, f"{where}: r", (3,), what="3 finite numbers (m)")
+            c = CogChange(validate.nonnegative(c.t, f"{where}: t", "s"), tuple(r.tolist()),
+                          validate.nonnegative(c.ramp, f"{where}: ramp", "s"))
             if c.t < last:
                 raise InputError(f"cog change {i}: t = {c.t} s comes before the previous "
-                                 f"change's end ({last} s); changes must be in time order")
+                                 f"change's end ({last} s); expected changes in time order")
             last = c.t + c.ramp
-            clean.append(CogChange(float(c.t), tuple(r), float(c.ramp)))
+            clean.append(c)
         self.changes = clean
 
     @classmethod
@@ -71,23 +80,49 @@ class Disturbance:
 
     def __post_init__(self):
         for name in ("force", "moment"):
-            v = np.asarray(getattr(self, name), dtype=float)
-            if v.shape != (3,) or not np.isfinite(v).all():
-                raise InputError(f"disturbance {name} must be 3 finite numbers, got "
-                                 f"{getattr(self, name)!r}")
-        if not (np.isfinite(self.duration) and self.duration > 0):
-            raise InputError(f"disturbance duration must be > 0 s, got {self.duration!r}")
-        if not (np.isfinite(self.t) and self.t >= 0):
-            raise InputError(f"disturbance t must be >= 0 s, got {self.t!r}")
+            v = validate.array(getattr(self, name), f"disturbance {name}", (3,),
+                               what=f"3 finite numbers ({'N' if name == 'force' else 'N m'})")
+            if not np.abs(v).max() <= LARGEST:
+                validate.fail(f"disturbance {name}", f"entries within +-{LARGEST:g}",
+                              v.tolist())
+            object.__setattr__(self, name, tuple(v.tolist()))
+        object.__setattr__(self, "duration",
+                           validate.positive(self.duration, "disturbance duration", "s"))
+        object.__setattr__(self, "t", validate.nonnegative(self.t, "disturbance t", "s"))
 
 
 def wrench_table(disturbances, t):
     """(N, 6) summed wrench of all pulses active at the times ``t`` (s)."""
     t = np.atleast_1d(np.asarray(t, dtype=float))
     w = np.zeros((t.size, 6))
-    for d in disturbances:
-        if not isinstance(d, Disturbance):
-            d = Disturbance(**d) if isinstance(d, dict) else Disturbance(*d)
+    for d in as_disturbances(disturbances):
         on = (t >= d.t) & (t < d.t + d.duration)
         w[on] += np.concatenate([d.force, d.moment])
     return w
+
+
+def as_disturbances(disturbances):
+    """A list of Disturbance from Disturbance objects, dicts of their fields or tuples
+    (t, duration[, force[, moment]]); InputError naming the entry otherwise."""
+    if disturbances is None:
+        return []
+    if isinstance(disturbances, (Disturbance, dict, str, bytes)) or not hasattr(
+            disturbances, "__iter__"):
+        validate.fail("disturbances", "a list of Disturbance pulses", disturbances)
+    out = []
+    for i, d in enumerate(disturbances):
+        if isinstance(d, Disturbance):
+            out.append(d)
+            continue
+        try:
+            if isinstance(d, dict):
+                out.append(Disturbance(**d))
+                continue
+            if isinstance(d, (tuple, list)) and 2 <= len(d) <= 4:
+                out.append(Disturbance(*d))
+                continue
+        except TypeError:           # unknown or missing fields
+            pass
+        validate.fail(f"disturbances[{i}]", "a Disturbance, a dict of its fields (t, duration, "
+                      "force, moment) or a tuple (t, duration[, force[, moment]])", d)
+    return out

@@ -4,28 +4,63 @@ A trajectory maps time t (s) to the 14-vector ``[p (3, m), v (3, m/s), a (3, m/s
 j (3, m/s^3), yaw (rad), yaw_rate (rad/s)]``; ``sample(t)`` does it for an array of times and
 returns (N, 14). The jerk lets the controllers feed forward the rate of the attitude they command.
 """
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from . import validate
+from .admissibility import LARGEST
+from .errors import InputError, QuadcogError
 
 REF_SIZE = 14
 POS, VEL, ACC, JERK = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 YAW, YAW_RATE = 12, 13
+REF_NAMES = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz", "yaw",
+             "yaw_rate")
 
 
 def _vec3(name, value):
-    a = np.asarray(value, dtype=float)
-    if a.shape != (3,) or not np.isfinite(a).all():
-        raise InputError(f"{name} must be 3 finite numbers (m), got {value!r}")
-    return a
+    return validate.array(value, name, (3,), what="3 finite numbers (m)")
 
 
 def _positive(name, value):
-    if not (np.isfinite(value) and value > 0):
-        raise InputError(f"{name} must be a positive number, got {value!r}")
-    return float(value)
+    return validate.positive(value, name)
+
+
+def _angle(name, value):
+    return validate.real(value, name, unit="rad")
+
+
+def _rate(name, period):
+    """2 pi / period (rad/s), refused when it overflows (a period of 5e-324 s)."""
+    w = 2 * np.pi / period
+    if not w <= LARGEST:
+        raise InputError(f"{name}: expected a period of at least {2 * np.pi / LARGEST:.3g} s "
+                         f"(at most {LARGEST:g} rad/s), got {validate.plain(period)}")
+    return w
+
+
+def _describe(trajectory):
+    """'Circle(center=[0.0, 0.0, 1.0], radius=1e+300, ...)' with plain numbers."""
+    if dataclasses.is_dataclass(trajectory):
+        fields = ", ".join(f"{f.name}={validate.plain(getattr(trajectory, f.name))}"
+                           for f in dataclasses.fields(trajectory))
+        return f"{type(trajectory).__name__}({fields})"
+    return repr(trajectory)
+
+
+def check_reference(ref, t, trajectory):
+    """``ref`` (N, 14) if every entry is finite and within +-LARGEST, else InputError naming
+    the trajectory, the first bad time and entry."""
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(ref) <= LARGEST)
+    if bad.any():
+        k, i = np.unravel_index(int(np.argmax(bad)), bad.shape)
+        raise InputError(f"trajectory {_describe(trajectory)}: {REF_NAMES[i]} at t = "
+                         f"{validate.plain(t[k])} s is {validate.plain(ref[k, i])}; expected "
+                         f"finite values within +-{LARGEST:g} (SI units)")
+    return ref
 
 
 class Trajectory:
@@ -34,11 +69,14 @@ class Trajectory:
     yaw = 0.0
 
     def sample(self, t):
-        """(N, 14) reference rows at the times ``t`` (s)."""
+        """(N, 14) reference rows at the times ``t`` (s); InputError when a row is not finite
+        or beyond the scale of quadcog.admissibility.LARGEST (a radius of 1e300 m)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        p, v, a, j = self._pvaj(t)
-        yaw = np.full((t.size, 1), float(self.yaw))
-        return np.hstack([p, v, a, j, yaw, np.zeros((t.size, 1))])
+        with np.errstate(over="ignore", invalid="ignore"):
+            p, v, a, j = self._pvaj(t)
+            yaw = np.full((t.size, 1), float(self.yaw))
+            ref = np.hstack([p, v, a, j, yaw, np.zeros((t.size, 1))])
+        return check_reference(ref, t, self)
 
     def __call__(self, t):
         """The 14-vector reference at time t (s)."""
@@ -53,6 +91,7 @@ class Hover(Trajectory):
 
     def __post_init__(self):
         self.position = _vec3("hover position", self.position)
+        self.yaw = _angle("hover yaw", self.yaw)
 
     def _pvaj(self, t):
         p = np.tile(self.position, (t.size, 1))
@@ -72,6 +111,8 @@ class Circle(Trajectory):
         self.center = _vec3("circle center", self.center)
         self.radius = _positive("circle radius", self.radius)
         self.period = _positive("circle period", self.period)
+        self.yaw = _angle("circle yaw", self.yaw)
+        _rate("circle period", self.period)
 
     def _pvaj(self, t):
         w = 2 * np.pi / self.period
@@ -97,6 +138,8 @@ class Figure8(Trajectory):
         self.center = _vec3("figure8 center", self.center)
         self.size = _positive("figure8 size", self.size)
         self.period = _positive("figure8 period", self.period)
+        self.yaw = _angle("figure8 yaw", self.yaw)
+        _rate("figure8 period", self.period)
 
     def _pvaj(self, t):
         w, a_, z = 2 * np.pi / self.period, self.size, np.zeros_like(t)
@@ -114,8 +157,7 @@ class Helix(Circle):
 
     def __post_init__(self):
         super().__post_init__()
-        if not np.isfinite(self.climb_rate):
-            raise InputError(f"helix climb_rate must be finite, got {self.climb_rate!r}")
+        self.climb_rate = validate.real(self.climb_rate, "helix climb_rate", unit="m/s")
 
     def _pvaj(self, t):
         p, v, a, j = super()._pvaj(t)
@@ -133,21 +175,32 @@ class FromCallable(Trajectory):
         self.f, self.h = f, h
 
     def _eval(self, t):
-        out = self.f(float(t))
+        name = getattr(self.f, "__name__", type(self.f).__name__)
+        where = f"trajectory callable {name}(t = {validate.plain(t)})"
+        try:
+            out = self.f(float(t))
+        except QuadcogError:
+            raise
+        except Exception as e:          # the user's function failed: say where, keep the cause
+            raise InputError(f"{where} raised {type(e).__name__}: {e}") from e
+        shape = "a position (3,), a tuple (p, v, a[, j]) of 3-vectors or a 14-vector"
         if isinstance(out, tuple):
-            parts = [np.asarray(o, dtype=float).reshape(3) for o in out]
+            if not 1 <= len(out) <= 4:
+                validate.fail(where, shape, out)
+            parts = [validate.array(o, f"{where}[{k}]", (3,), what=shape)
+                     for k, o in enumerate(out)]
             return parts + [None] * (4 - len(parts))
-        out = np.asarray(out, dtype=float).reshape(-1)
+        out = validate.array(out, where, what=shape).reshape(-1)
         if out.size == REF_SIZE:
             return out
         if out.size != 3:
-            raise InputError(f"trajectory callable must return a position (3,), a tuple "
-                             f"(p, v, a[, j]) or a 14-vector, got shape {out.shape}")
+            raise InputError(f"{where}: expected {shape}, got shape {out.shape}")
         return [out, None, None, None]
 
     def sample(self, t):
         rows = []
-        for tk in np.atleast_1d(np.asarray(t, dtype=float)):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        for tk in t:
             got = self._eval(tk)
             if not isinstance(got, list):
                 rows.append(got)
@@ -155,18 +208,19 @@ class FromCallable(Trajectory):
             p, v, a, j = got
             h = self.h
             pos = lambda s: np.asarray(self._eval(s)[0])
-            if v is None:
-                v = (pos(tk + h) - pos(tk - h)) / (2 * h)
-            if a is None:
-                a = (pos(tk + h) - 2 * p + pos(tk - h)) / h ** 2
-            if j is None:
-                j = (pos(tk + 2 * h) - 2 * pos(tk + h) + 2 * pos(tk - h) - pos(tk - 2 * h)) / (
-                    2 * h ** 3)
+            with np.errstate(over="ignore", invalid="ignore"):
+                if v is None:
+                    v = (pos(tk + h) - pos(tk - h)) / (2 * h)
+                if a is None:
+                    a = (pos(tk + h) - 2 * p + pos(tk - h)) / h ** 2
+                if j is None:
+                    j = (pos(tk + 2 * h) - 2 * pos(tk + h) + 2 * pos(tk - h)
+                         - pos(tk - 2 * h)) / (2 * h ** 3)
             rows.append(np.concatenate([p, v, a, j, [0.0, 0.0]]))
-        ref = np.array(rows)
-        if not np.isfinite(ref).all():
-            raise InputError("trajectory callable returned non-finite values")
-        return ref
+        return check_reference(np.array(rows).reshape(t.size, REF_SIZE), t, self)
+
+    def __repr__(self):
+        return f"FromCallable({getattr(self.f, '__name__', type(self.f).__name__)})"
 
 
 def as_trajectory(trajectory):
@@ -175,9 +229,7 @@ def as_trajectory(trajectory):
         return trajectory
     if isinstance(trajectory, str):
         kinds = {"hover": Hover, "circle": Circle, "figure8": Figure8, "helix": Helix}
-        if trajectory not in kinds:
-            raise InputError(f"unknown trajectory {trajectory!r}; expected one of {tuple(kinds)}")
-        return kinds[trajectory]()
+        return kinds[validate.choice(trajectory, "trajectory", tuple(kinds))]()
     if callable(trajectory):
         return FromCallable(trajectory)
-    raise InputError(f"trajectory must be a Trajectory, a name or a callable, got {trajectory!r}")
+    validate.fail("trajectory", "a Trajectory, a name or a callable", trajectory)

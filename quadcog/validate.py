@@ -20,7 +20,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["plain", "fail", "real", "positive", "nonnegative", "integer", "flag", "choice",
-           "array", "vector", "step_count", "BYTES_PER_STEP"]
+           "array", "vector", "poles", "step_count", "BYTES_PER_STEP"]
 
 _MAX_ITEMS_SHOWN = 8
 
@@ -253,6 +253,30 @@ def vector(value, where, n, finite=True, error=InputError):
         if bad.size:
             raise error(f"{where}[{bad[0]}]: expected a finite number, got {plain(a[bad[0]])}")
     return a
+
+
+def poles(value, where, n, error=InputError):
+    """``n`` closed-loop poles (1/s) as a complex array: real numbers or complex ones in
+    conjugate pairs, all finite with negative real part (strings, bools, NaN refused)."""
+    what = f"{n} finite poles with negative real part (complex ones in conjugate pairs)"
+    items = value.tolist() if isinstance(value, np.ndarray) else value
+    if not isinstance(items, (list, tuple)) or len(items) != n:
+        fail(where, what, value, error)
+    out = []
+    for k, v in enumerate(items):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Complex):
+            fail(f"{where}[{k}]", "a real or complex number", v, error)
+        try:
+            z = complex(v)
+        except OverflowError:
+            fail(f"{where}[{k}]", "a number within the float range", v, error)
+        if not (math.isfinite(z.real) and math.isfinite(z.imag) and z.real < 0):
+            fail(f"{where}[{k}]", "a finite pole with negative real part", v, error)
+        out.append(z)
+    p = np.array(out, dtype=complex)
+    if not np.allclose(np.sort_complex(p), np.sort_complex(p.conj()), rtol=1e-12, atol=0):
+        fail(where, what, value, error)
+    return p
 
 
 # Memory one simulated step of one flight costs: the step table (27 numbers), state and

@@ -151,9 +151,9 @@ def test_batch_reports_divergence():
     (dict(x0=np.zeros(5)), "x0 must be 12 finite numbers"),
     (dict(x0=np.full(12, np.nan)), "x0 must be 12 finite numbers"),
     (dict(vehicle=np.ones(14)), "vehicle must be a quadcog Vehicle"),
-    (dict(trajectory="spiral"), "unknown trajectory 'spiral'"),
+    (dict(trajectory="spiral"), "trajectory: expected one of 'hover', .*, got 'spiral'"),
     (dict(path="fast"), "path must be 'compiled' or 'python'"),
-    (dict(cog=[(1.0, (0.02, 0, 0), 0.0), (0.5, (0.0, 0, 0), 0.0)]), "must be in time order"),
+    (dict(cog=[(1.0, (0.02, 0, 0), 0.0), (0.5, (0.0, 0, 0), 0.0)]), "expected changes in time order"),
     (dict(cog=[(0.5, (0.2, 0.0, 0.3), 0.0)]), "cog change 0"),
 ])
 def test_bad_input(kwargs, message):
@@ -162,11 +162,14 @@ def test_bad_input(kwargs, message):
 
 
 def test_bad_trajectory_and_disturbance_values():
-    with pytest.raises(quadcog.InputError, match="circle radius must be a positive number"):
+    with pytest.raises(quadcog.InputError, match="circle radius: expected a positive number, "
+                                                 "got -1"):
         quadcog.Circle(radius=-1)
-    with pytest.raises(quadcog.InputError, match="disturbance duration must be > 0"):
+    with pytest.raises(quadcog.InputError, match="disturbance duration: expected a positive "
+                                                 "number"):
         Disturbance(t=1.0, duration=0.0)
-    with pytest.raises(quadcog.InputError, match="hover position must be 3 finite numbers"):
+    with pytest.raises(quadcog.InputError, match=r"hover position: expected 3 finite numbers "
+                                                 r"\(m\), got shape \(2,\)"):
         quadcog.Hover(position=(0, 0))
 
 

@@ -11,6 +11,8 @@ import casadi as ca
 import numpy as np
 
 from ..conventions import B_U
+from .. import validate
+from ..admissibility import LARGEST
 from ..errors import InputError
 from .feedback_linearization import FeedbackLinearization
 from .shaping import kinematics
@@ -45,18 +47,24 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
     def __init__(self, vehicle=None, model=None, *, gamma=0.01, Q=None,
                  projection_radius="default", **kwargs):
         super().__init__(vehicle, model, **kwargs)
-        gamma = np.broadcast_to(np.asarray(gamma, dtype=float), (3,)).copy()
-        if not np.all(np.isfinite(gamma)) or np.any(gamma <= 0):
-            raise InputError(f"gamma must be positive, got {gamma}")
+        what = "a positive number or 3 positive numbers (the diagonal of Gamma)"
+        if isinstance(gamma, (list, tuple, np.ndarray)):
+            gamma = validate.array(gamma, "gamma", (3,), what=what)
+        else:
+            gamma = np.full(3, validate.positive(gamma, "gamma"))
+        if not np.all((gamma > 0) & (gamma <= LARGEST)):
+            validate.fail("gamma", what + f" up to {LARGEST:g}", gamma.tolist())
         self.gamma = gamma
-        Q = np.eye(8) if Q is None else np.asarray(Q, dtype=float)
-        if Q.shape != (8, 8) or not np.allclose(Q, Q.T) or np.linalg.eigvalsh(Q)[0] <= 0:
-            raise InputError(f"Q must be a symmetric positive definite 8x8 matrix, got {Q}")
+        Q = np.eye(8) if Q is None else validate.array(Q, "Q", (8, 8))
+        if not (np.allclose(Q, Q.T) and np.linalg.eigvalsh(0.5 * (Q + Q.T))[0] > 0):
+            raise InputError(f"Q: expected a symmetric positive definite 8x8 matrix, got one "
+                             f"with smallest eigenvalue "
+                             f"{validate.plain(np.linalg.eigvalsh(0.5 * (Q + Q.T))[0])}")
         self.Q = Q
         if isinstance(projection_radius, str) and projection_radius == "default":
             projection_radius = admissible_estimate_radius(self.vehicle)
-        if projection_radius is not None and not projection_radius > 0:
-            raise InputError(f"projection_radius must be > 0 m or None, got {projection_radius}")
+        elif projection_radius is not None:
+            projection_radius = validate.positive(projection_radius, "projection_radius", "m")
         self.projection_radius = projection_radius
         self.A_error = np.block([[np.zeros((4, 4)), np.eye(4)],
                                  [-np.diag(self.kp), -np.diag(self.kd)]])

@@ -11,11 +11,12 @@ import casadi as ca
 import numpy as np
 
 from ..conventions import IDX
+from .. import validate
 from ..errors import InputError
 from ..params import with_cog
 from ..trajectory import ACC, POS, VEL, YAW, YAW_RATE
 from .base import Controller
-from .shaping import drag_over_mass, kinematics, wrap_angle, yaw_rotation_T
+from .shaping import drag_over_mass, kinematics, tilt_limit, wrap_angle, yaw_rotation_T
 
 # (states, input) of each decoupled loop of the hover linearization (yaw 0, r_G = 0).
 LOOPS = {"z": ([2, 8], 0), "psi": ([5, 11], 3),
@@ -36,7 +37,7 @@ class CascadePD(Controller):
                  poles_y=(-2.0, -2.5, -10.0, -12.0), max_tilt=0.6):
         super().__init__(vehicle, model)
         self.poles = {"z": poles_z, "psi": poles_psi, "x": poles_x, "y": poles_y}
-        self.max_tilt = float(max_tilt)
+        self.max_tilt = tilt_limit(max_tilt)
         # designed at r_G = 0 (the loops decouple there); a CoG the model believes in enters
         # only as the hover moment it needs, fed forward
         self.hover_input = self.vehicle.hover_input()
@@ -47,13 +48,19 @@ class CascadePD(Controller):
         self.gains = {}
         K = np.zeros((4, 12))
         for loop, (states, inp) in LOOPS.items():
-            poles = np.asarray(self.poles[loop], dtype=float)
-            if poles.size != len(states) or np.any(poles >= 0):
-                raise InputError(f"poles_{loop} must be {len(states)} negative numbers, "
-                                 f"got {self.poles[loop]}")
+            poles = validate.poles(self.poles[loop], f"poles_{loop}", len(states))
+            if np.any(poles.imag != 0):
+                validate.fail(f"poles_{loop}", f"{len(states)} real negative poles",
+                              self.poles[loop])
+            poles = poles.real
             Ai = A[np.ix_(states, states)]
             Bi = B[np.ix_(states, [inp])]
-            k = place_poles(Ai, Bi, poles).gain_matrix.ravel()
+            try:
+                k = place_poles(Ai, Bi, poles).gain_matrix.ravel()
+            except ValueError as e:     # e.g. a pole repeated on this single-input chain
+                raise InputError(f"poles_{loop}: expected poles that can be placed on a "
+                                 f"single-input chain ({e}), got "
+                                 f"{validate.plain(self.poles[loop])}") from None
             self.gains[loop] = k
             K[inp, states] = k
         self.K = K
@@ -62,7 +69,10 @@ class CascadePD(Controller):
         got = np.sort(self.closed_loop_eigenvalues.real)
         if np.max(np.abs(got - chosen)) > 1e-6 * np.max(np.abs(chosen)) or \
                 np.max(np.abs(self.closed_loop_eigenvalues.imag)) > 1e-6:
-            raise AssertionError(f"closed-loop eigenvalues {got} differ from the poles {chosen}")
+            raise InputError(f"poles: the placed closed-loop eigenvalues "
+                             f"{validate.plain(got.tolist())} differ from the chosen poles "
+                             f"{validate.plain(chosen.tolist())}; expected poles the hover "
+                             f"linearization can be placed at (too fast or too close together)")
 
     def expression(self, t, x, ref, c):
         p = self.nominal

@@ -46,7 +46,7 @@ import casadi as ca
 import numpy as np
 
 from ..conventions import B_U
-from ..errors import InputError
+from .. import validate
 from .adaptive import AdaptiveFeedbackLinearization
 from .allocation import prioritized_input
 
@@ -54,10 +54,7 @@ _P_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
 
 def _positive(name, value):
-    value = float(value)
-    if not (np.isfinite(value) and value > 0):
-        raise InputError(f"{name} must be a positive number, got {value!r}")
-    return value
+    return validate.positive(value, name)
 
 
 def unpack_covariance(v):
@@ -112,18 +109,11 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         self.ls_gain = _positive("ls_gain", ls_gain)
         self.forgetting = _positive("forgetting", forgetting)
         self.covariance_bound = _positive("covariance_bound", covariance_bound)
-        force_weight = float(force_weight)
-        if not (np.isfinite(force_weight) and force_weight >= 0):
-            raise InputError(f"force_weight must be a number >= 0, got {force_weight!r}")
-        self.force_weight = force_weight
-        warm_up = 5.0 / self.filter_rate if warm_up is None else float(warm_up)
-        if not (np.isfinite(warm_up) and warm_up >= 0):
-            raise InputError(f"warm_up must be a number of seconds >= 0, got {warm_up!r}")
-        self.warm_up = warm_up
-        for name, flag in (("allocation", allocation), ("motor_lag", motor_lag)):
-            if not isinstance(flag, (bool, np.bool_)):
-                raise InputError(f"{name} must be True or False, got {flag!r}")
-        self.allocation, self.motor_lag = bool(allocation), bool(motor_lag)
+        self.force_weight = validate.nonnegative(force_weight, "force_weight")
+        self.warm_up = (5.0 / self.filter_rate if warm_up is None
+                        else validate.nonnegative(warm_up, "warm_up", "s"))
+        self.allocation = validate.flag(allocation, "allocation")
+        self.motor_lag = validate.flag(motor_lag, "motor_lag")
         self.motor_states = 4 if (self.motor_lag and self.vehicle.motor_time_constant > 0) else 0
         self.n_state = 34 + self.motor_states
         v = self.vehicle

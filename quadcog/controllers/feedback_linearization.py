@@ -7,7 +7,8 @@ import numpy as np
 from ..conventions import IDX
 from ..trajectory import ACC, JERK, POS, VEL, YAW, YAW_RATE
 from .base import Controller
-from .shaping import desired_tilt, drag_over_mass, kinematics, second_order_gains, wrap_angle
+from .shaping import (desired_tilt, drag_over_mass, kinematics, second_order_gains, tilt_limit,
+                      wrap_angle)
 
 
 class FeedbackLinearization(Controller):
@@ -30,7 +31,7 @@ class FeedbackLinearization(Controller):
         self.kp = np.array([kz[0], ka[0], ka[0], kpsi[0]])
         self.kd = np.array([kz[1], ka[1], ka[1], kpsi[1]])
         self.kp_pos, self.kd_pos = second_order_gains(poles_position, "poles_position")
-        self.max_tilt = float(max_tilt)
+        self.max_tilt = tilt_limit(max_tilt)
 
     def output_errors(self, x, ref, p):
         """(e (4,), e_dot (4,), y_ddot_d (4,)) relative to y_d = [z_d, phi_d, theta_d, psi_d].

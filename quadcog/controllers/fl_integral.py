@@ -15,7 +15,7 @@ Controller state c (3): the integrals of the phi, theta and psi errors (rad s).
 import casadi as ca
 import numpy as np
 
-from ..errors import InputError
+from .. import validate
 from .feedback_linearization import FeedbackLinearization
 
 ATTITUDE_ROWS = slice(1, 4)          # phi, theta, psi in y = [z, phi, theta, psi]
@@ -39,14 +39,8 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
     def __init__(self, vehicle=None, model=None, *, integral_pole=-4.0, integral_limit=1.0,
                  **kwargs):
         super().__init__(vehicle, model, **kwargs)
-        a = float(integral_pole)
-        if not (np.isfinite(a) and a < 0):
-            raise InputError(f"integral_pole must be a negative number (1/s), got "
-                             f"{integral_pole!r}")
-        limit = float(integral_limit)
-        if not (np.isfinite(limit) and limit > 0):
-            raise InputError(f"integral_limit must be a positive number (rad s), got "
-                             f"{integral_limit!r}")
+        a = validate.real(integral_pole, "integral_pole", hi=0.0, hi_open=True, unit="1/s")
+        limit = validate.positive(integral_limit, "integral_limit", "rad s")
         self.integral_pole, self.integral_limit = a, limit
         kp, kd = self.kp[ATTITUDE_ROWS].copy(), self.kd[ATTITUDE_ROWS].copy()
         self.kp[ATTITUDE_ROWS] = kp - a * kd

@@ -4,18 +4,18 @@ import casadi as ca
 import numpy as np
 
 from ..conventions import IDX, OUTPUT_ROWS
-from ..errors import InputError
+from .. import validate
 
 
 def second_order_gains(poles, what):
     """(kp, kd) so that s^2 + kd s + kp has the two given poles (real or a conjugate pair)."""
-    poles = np.asarray(poles, dtype=complex)
-    if poles.shape != (2,) or np.any(poles.real >= 0):
-        raise InputError(f"{what}: expected two poles with negative real part, got {poles}")
-    coeffs = np.poly(poles)
-    if np.max(np.abs(coeffs.imag)) > 1e-12:
-        raise InputError(f"{what}: complex poles must come as a conjugate pair, got {poles}")
+    coeffs = np.poly(validate.poles(poles, what, 2))
     return float(coeffs.real[2]), float(coeffs.real[1])
+
+
+def tilt_limit(max_tilt, what="max_tilt"):
+    """The clip on commanded roll and pitch (rad), a number in (0, pi/2]."""
+    return validate.real(max_tilt, what, lo=0.0, lo_open=True, hi=np.pi / 2, unit="rad")
 
 
 def wrap_angle(a):
