@@ -13,13 +13,14 @@ import warnings
 import casadi as ca
 import numpy as np
 
-from . import config
+from . import config, validate
 from .closed_loop import (TABLE, TABLE_SIZE, closed_loop_step, step_table,
                           truth_parameters)
 from .compiled import compile_function
 from .controllers.base import Controller
 from .conventions import rotation_matrix
-from .errors import EulerSingularityError, InputError
+from .admissibility import LARGEST
+from .errors import EulerSingularityError, InputError, QuadcogError
 from .fastcall import FastCall
 from .model import load
 from .params import check_parameters, with_cog
@@ -96,9 +97,9 @@ def _prepare(trajectory, duration, dt, vehicle, cog, disturbances, x0):
                          f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
     table = step_table(times, dt, refs, r_tab, wrench_table(disturbances, times),
                        tail_from=tail_start(duration))
-    x0 = start_at_reference(refs[0]) if x0 is None else np.asarray(x0, dtype=float)
-    if x0.shape != (12,) or not np.isfinite(x0).all():
-        raise InputError(f"x0 must be 12 finite numbers, got {x0!r}")
+    x0 = start_at_reference(refs[0]) if x0 is None else validate.vector(x0, "x0", 12)
+    if not np.abs(x0).max() <= LARGEST:
+        validate.fail("x0", f"12 finite numbers within +-{LARGEST:g}", x0.tolist())
     return trajectory, P, table, x0
 
 
@@ -182,13 +183,17 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=Non
     -------
     SimulationResult. A diverged run stops there and says when and why in result.metrics.
     """
-    options = truth or TruthOptions()
+    options = TruthOptions() if truth is None else truth
     if not isinstance(options, TruthOptions):
-        raise InputError(f"truth must be a quadcog TruthOptions, got {truth!r}")
-    limits = limits or Limits()
+        validate.fail("truth", "a quadcog TruthOptions", truth)
+    limits = Limits() if limits is None else limits
+    if not isinstance(limits, Limits):
+        validate.fail("limits", "a quadcog Limits", limits)
+    if progress is not None and not callable(progress):
+        validate.fail("progress", "None or a callable(fraction), e.g. a ProgressBar", progress)
+    validate.flag(check_dt, "check_dt")
     dt = config.get("simulate.dt", dt)
-    if path not in ("compiled", "python"):
-        raise InputError(f"path must be 'compiled' or 'python', got {path!r}")
+    validate.choice(path, "path", ("compiled", "python"))
     is_law = isinstance(controller, Controller)
     if not is_law and not (path == "python" and callable(controller)):
         raise InputError("controller must be a quadcog Controller, or a callable U = ctrl(t, x) "
@@ -326,11 +331,7 @@ def _run_python(controller, P, table, x0, f0, actuation, limits, progress, is_la
             law()
             pU[:] = U_out
         else:
-            Uk = np.asarray(controller(float(row[0]), x.copy()), dtype=float).reshape(-1)
-            if Uk.shape != (4,):
-                raise InputError(f"controller returned shape {Uk.shape} at t = {row[0]} s, "
-                                 "expected (4,)")
-            pU[:] = Uk
+            pU[:] = _user_output(controller, row[0], x)
         px[:] = x
         if nf:
             pf[:] = X[k, 12:ic]
@@ -358,15 +359,49 @@ def _run_python(controller, P, table, x0, f0, actuation, limits, progress, is_la
     return X, U
 
 
+def _user_output(controller, t, x):
+    """U (4,) of a user's Python controller at time t, checked: a typed error naming the time
+    when it is not 4 finite numbers (or when the controller raises)."""
+    where = f"controller output at t = {validate.plain(float(t))} s"
+    try:
+        out = controller(float(t), x.copy())
+    except QuadcogError:
+        raise
+    except Exception as e:              # the user's function failed: say when, keep the cause
+        raise InputError(f"controller raised {type(e).__name__} at t = "
+                         f"{validate.plain(float(t))} s: {e}") from e
+    U = validate.vector(out, where, 4, finite=False)
+    if not np.isfinite(U).all():
+        raise InputError(f"{where}: expected 4 finite numbers, got {validate.plain(U.tolist())}")
+    return U
+
+
+def _first_nonfinite(X, U):
+    """Index of the first sample whose state, controller state or input is not finite."""
+    bad = ~(np.isfinite(X).all(axis=1) & np.isfinite(U).all(axis=1))
+    return int(np.argmax(bad)) if bad.any() else None
+
+
 def _result(controller, X, U, table, P, duration, limits, path, elapsed, nf):
+    # never hand out NaN: a sample whose controller state or input is not finite (while x
+    # may still be) ends the run before it, as a divergence
+    k = _first_nonfinite(X, U[:X.shape[0]])
+    if k == 0:
+        raise InputError(f"the controller gives a non-finite input or state at t = 0 (U = "
+                         f"{validate.plain(U[0].tolist())}): expected finite numbers; check "
+                         f"its settings and the start state")
     n = X.shape[0]
     t = table[:n, TABLE["t"]]
     ref = table[:n, TABLE["ref"]]
     r_G = table[:n, TABLE["s"], None] * P[11:14] + table[:n, TABLE["r_table"]]
     err = _position_error(X, table[:n])
     idx, cause = _first_divergence(X[:, :12], err, limits)
-    if idx is not None and not np.isfinite(X[idx]).all():
+    if k is not None and (idx is None or k <= idx):
+        idx, cause = k, "non-finite controller output or state"
+    if idx is not None and k == idx:
         keep = idx              # never hand out NaN arrays: drop the non-finite sample
+    elif idx is not None and not np.isfinite(X[idx]).all():
+        keep = idx
     else:
         keep = n if idx is None else idx + 1
     if limits.max_tilt >= np.pi / 2 - 1e-6:     # otherwise the tilt limit catches it first

@@ -82,7 +82,8 @@ def test_user_python_controller():
     assert res.controller == "hover_pd"
     with pytest.raises(quadcog.InputError, match="path='python'"):
         simulate(hover_pd, "hover", duration=1.0)
-    with pytest.raises(quadcog.InputError, match=r"returned shape \(3,\)"):
+    with pytest.raises(quadcog.InputError, match=r"controller output at t = 0.0 s: expected "
+                                                 r"an array of shape \(4,\), got shape \(3,\)"):
         simulate(lambda t, x: np.zeros(3), "hover", duration=1.0, path="python")
 
 
@@ -100,10 +101,13 @@ def test_divergence_detected_and_named(path):
 
 
 def test_divergence_non_finite_and_position():
-    crazy = simulate(lambda t, x: np.array([np.nan, 0, 0, 0]), "hover", duration=1.0,
+    with pytest.raises(quadcog.InputError, match=r"controller output at t = 0.0 s: expected 4 "
+                                                 r"finite numbers, got \[nan, 0.0, 0.0, 0.0\]"):
+        simulate(lambda t, x: np.array([np.nan, 0, 0, 0]), "hover", duration=1.0, path="python")
+    crazy = simulate(lambda t, x: np.array([1e200, 0, 0, 0]), "hover", duration=1.0,
                      path="python")
     assert crazy.metrics.diverged_cause == "non-finite state" and crazy.metrics.diverged_at == 0.001
-    assert np.isfinite(crazy.x).all()
+    assert np.isfinite(crazy.x).all() and np.isfinite(crazy.U).all()
     rocket = simulate(lambda t, x: np.array([40.0, 0, 0, 0]), "hover", duration=5.0,
                       path="python")
     assert rocket.metrics.diverged_cause == "position error over 10 m"
@@ -148,11 +152,11 @@ def test_batch_reports_divergence():
     (dict(dt=-1e-3), "dt: expected a positive number"),
     (dict(duration=-1.0), "duration: expected a positive number"),
     (dict(dt=0.5, duration=2.0), r"dt = 0.5 s is too large: .* RK4 needs dt < "),
-    (dict(x0=np.zeros(5)), "x0 must be 12 finite numbers"),
-    (dict(x0=np.full(12, np.nan)), "x0 must be 12 finite numbers"),
+    (dict(x0=np.zeros(5)), r"x0: expected an array of shape \(12,\), got shape \(5,\)"),
+    (dict(x0=np.full(12, np.nan)), r"x0\[0\]: expected a finite number, got nan"),
     (dict(vehicle=np.ones(14)), "vehicle must be a quadcog Vehicle"),
     (dict(trajectory="spiral"), "trajectory: expected one of 'hover', .*, got 'spiral'"),
-    (dict(path="fast"), "path must be 'compiled' or 'python'"),
+    (dict(path="fast"), "path: expected one of 'compiled', 'python', got 'fast'"),
     (dict(cog=[(1.0, (0.02, 0, 0), 0.0), (0.5, (0.0, 0, 0), 0.0)]), "expected changes in time order"),
     (dict(cog=[(0.5, (0.2, 0.0, 0.3), 0.0)]), "cog change 0"),
 ])
