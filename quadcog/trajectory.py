@@ -16,6 +16,10 @@ from .errors import InputError, QuadcogError
 REF_SIZE = 14
 POS, VEL, ACC, JERK = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 YAW, YAW_RATE = 12, 13
+# A reference row beyond this (SI units) is refused: far above any flyable reference (a
+# finite-differenced waypoint step reaches ~5e8 m/s^3, which quadcog.feasibility reports),
+# and low enough that the closed loop's products stay finite (a radius of 1e300 m does not).
+REFERENCE_LIMIT = 1e12
 REF_NAMES = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz", "yaw",
              "yaw_rate")
 
@@ -51,15 +55,15 @@ def _describe(trajectory):
 
 
 def check_reference(ref, t, trajectory):
-    """``ref`` (N, 14) if every entry is finite and within +-LARGEST, else InputError naming
-    the trajectory, the first bad time and entry."""
+    """``ref`` (N, 14) if every entry is finite and within +-REFERENCE_LIMIT, else InputError
+    naming the trajectory, the first bad time and entry."""
     with np.errstate(invalid="ignore"):
-        bad = ~(np.abs(ref) <= LARGEST)
+        bad = ~(np.abs(ref) <= REFERENCE_LIMIT)
     if bad.any():
         k, i = np.unravel_index(int(np.argmax(bad)), bad.shape)
         raise InputError(f"trajectory {_describe(trajectory)}: {REF_NAMES[i]} at t = "
                          f"{validate.plain(t[k])} s is {validate.plain(ref[k, i])}; expected "
-                         f"finite values within +-{LARGEST:g} (SI units)")
+                         f"finite values within +-{REFERENCE_LIMIT:g} (SI units)")
     return ref
 
 
@@ -70,7 +74,7 @@ class Trajectory:
 
     def sample(self, t):
         """(N, 14) reference rows at the times ``t`` (s); InputError when a row is not finite
-        or beyond the scale of quadcog.admissibility.LARGEST (a radius of 1e300 m)."""
+        or beyond REFERENCE_LIMIT (a radius of 1e300 m)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         with np.errstate(over="ignore", invalid="ignore"):
             p, v, a, j = self._pvaj(t)
