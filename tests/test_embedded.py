@@ -198,3 +198,6 @@ def test_cli_export(tmp_path, capsys):
     with pytest.raises(SystemExit):
         cli(["export", "--controller", "pd", "--precision", "half", "--out", str(tmp_path)])
     assert "half" in capsys.readouterr().err
+    assert cli(["export", "--controller", "lqr", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "lqr" in err and "adaptive" in err

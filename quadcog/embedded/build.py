@@ -108,6 +108,8 @@ def target_costs(folder=None, names=CONTROLLERS, work=None):
                     instructions_max=info["instructions_max"],
                     max_U_diff=float(abs(U - U_h).max()),
                     max_c_diff=float(abs(c - c_h).max()) if nc else 0.0,
+                    rel_diff=max(target.relative_difference(U, U_h),
+                                 target.relative_difference(c, c_h, per_column=False)),
                     calibration=(info["calibration_counted"], info["calibration_true"])))
     return rows
 
@@ -162,7 +164,16 @@ def main(argv=None):
           f"{RECORDING[0]}; calibration loop counted "
           f"{rows[0]['calibration'][0]} of {rows[0]['calibration'][1]} instructions:")
     print(cost_table(rows), end="")
+    bad = 0
     for r in rows:
+        tol = target.target_rtol(r["controller"], r["precision"])
+        ok = r["rel_diff"] <= tol
+        bad += not ok
         print(f"  {r['controller']:>8s} {r['precision']:>7s}: target vs host build, max |dU| = "
-              f"{r['max_U_diff']:.3g} N (N m), max |dc| = {r['max_c_diff']:.3g}")
-    return 0
+              f"{r['max_U_diff']:.3g} N (N m), max |dc| = {r['max_c_diff']:.3g}, relative "
+              f"{r['rel_diff']:.2g} (tolerance {tol:g})"
+              + ("" if ok else "  FAILED"))
+    if rows[0]["calibration"][0] != rows[0]["calibration"][1]:
+        print("the instruction count is not exact: the calibration loop was miscounted")
+        bad += 1
+    return 1 if bad else 0
