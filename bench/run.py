@@ -56,7 +56,7 @@ def bench_single_call():
     t_lam = per_call(lambda: lam(x, U, p), 2000)
     vm = model.casadi_function("dynamics")
     t_vm = per_call(lambda: vm(x, U, p), 2000)
-    ext = model._compiled["dynamics"]
+    ext = model._library.functions()["dynamics"]
     t_ext = per_call(lambda: ext(x, U, p), 2000)
     fast = model.fast("dynamics")
     fast.inputs[0][:], fast.inputs[1][:], fast.inputs[2][:] = x, U, p
@@ -171,20 +171,169 @@ def bench_op_estimate(ctl, measured_step):
            f"{measured_step / estimate:.2f}x estimate", "<= 1.5x")
 
 
+def _batch_vehicles(n_flights, seed=1):
+    rng = np.random.default_rng(seed)
+    return [quadcog.HUMMINGBIRD.with_cog(rng.uniform(-0.06, 0.06, 2).tolist() + [0.0])
+            for _ in range(n_flights)]
+
+
 def bench_batch(n_flights):
-    print(f"{n_flights} adaptive flights of 20 s, batch")
+    """The vector kernel against the CasADi map it replaces, the single-flight path, and its
+    memory per flight. Returns (ns per flight-step with 1 thread, flight-steps/s, 2 threads)."""
+    import tracemalloc
+    import quadcog.batch as qb
+    print(f"{n_flights} adaptive flights of 20 s at 1 kHz (CoG step at 1 s), batch")
     ctl = AdaptiveFeedbackLinearization()
-    rng = np.random.default_rng(1)
-    params = [quadcog.HUMMINGBIRD.with_cog(rng.uniform(-0.06, 0.06, 2).tolist() + [0.0])
-              for _ in range(n_flights)]
+    vehicles = _batch_vehicles(n_flights)
     shape = lambda t: float(t >= 1.0)
-    simulate_batch(ctl, params[:2], "hover", duration=1.0, cog_shape=shape)    # compile
-    r1 = simulate_batch(ctl, params, "hover", duration=20.0, cog_shape=shape, threads=1)
-    r2 = simulate_batch(ctl, params, "hover", duration=20.0, cog_shape=shape, threads=2)
-    same = np.allclose(r1.rms_position_error, r2.rms_position_error, rtol=1e-12)
-    record("batch: 1 thread", f"{r1.seconds:.1f}", "s", "1x")
-    record("batch: 2 threads", f"{r2.seconds:.1f}", "s", f"{r1.seconds / r2.seconds:.2f}x",
-           "<= 10 s", f"same metrics: {same}; {int(r2.diverged.sum())} diverged")
+    kw = dict(trajectory="hover", duration=20.0, cog_shape=shape)
+    simulate_batch(ctl, vehicles[:2], "hover", duration=1.0, cog_shape=shape)    # compile
+
+    def timed(threads):
+        """(result, CPU seconds of this process): on a shared machine the wall time also
+        counts the time other processes hold the cores."""
+        c0 = os.times()
+        r = simulate_batch(ctl, vehicles, threads=threads, **kw)
+        c1 = os.times()
+        return r, (c1.user - c0.user) + (c1.system - c0.system)
+    r2, cpu2 = timed(2)
+    r1, cpu1 = timed(1)
+    steps = n_flights * 20000
+    same = r1.final_state.tobytes() == r2.final_state.tobytes()
+    record("batch: vector kernel, 1 thread", f"{r1.seconds:.2f}", "s", "1x", "",
+           f"{steps / r1.seconds / 1e6:.2f} M flight-steps/s; CPU {cpu1:.2f} s")
+    record("batch: vector kernel, 2 threads", f"{r2.seconds:.2f}", "s",
+           f"{r1.seconds / r2.seconds:.2f}x", "<= 4 s",
+           f"{steps / r2.seconds / 1e6:.2f} M flight-steps/s; CPU {cpu2:.2f} s (two free "
+           f"cores: {cpu2 / 2:.1f} s); bits equal to 1 thread: {same}; "
+           f"{int(r2.diverged.sum())} diverged")
+    # the previous path (CasADi map over flights), on a fifth of the flights: compare rates
+    n_map = max(2, n_flights // 5)
+    kernel_for = qb.kernel_for
+    qb.kernel_for = lambda *a, **k: None
+    try:
+        simulate_batch(ctl, vehicles[:2], "hover", duration=1.0, cog_shape=shape)
+        rm = simulate_batch(ctl, vehicles[:n_map], threads=2, **kw)
+    finally:
+        qb.kernel_for = kernel_for
+    map_rate = n_map * 20000 / rm.seconds
+    record(f"batch: CasADi map (previous path), 2 threads, {n_map} flights",
+           f"{rm.seconds:.2f}", "s", f"{steps / r2.seconds / map_rate:.1f}x slower", "",
+           f"{map_rate / 1e6:.3f} M flight-steps/s")
+    # metrics against the single-flight path (simulate), 6 flights
+    worst = 0.0
+    for i in range(0, n_flights, max(1, n_flights // 6)):
+        v = vehicles[i]
+        m = simulate(ctl, "hover", duration=20.0, vehicle=v.with_cog(np.zeros(3)),
+                     cog=CogProfile.step(1.0, v.r_G)).metrics
+        for name in ("rms_position_error", "max_position_error", "rms_position_error_tail",
+                     "final_position_error"):
+            a, b = getattr(r2, name)[i], getattr(m, name)
+            worst = max(worst, abs(a - b) / max(abs(b), 1e-12))
+    record("batch: metrics vs single-flight path", f"{worst:.1e}", "max rel. diff", "",
+           "<= 1e-9", "4 metrics x 6 flights")
+    # memory: tracemalloc peak (numpy buffers) of 2 s batches of n and n/10 flights
+    peaks = []
+    for n in (n_flights // 10, n_flights):
+        tracemalloc.start()
+        simulate_batch(ctl, vehicles[:n], "hover", duration=2.0, cog_shape=shape, threads=2)
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+    per_flight = (peaks[1] - peaks[0]) / (n_flights - n_flights // 10)
+    record("batch: memory per flight", f"{per_flight / 1024:.2f}", "KB", "", "<= 20 KB",
+           "slope of the peak between 100 and 1000 flights (state, parameters, metrics)")
+    return cpu1 / steps * 1e9, steps / r2.seconds
+
+
+def bench_vector_limits(ns_per_flight_step):
+    """What bounds the vector kernel: per-lane rates of arithmetic, division and
+    transcendental operations measured through the same kernel (random DAGs), weighted by
+    the op counts of the batch step."""
+    from quadcog.closed_loop import monitored_step
+    from quadcog.kernel import VectorKernel
+    from quadcog.plant import Actuation
+    from quadcog.simulation import Limits
+    print("vector kernel against its op-count limit")
+    counts, times = [], []
+    B, n = 1024, 2000          # n: enough steps for the 10 ms resolution of CPU times
+    for kind in ("arithmetic", "division", "trig"):
+        f = _kernel(kind, n_ops=1500)
+        Z, Q, row = ca.SX.sym("Z", 16), ca.SX.sym("Q", 1), ca.SX.sym("row", 1)
+        # keep the values bounded from step to step (no overflow, no subnormals)
+        out = ca.sin(f(Z)) if kind != "trig" else f(Z)
+        k = VectorKernel(ca.Function(f"v_{kind}", [Z, Q, row], [out]))
+        Z0 = np.tile(np.linspace(0.1, 0.9, 16), (B, 1))
+        k(Z0, np.zeros((B, 1)), np.zeros((5, 1)))
+        c0 = os.times()
+        k(Z0, np.zeros((B, 1)), np.zeros((n, 1)))
+        c1 = os.times()
+        times.append((c1.user - c0.user + c1.system - c0.system) / (B * n))
+        c = _op_classes(ca.Function("c", [Z, Q, row], [out]))
+        counts.append([c["arithmetic"], c["division"], c["trig"]])
+    rates = dict(zip(("arithmetic", "division", "trig"), np.linalg.solve(counts, times)))
+    for c in rates:
+        record(f"vector rate: {c}", f"{rates[c] * 1e9:.3f}", "ns/op per flight", "", "",
+               "1 thread, CPU time, random DAGs through the vector kernel")
+    ctl = AdaptiveFeedbackLinearization()
+    step = monitored_step(ctl, Actuation.of(ctl.vehicle), Limits())
+    c = _op_classes(step)
+    parts = {k: c[k] * rates[k] * 1e9 for k in rates}
+    estimate = sum(parts.values())
+    record("vector step: op counts", f"{c['arithmetic']} / {c['division']} / {c['trig']}",
+           "arith / div / trig")
+    record("vector step: estimate from op counts", f"{estimate:.0f}", "ns per flight-step", "",
+           "", " + ".join(f"{k} {v:.0f}" for k, v in parts.items()))
+    record("vector step: measured (1 thread, CPU time)", f"{ns_per_flight_step:.0f}",
+           "ns per flight-step",
+           f"{ns_per_flight_step / estimate:.2f}x estimate")
+    nbytes = (2 * step.nnz_in(0) * 2 + step.nnz_in(1)) * 8
+    record("vector step: memory traffic", f"{nbytes}", "bytes per flight-step", "", "",
+           f"{nbytes / ns_per_flight_step:.1f} GB/s per thread, from L1 (a block is "
+           f"{16 * nbytes // 1024} KB)")
+
+
+def bench_rotorpy_batched(n_flights, seconds, quadcog_rate):
+    """RotorPy's batched simulator (PyTorch on the CPU, float64, the Hummingbird, SE(3)
+    control, RK4 at 1 ms), as many steps as fit; extrapolated to 20 s."""
+    try:
+        import torch
+        from rotorpy.controllers.quadrotor_control import BatchedSE3Control
+        from rotorpy.sensors.imu import BatchedImu
+        from rotorpy.simulate import simulate_batch as rotorpy_batch
+        from rotorpy.trajectories.batched_traj import BatchedTrajectory
+        from rotorpy.trajectories.hover_traj import HoverTraj
+        from rotorpy.vehicles.hummingbird_params import quad_params
+        from rotorpy.vehicles.multirotor import BatchedMultirotor, BatchedMultirotorParams
+        from rotorpy.wind.default_winds import BatchedNoWind
+        from rotorpy.world import World
+    except ImportError as e:
+        record("peer: rotorpy batched", "n/a", "", "", "", f"not installed ({e.name}): pip "
+               "install '.[peer]' torch==2.13.0 (a CPU build)")
+        return
+    print(f"rotorpy simulate_batch: {n_flights} flights, {seconds} s at 1 ms")
+    B, dev = n_flights, torch.device("cpu")
+    params = BatchedMultirotorParams([quad_params] * B, B, dev)
+    hover = np.sqrt(quad_params["mass"] * 9.81 / (4 * quad_params["k_eta"]))
+    zeros = lambda: torch.zeros(B, 3, dtype=torch.double)
+    init = {"x": zeros(), "v": zeros(), "w": zeros(), "wind": zeros(),
+            "q": torch.tensor([[0, 0, 0, 1.0]] * B, dtype=torch.double),
+            "rotor_speeds": torch.full((B, 4), hover, dtype=torch.double)}
+    vehicle = BatchedMultirotor(params, B, init, dev, control_abstraction="cmd_motor_speeds",
+                                integrator="rk4")
+    t0 = time.perf_counter()
+    rotorpy_batch(World.empty([-10, 10, -10, 10, -10, 10]), init, vehicle,
+                  BatchedSE3Control(params, B, dev),
+                  BatchedTrajectory([HoverTraj() for _ in range(B)], dev), BatchedNoWind(B),
+                  BatchedImu(B, device=dev), np.full(B, seconds), 0.001, 0.25,
+                  terminate=False, check_collisions=False)
+    t = time.perf_counter() - t0
+    steps = int(round(seconds / 0.001))
+    rate = B * steps / t
+    record(f"peer: rotorpy simulate_batch, {B} flights x {steps} steps", f"{t:.1f}", "s", "", "",
+           f"{rate:.0f} flight-steps/s, torch {torch.__version__}, {torch.get_num_threads()} "
+           f"threads; 20 s extrapolated: {t * 20 / seconds:.0f} s")
+    record("peer: quadcog vector kernel / rotorpy batched", f"{quadcog_rate / rate:.0f}",
+           "x (flight-steps/s)", "", "", "same flight count and step, one run")
 
 
 def bench_rotorpy():
@@ -214,6 +363,9 @@ def main():
     ap.add_argument("--flights", type=int, default=1000, help="batch size (default 1000)")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench" / "results.md",
                     help="where to write the table (default: out/bench/results.md)")
+    ap.add_argument("--peer-seconds", type=float, default=0.05,
+                    help="simulated seconds of RotorPy's batched run (default 0.05: its "
+                         "trajectory arrays grow with every step)")
     args = ap.parse_args()
     print(f"quadcog bench on {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, CasADi {ca.__version__}, Python {platform.python_version()}")
@@ -221,7 +373,9 @@ def main():
     bench_controllers()
     ctl, step = bench_flight()
     bench_op_estimate(ctl, step)
-    bench_batch(args.flights)
+    ns_step, rate = bench_batch(args.flights)
+    bench_vector_limits(ns_step)
+    bench_rotorpy_batched(args.flights, args.peer_seconds, rate)
     bench_rotorpy()
     lines = ["| measurement | value | unit | ratio | goal | note |", "|---|---|---|---|---|---|"]
     lines += ["| " + " | ".join(map(str, r)) + " |" for r in rows]

@@ -8,6 +8,7 @@ import numpy as np
 
 from . import config
 from .closed_loop import TABLE, TABLE_SIZE, monitored_step, step_table
+from .kernel import kernel_for
 from .errors import InputError
 from .plant import Actuation, TruthOptions, initial_rotor_thrusts
 from .simulation import (CHUNK, Limits, _check_time, _compiled, _first_divergence,
@@ -47,7 +48,7 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
         time, a CogProfile whose x component is used as the shape, or None (the CoG is there
         from t = 0).
     trajectory, duration, dt, disturbances, truth, limits, progress : as ``simulate``.
-    threads : CasADi threads sharing the flights.
+    threads : the number of threads that share the flights.
 
     Returns
     -------
@@ -100,9 +101,6 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
             ca.MX.sym("rows", TABLE_SIZE, CHUNK)
         return ca.Function("monitored_last", [Z, P, rows], [acc(Z, P, rows)[:, -1]])
 
-    last = _compiled(key, build)
-    # the step table (input 2) is shared by all flights: reduce_in, not B copies
-    mapped = last.map("batch", "thread" if threads > 1 else "serial", B, [2], [])
     nc, nf = controller.n_state, actuation.n_rotor_states
     Z = np.zeros((12 + nf + nc + 4, B))
     Z[:12] = x0[:, None]
@@ -110,19 +108,44 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
         Z[12:12 + nf, b] = initial_rotor_thrusts(v.with_cog(s[0] * v.r_G), actuation)
     Z[12 + nf:12 + nf + nc] = controller.initial_state()[:, None]
     Z[-1] = -1.0
+    # the vector kernel (quadcog.kernel): flights in vector lanes, `threads` threads
+    kernel = kernel_for(key, lambda: monitored_step(controller, actuation, limits))
     t0 = time.perf_counter()
     k = 0
-    while k < n:
-        rows = table[k:k + CHUNK]
-        if rows.shape[0] < CHUNK:
-            # pad with rows that change nothing: dt = 0 and no contribution to the sums
-            pad = np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)
-            pad[:, TABLE["dt"]] = 0.0
-            rows = np.vstack([rows, pad])
-        Z = np.array(mapped(Z, params.T, rows.T))
-        k += min(CHUNK, n - k)
-        if progress:
-            progress(k / n)
+    if kernel is not None:
+        Zb = Z.T
+        while k < n:
+            m = min(CHUNK, n - k)
+            Zb = kernel(Zb, params, table[k:k + m], threads=threads)
+            k += m
+            if progress:
+                progress(k / n)
+        Z = Zb.T
+    else:
+        last = _compiled(key, build)
+        # `threads` threads, each mapping its share of the flights serially (a plain
+        # "thread" map starts about one thread per flight); the step table (input 2) is
+        # shared by all flights: reduce_in, not B copies
+        parts = max(1, min(int(threads), B))
+        share = -(-B // parts)
+        mapped = last.map("share", "serial", share, [2], [])
+        if parts > 1:
+            mapped = mapped.map("batch", "thread", parts, [2], [])
+        pad = parts * share - B
+        Zp = np.hstack([Z, np.repeat(Z[:, -1:], pad, axis=1)]) if pad else Z
+        Pp = np.vstack([params, np.repeat(params[-1:], pad, axis=0)]) if pad else params
+        while k < n:
+            rows = table[k:k + CHUNK]
+            if rows.shape[0] < CHUNK:
+                # pad with rows that change nothing: dt = 0 and no contribution to the sums
+                pad_rows = np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)
+                pad_rows[:, TABLE["dt"]] = 0.0
+                rows = np.vstack([rows, pad_rows])
+            Zp = np.array(mapped(Zp, Pp.T, rows.T))
+            k += min(CHUNK, n - k)
+            if progress:
+                progress(k / n)
+        Z = Zp[:, :B]
     seconds = time.perf_counter() - t0
     return _batch_result(Z, n, table, nf + nc, seconds, limits)
 

@@ -59,7 +59,7 @@ def batch_table(trajectory, duration, dt, cog_times, disturbances):
 
 def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=None,
               cog_times=(), disturbances=(), truth=None, limits=None, x0=None, threads=1,
-              kernel="casadi"):
+              kernel="auto"):
     """Fly ``controller`` (designed for its model already) with each truth vehicle and CoG
     increments D (B, 3 J).
 
@@ -110,11 +110,12 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     Z[:, -1] = -1.0
     Q = np.hstack([P, D])
     t0 = time.perf_counter()
+    run = None
     if kernel in ("auto", "vector"):
-        from .kernel import vector_kernel
-        run = vector_kernel(controller, actuation, limits, J, required=kernel == "vector")
-    else:
-        run = None
+        from .kernel import kernel_for
+        run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
+                         lambda: sweep_step(controller, actuation, limits, J),
+                         required=kernel == "vector")
     if run is not None:
         Z = run(Z, Q, table[:n], threads=threads)
     else:

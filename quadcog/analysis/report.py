@@ -186,7 +186,7 @@ def markdown(s):
     out.append("## 4. Failure map\n")
     out.append(f"CoG step at hover at t = {fm['t_step']:g} s to (x_G, y_G, 0) on a "
                f"{fm['grid']} x {fm['grid']} grid over [-{fm['half_width']:g}, "
-               f"{fm['half_width']:g}]^2 m, {fm['duration']:g} s flights (batch path, 2 threads). "
+               f"{fm['half_width']:g}]^2 m, {fm['duration']:g} s flights (the shipped sweep failure-map). "
                f"{fm['n_admissible']} of {fm['n_points']} offsets are admissible (the others make "
                "the inertia about the CoG indefinite: grey, not simulated; boundary |r_G| = "
                f"{fm['admissible_radius']:.4f} m). Failure: tail RMS (last "
