@@ -156,14 +156,15 @@ def plot_lyapunov(study, path, t_step=STEP_TIME):
     ax.set_ylabel(r"$V = e_s^T P e_s + \tilde r^T \Gamma^{-1} \tilde r$")
     ax.set_title("Lyapunov function, CoG step to [6, 6, 0] cm at hover\n"
                  "(V = 0 before the step)")
-    ax.legend(fontsize=8, loc="lower left")
+    # one legend for the three panels, below them: never over a curve
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, frameon=False)
     bx.set_ylabel(r"$V / V(t_{step})$")
     bx.set_title("first second after the step")
-    bx.legend(fontsize=8)
     cx.set_ylabel(r"$V / V(t_{step})$")
     cx.set_title("first 60 ms after the step:\nV above 1 means V increased")
     cx.axhline(1.0, color="0.5", lw=0.8)
     cx.set_ylim(0.55, 1.12)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)

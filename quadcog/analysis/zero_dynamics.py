@@ -277,10 +277,11 @@ def plot_zero_dynamics(study, path):
         bx.set_xlabel("time (s)")
         for a in (ax, bx):
             a.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
-        bx.legend(fontsize=7)
+    # one legend for all four panels, below them: never over a curve
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, frameon=False)
     fig.suptitle("Free states of the exact output-tracking loop (true parameters, "
                  "start u, v = 0.5, -0.3 m/s)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)
