@@ -5,8 +5,9 @@ input one control period late.
 state the controller sees seeded Gaussian noise on position, velocity, attitude and body rates
 and a constant gyroscope bias on the rates, and (``delay``) holds the computed input for one
 period: the input applied during step k is the one computed from the measurement of step k-1.
-Everything is part of the CasADi law, so the compiled closed loop, the Python loop and the C
-export carry it unchanged.
+Everything is part of the CasADi law, so the compiled closed loop and the Python loop carry it
+unchanged. It is a simulation of the sensors, not flight code: the C export takes the wrapped
+controller itself (the noise depends on the time t, which the exported step does not take).
 
 The noise is a counter-based pseudo-random sequence of the time t and the seed (a sine hash
 per channel turned Gaussian by Box-Muller), so a run is reproducible without a random state
