@@ -6,7 +6,8 @@ import time
 import casadi as ca
 import numpy as np
 
-from . import config
+from . import config, validate
+from .controllers.base import Controller
 from .closed_loop import TABLE, TABLE_SIZE, monitored_step, step_table
 from .kernel import kernel_for
 from .errors import InputError
@@ -54,10 +55,25 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
     -------
     BatchResult.
     """
-    options = truth or TruthOptions()
-    limits = limits or Limits()
+    if not isinstance(controller, Controller):
+        validate.fail("controller", "a quadcog Controller", controller)
+    options = TruthOptions() if truth is None else truth
+    if not isinstance(options, TruthOptions):
+        validate.fail("truth", "a quadcog TruthOptions", truth)
+    limits = Limits() if limits is None else limits
+    if not isinstance(limits, Limits):
+        validate.fail("limits", "a quadcog Limits", limits)
+    if progress is not None and not callable(progress):
+        validate.fail("progress", "None or a callable(fraction), e.g. a ProgressBar", progress)
+    threads = validate.integer(threads, "threads", lo=1, hi=1024)
+    if not (cog_shape is None or isinstance(cog_shape, CogProfile) or callable(cog_shape)):
+        validate.fail("cog_shape", "None, a CogProfile or a function of time", cog_shape)
     dt = config.get("simulate.dt", dt)
-    vehicles = [vehicles] if isinstance(vehicles, Vehicle) else list(vehicles)
+    if isinstance(vehicles, Vehicle):
+        vehicles = [vehicles]
+    elif isinstance(vehicles, (str, bytes)) or not hasattr(vehicles, "__iter__"):
+        validate.fail("vehicles", "a non-empty sequence of quadcog Vehicles", vehicles)
+    vehicles = list(vehicles)
     if not vehicles or not all(isinstance(v, Vehicle) for v in vehicles):
         raise InputError("vehicles must be a non-empty sequence of quadcog Vehicles, got "
                          f"{vehicles!r:.200}")
@@ -86,7 +102,8 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
     elif isinstance(cog_shape, CogProfile):
         s = cog_shape.sample(times)[:, 0]
     else:
-        s = np.array([float(cog_shape(t)) for t in times])
+        s = np.array([validate.real(cog_shape(t), f"cog_shape({validate.plain(float(t))})")
+                      for t in times])
     table = step_table(times, dt, refs, np.zeros((n + 1, 3)), wrench_table(disturbances, times),
                        tail_from=tail_start(duration))
     table[:, TABLE["s"]] = s
