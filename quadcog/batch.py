@@ -12,7 +12,7 @@ from .closed_loop import TABLE, TABLE_SIZE, monitored_step, step_table
 from .kernel import kernel_for
 from .errors import InputError
 from .plant import Actuation, TruthOptions, initial_rotor_thrusts
-from .simulation import (CHUNK, Limits, _check_time, _compiled, _first_divergence,
+from .simulation import (CHUNK, Limits, run_options, _check_time, _compiled, _first_divergence,
                          _position_error, start_at_reference, tail_start)
 from .timeline import CogProfile, wrench_table
 from .trajectory import as_trajectory
@@ -57,14 +57,7 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
     """
     if not isinstance(controller, Controller):
         validate.fail("controller", "a quadcog Controller", controller)
-    options = TruthOptions() if truth is None else truth
-    if not isinstance(options, TruthOptions):
-        validate.fail("truth", "a quadcog TruthOptions", truth)
-    limits = Limits() if limits is None else limits
-    if not isinstance(limits, Limits):
-        validate.fail("limits", "a quadcog Limits", limits)
-    if progress is not None and not callable(progress):
-        validate.fail("progress", "None or a callable(fraction), e.g. a ProgressBar", progress)
+    options, limits = run_options(truth, limits, progress)
     threads = validate.integer(threads, "threads", lo=1, hi=1024)
     if not (cog_shape is None or isinstance(cog_shape, CogProfile) or callable(cog_shape)):
         validate.fail("cog_shape", "None, a CogProfile or a function of time", cog_shape)

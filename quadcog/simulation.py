@@ -85,7 +85,12 @@ def _prepare(trajectory, duration, dt, vehicle, cog, disturbances, x0):
     _check_time(duration, dt)
     trajectory = as_trajectory(trajectory)
     P = vehicle.parameters()
-    cog = cog if isinstance(cog, CogProfile) else CogProfile(list(cog or []))
+    if cog is None:
+        cog = CogProfile([])
+    elif not isinstance(cog, CogProfile):
+        if not isinstance(cog, (list, tuple)):
+            validate.fail("cog", "None, a CogProfile or a list of (t, r, ramp) changes", cog)
+        cog = CogProfile(list(cog))
     n = int(round(duration / dt))
     times = np.arange(n + 1) * dt
     refs = trajectory.sample(times)
@@ -153,6 +158,21 @@ def _singularity_check(t, x):
             f"kinematics (Q(eta2)) are singular there; lower Limits.max_tilt below 90 deg")
 
 
+def run_options(truth, limits, progress):
+    """The checked (TruthOptions, Limits) of a run (defaults for None); a typed error naming
+    ``truth``, ``limits`` or ``progress`` when one is of the wrong kind. Shared by ``simulate``
+    and ``simulate_batch``."""
+    options = TruthOptions() if truth is None else truth
+    if not isinstance(options, TruthOptions):
+        validate.fail("truth", "a quadcog TruthOptions", truth)
+    limits = Limits() if limits is None else limits
+    if not isinstance(limits, Limits):
+        validate.fail("limits", "a quadcog Limits", limits)
+    if progress is not None and not callable(progress):
+        validate.fail("progress", "None or a callable(fraction), e.g. a ProgressBar", progress)
+    return options, limits
+
+
 def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=None,
              controller_model=None, cog=None, disturbances=(), truth=None, x0=None,
              path="compiled", limits=None, progress=None, check_dt=True):
@@ -183,14 +203,7 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=Non
     -------
     SimulationResult. A diverged run stops there and says when and why in result.metrics.
     """
-    options = TruthOptions() if truth is None else truth
-    if not isinstance(options, TruthOptions):
-        validate.fail("truth", "a quadcog TruthOptions", truth)
-    limits = Limits() if limits is None else limits
-    if not isinstance(limits, Limits):
-        validate.fail("limits", "a quadcog Limits", limits)
-    if progress is not None and not callable(progress):
-        validate.fail("progress", "None or a callable(fraction), e.g. a ProgressBar", progress)
+    options, limits = run_options(truth, limits, progress)
     validate.flag(check_dt, "check_dt")
     dt = config.get("simulate.dt", dt)
     validate.choice(path, "path", ("compiled", "python"))

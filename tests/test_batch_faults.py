@@ -31,3 +31,10 @@ def test_bad_batch_argument_names_it(change, name):
     args.update(change)
     with pytest.raises(quadcog.InputError, match=name):
         simulate_batch(**args)
+
+
+@pytest.mark.parametrize("cog", [float("nan"), "abc", 3, {"t": 1.0}])
+def test_simulate_refuses_a_cog_of_the_wrong_kind(cog):
+    # found by the property suite: a NaN float reached list() and raised a raw TypeError
+    with pytest.raises(quadcog.InputError, match="cog"):
+        quadcog.simulate(CascadePD(), "hover", duration=0.01, cog=cog)
