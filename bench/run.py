@@ -161,7 +161,7 @@ def bench_op_estimate(ctl, measured_step):
     for c in ("arithmetic", "division", "trig"):
         record(f"rate: {c}", f"{rates[c] * 1e9:.2f}", "ns/op", "", "",
                "from 3 kernels of ~3000 ops, random DAGs")
-    step = closed_loop_step(ctl, Actuation.of(quadcog.HUMMINGBIRD, TruthOptions()))
+    step = closed_loop_step(ctl, Actuation.of(quadcog.HUMMINGBIRD, TruthOptions()), quadcog.Limits())
     n = _op_classes(step)
     estimate = sum(n[c] * rates[c] for c in n)
     record("step: op counts", f"{n['arithmetic']} / {n['division']} / {n['trig']}",
@@ -249,10 +249,10 @@ def bench_vector_limits(ns_per_flight_step):
     """What bounds the vector kernel: per-lane rates of arithmetic, division and
     transcendental operations measured through the same kernel (random DAGs), weighted by
     the op counts of the batch step."""
-    from quadcog.closed_loop import monitored_step
+    from quadcog.closed_loop import monitored_step, packed
     from quadcog.kernel import VectorKernel
     from quadcog.plant import Actuation
-    from quadcog.simulation import Limits
+    from quadcog.divergence import Limits
     print("vector kernel against its op-count limit")
     counts, times = [], []
     B, n = 1024, 2000          # n: enough steps for the 10 ms resolution of CPU times
@@ -275,7 +275,7 @@ def bench_vector_limits(ns_per_flight_step):
         record(f"vector rate: {c}", f"{rates[c] * 1e9:.3f}", "ns/op per flight", "", "",
                "1 thread, CPU time, random DAGs through the vector kernel")
     ctl = AdaptiveFeedbackLinearization()
-    step = monitored_step(ctl, Actuation.of(ctl.vehicle), Limits())
+    step = packed(monitored_step(ctl, Actuation.of(ctl.vehicle), Limits()))
     c = _op_classes(step)
     parts = {k: c[k] * rates[k] * 1e9 for k in rates}
     estimate = sum(parts.values())

@@ -21,7 +21,8 @@ from .plant import TruthOptions
 from .sensing import Sensed, Sensing
 from .result import Metrics, SimulationResult
 from .batch import BatchResult, simulate_batch
-from .simulation import Limits, simulate
+from .divergence import DivergenceCause, Limits
+from .simulation import simulate
 from .sweeps import sweep
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, FromCallable, Helix, Hover, Trajectory

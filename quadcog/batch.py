@@ -1,35 +1,77 @@
-"""Many flights at once: the compiled closed-loop steps mapped over parameter sets on
-several threads, keeping metrics instead of trajectories."""
+"""Many flights at once, keeping metrics (the same definition and divergence rule as single
+flights) instead of trajectories: the monitored closed-loop step run by the vector kernel
+(``quadcog.kernel``, flights in the CPU's vector lanes, ``threads`` threads) or, where that
+cannot be built, by CasADi's map."""
 from dataclasses import dataclass
 import time
 
-import casadi as ca
 import numpy as np
 
 from . import config, validate
+from .closed_loop import ACCUMULATORS, CHUNK, monitored_chunk_function, monitored_step, packed
 from .controllers.base import Controller
-from .closed_loop import TABLE, TABLE_SIZE, monitored_step, step_table
-from .kernel import kernel_for
+from .divergence import DivergenceCause, divergence_rule, magnitude
 from .errors import InputError
-from .plant import Actuation, TruthOptions, initial_rotor_thrusts
-from .simulation import (CHUNK, Limits, run_options, _check_time, _compiled, _first_divergence,
-                         _position_error, start_at_reference, tail_start)
-from .timeline import CogProfile, wrench_table
+from .kernel import kernel_for
+from .plant import Actuation, initial_rotor_thrusts
+from .result import metrics_from_sums, position_errors
+from .schedule import STEP_INPUTS, Schedule
+from .simulation import check_time, run_options, start_at_reference
+from .timeline import CogProfile
 from .trajectory import as_trajectory
 from .vehicle import Vehicle
 
 
 @dataclass
 class BatchResult:
-    """Metrics of many flights (arrays with one entry per flight, lengths in m, times in s)."""
+    """Metrics of many flights (arrays with one entry per flight, lengths in m, times in s),
+    each as ``quadcog.Metrics`` defines it for a single flight."""
     rms_position_error: np.ndarray
     max_position_error: np.ndarray
-    rms_position_error_tail: np.ndarray
+    rms_position_error_tail: np.ndarray   # inf where the flight diverged
     final_position_error: np.ndarray
     diverged: np.ndarray
     diverged_at: np.ndarray           # NaN where the flight did not diverge
+    diverged_cause: list              # a DivergenceCause or None per flight
     final_state: np.ndarray           # (B, 12 + rotor states + n_state)
     seconds: float
+
+
+def batch_kernel(controller, actuation, limits):
+    """The vector kernel of the monitored step (``quadcog.kernel.kernel_for``), or None where
+    it cannot be built. Rows come from ``Schedule.rows``."""
+    return kernel_for(("batch", controller.cache_key(), actuation, limits),
+                      lambda: packed(monitored_step(controller, actuation, limits)))
+
+
+def _vehicles(vehicles, options):
+    """The checked list of truth vehicles and their shared Actuation."""
+    if isinstance(vehicles, Vehicle):
+        vehicles = [vehicles]
+    elif isinstance(vehicles, (str, bytes)) or not hasattr(vehicles, "__iter__"):
+        validate.fail("vehicles", "a non-empty sequence of quadcog Vehicles", vehicles)
+    vehicles = list(vehicles)
+    if not vehicles or not all(isinstance(v, Vehicle) for v in vehicles):
+        raise InputError("vehicles must be a non-empty sequence of quadcog Vehicles, got "
+                         f"{vehicles!r:.200}")
+    actuation = Actuation.of(vehicles[0], options)
+    for b, v in enumerate(vehicles):
+        if Actuation.of(v, options) != actuation:
+            raise InputError(f"vehicles[{b}] has other rotors than vehicles[0] (layout, "
+                             "constants, limits or motor time constant); a batch shares them")
+    return vehicles, actuation
+
+
+def _cog_scale(cog_shape):
+    """cog_shape as a checked function of time (or None)."""
+    if cog_shape is None:
+        return None
+    if isinstance(cog_shape, CogProfile):
+        profile = cog_shape
+        return lambda t: profile.sample([t])[0, 0]
+    if not callable(cog_shape):
+        validate.fail("cog_shape", "None, a CogProfile or a function of time", cog_shape)
+    return lambda t: validate.real(cog_shape(t), f"cog_shape({validate.plain(float(t))})")
 
 
 def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=None,
@@ -59,22 +101,9 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
         validate.fail("controller", "a quadcog Controller", controller)
     options, limits = run_options(truth, limits, progress)
     threads = validate.integer(threads, "threads", lo=1, hi=1024)
-    if not (cog_shape is None or isinstance(cog_shape, CogProfile) or callable(cog_shape)):
-        validate.fail("cog_shape", "None, a CogProfile or a function of time", cog_shape)
+    cog_scale = _cog_scale(cog_shape)
     dt = config.get("simulate.dt", dt)
-    if isinstance(vehicles, Vehicle):
-        vehicles = [vehicles]
-    elif isinstance(vehicles, (str, bytes)) or not hasattr(vehicles, "__iter__"):
-        validate.fail("vehicles", "a non-empty sequence of quadcog Vehicles", vehicles)
-    vehicles = list(vehicles)
-    if not vehicles or not all(isinstance(v, Vehicle) for v in vehicles):
-        raise InputError("vehicles must be a non-empty sequence of quadcog Vehicles, got "
-                         f"{vehicles!r:.200}")
-    actuation = Actuation.of(vehicles[0], options)
-    for b, v in enumerate(vehicles):
-        if Actuation.of(v, options) != actuation:
-            raise InputError(f"vehicles[{b}] has other rotors than vehicles[0] (layout, "
-                             "constants, limits or motor time constant); a batch shares them")
+    vehicles, actuation = _vehicles(vehicles, options)
     if controller_model is None:
         controller_model = vehicles[0].with_cog(np.zeros(3))
         for b, v in enumerate(vehicles):
@@ -85,105 +114,99 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
         raise InputError(f"controller_model must be a quadcog Vehicle, got {controller_model!r}")
     controller = controller.for_vehicle(controller_model)
     params = np.array([v.parameters() for v in vehicles])
-    _check_time(duration, dt)
-    traj = as_trajectory(trajectory)
-    n = int(round(duration / dt))
-    times = np.arange(n + 1) * dt
-    refs = traj.sample(times)
-    if cog_shape is None:
-        s = np.ones_like(times)
-    elif isinstance(cog_shape, CogProfile):
-        s = cog_shape.sample(times)[:, 0]
-    else:
-        s = np.array([validate.real(cog_shape(t), f"cog_shape({validate.plain(float(t))})")
-                      for t in times])
-    table = step_table(times, dt, refs, np.zeros((n + 1, 3)), wrench_table(disturbances, times),
-                       tail_from=tail_start(duration))
-    table[:, TABLE["s"]] = s
-    x0 = start_at_reference(refs[0])
-    B = params.shape[0]
-    key = ("batch", controller.cache_key(), actuation, limits, CHUNK)
-
-    def build():
-        step = monitored_step(controller, actuation, limits)
-        acc = step.mapaccum("monitored_chunk", CHUNK)
-        Z, P, rows = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("P", 14), \
-            ca.MX.sym("rows", TABLE_SIZE, CHUNK)
-        return ca.Function("monitored_last", [Z, P, rows], [acc(Z, P, rows)[:, -1]])
-
+    duration, dt = check_time(duration, dt)
+    schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
+                              disturbances=disturbances, cog_scale=cog_scale)
+    x0 = start_at_reference(schedule.ref[0])
     nc, nf = controller.n_state, actuation.n_rotor_states
-    Z = np.zeros((12 + nf + nc + 4, B))
-    Z[:12] = x0[:, None]
+    nX = 12 + nf + nc
+    Z = np.zeros((len(vehicles), nX + len(ACCUMULATORS)))
+    Z[:, :12] = x0
     for b, v in enumerate(vehicles):
-        Z[12:12 + nf, b] = initial_rotor_thrusts(v.with_cog(s[0] * v.r_G), actuation)
-    Z[12 + nf:12 + nf + nc] = controller.initial_state()[:, None]
-    Z[-1] = -1.0
-    # the vector kernel (quadcog.kernel): flights in vector lanes, `threads` threads
-    kernel = kernel_for(key, lambda: monitored_step(controller, actuation, limits))
+        Z[b, 12:12 + nf] = initial_rotor_thrusts(
+            v.with_cog(schedule.r_G(v.r_G)[0]), actuation)
+    Z[:, 12 + nf:nX] = controller.initial_state()
+    Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
     t0 = time.perf_counter()
-    k = 0
+    kernel = batch_kernel(controller, actuation, limits)
     if kernel is not None:
-        Zb = Z.T
-        while k < n:
-            m = min(CHUNK, n - k)
-            Zb = kernel(Zb, params, table[k:k + m], threads=threads)
-            k += m
-            if progress:
-                progress(k / n)
-        Z = Zb.T
+        Z = run_kernel(kernel, Z, params, schedule, threads=threads, progress=progress)
     else:
-        last = _compiled(key, build)
-        # `threads` threads, each mapping its share of the flights serially (a plain
-        # "thread" map starts about one thread per flight); the step table (input 2) is
-        # shared by all flights: reduce_in, not B copies
-        parts = max(1, min(int(threads), B))
-        share = -(-B // parts)
-        mapped = last.map("share", "serial", share, [2], [])
-        if parts > 1:
-            mapped = mapped.map("batch", "thread", parts, [2], [])
-        pad = parts * share - B
-        Zp = np.hstack([Z, np.repeat(Z[:, -1:], pad, axis=1)]) if pad else Z
-        Pp = np.vstack([params, np.repeat(params[-1:], pad, axis=0)]) if pad else params
-        while k < n:
-            rows = table[k:k + CHUNK]
-            if rows.shape[0] < CHUNK:
-                # pad with rows that change nothing: dt = 0 and no contribution to the sums
-                pad_rows = np.repeat(rows[-1:], CHUNK - rows.shape[0], axis=0)
-                pad_rows[:, TABLE["dt"]] = 0.0
-                rows = np.vstack([rows, pad_rows])
-            Zp = np.array(mapped(Zp, Pp.T, rows.T))
-            k += min(CHUNK, n - k)
-            if progress:
-                progress(k / n)
-        Z = Zp[:, :B]
+        Z = _run_map(controller, actuation, limits, Z, params, schedule, threads, progress)
     seconds = time.perf_counter() - t0
-    return _batch_result(Z, n, table, nf + nc, seconds, limits)
+    return batch_metrics(Z, nX, schedule, limits, seconds)
 
 
-def _batch_result(Z, n, table, n_extra, seconds, limits):
-    """Metrics over the samples t_0 .. t_n, as for a single flight: the steps accumulated
-    t_0 .. t_{n-1}; the final state is added here. n_extra: states after x (rotors, controller)."""
-    nX = 12 + n_extra
-    Z = Z.copy()
-    sumsq, emax, sumsq_tail, div_at = Z[nX], Z[nX + 1], Z[nX + 2], Z[nX + 3]
-    running = div_at < 0
-    e_final = _position_error(Z[:3].T, table[n][None, :])
-    for b in np.flatnonzero(running):
-        idx, _ = _first_divergence(Z[None, :12, b], e_final[b:b + 1], limits)
-        if idx is not None:
-            div_at[b] = table[n, TABLE["t"]]
-            continue
-        sumsq[b] += e_final[b] ** 2
-        sumsq_tail[b] += e_final[b] ** 2
-        emax[b] = max(emax[b], e_final[b])
-    n_tail = int(table[:n, TABLE["tail"]].sum()) + 1
-    diverged = div_at >= 0
-    dt = table[0, TABLE["dt"]]
-    samples = np.where(diverged, np.maximum(np.round(div_at / dt), 1), n + 1)
-    rms = np.sqrt(sumsq / samples)
-    return BatchResult(rms_position_error=rms, max_position_error=emax,
-                       rms_position_error_tail=np.where(diverged, np.inf,
-                                                        np.sqrt(sumsq_tail / max(n_tail, 1))),
-                       final_position_error=e_final,
-                       diverged=diverged, diverged_at=np.where(diverged, div_at, np.nan),
-                       final_state=Z[:nX].T, seconds=seconds)
+def run_kernel(kernel, Z, Q, schedule, *extra, threads=1, progress=None):
+    """Z (B, nZ) after the schedule's steps through a vector kernel, a chunk of steps at a
+    time (for progress); ``extra``: per-step arrays appended to the rows."""
+    n = schedule.n_steps
+    k = 0
+    while k < n:
+        m = min(CHUNK, n - k)
+        Z = kernel(Z, Q, schedule.rows(k, k + m, *extra), threads=threads)
+        k += m
+        if progress:
+            progress(k / n)
+    return Z
+
+
+def _run_map(controller, actuation, limits, Z, params, schedule, threads, progress):
+    """The CasADi path: ``threads`` threads, each mapping its share of the flights serially
+    (a plain "thread" map starts about one thread per flight); the per-step inputs are shared
+    by all flights (reduce_in, not B copies). Padding steps have dt = 0 and count nothing."""
+    chunk = monitored_chunk_function(controller, actuation, limits)
+    B = Z.shape[0]
+    shared = list(range(2, 2 + len(STEP_INPUTS)))
+    parts = max(1, min(threads, B))
+    share = -(-B // parts)
+    mapped = chunk.map("share", "serial", share, shared, [])
+    if parts > 1:
+        mapped = mapped.map("batch", "thread", parts, shared, [])
+    pad = parts * share - B
+    Zp = np.vstack([Z, np.repeat(Z[-1:], pad, axis=0)]).T if pad else Z.T
+    Pp = np.vstack([params, np.repeat(params[-1:], pad, axis=0)]).T if pad else params.T
+    padded, n = schedule.padded(CHUNK), schedule.n_steps
+    k = 0
+    while k < n:
+        block = [a.T if a.ndim == 2 else a[None, :] for a in padded.block(k, k + CHUNK)]
+        Zp = np.array(mapped(Zp, Pp, *block))
+        k += min(CHUNK, n - k)
+        if progress:
+            progress(k / n)
+    return Zp[:, :B].T
+
+
+def batch_metrics(Z, nX, schedule, limits, seconds):
+    """BatchResult from the monitored states Z (B, nX + accumulators) after the last step:
+    metrics over the samples t_0 .. t_n, as for a single flight (the steps counted
+    t_0 .. t_{n-1}; the final sample is checked and counted here, with the same rule).
+    ``seconds``: the wall time to report."""
+    a = dict(zip(ACCUMULATORS, Z[:, nX:].T))
+    n, B = schedule.n_steps, Z.shape[0]
+    e_final = position_errors(Z[:, :3], np.repeat(schedule.ref[n:n + 1], B, axis=0))
+    final_codes = np.array(divergence_rule(limits).map(B)(
+        Z[:, :12].T, e_final[None, :], magnitude(Z[:, 12:nX])[None, :])).ravel()
+    tail_n = schedule.tail[n]
+    metrics = []
+    for b in range(B):
+        code, at = int(a["code"][b]), a["diverged_at"][b]
+        sums = [a[k][b] for k in ("count", "sum_sq", "max", "count_tail", "sum_sq_tail", "last")]
+        if not code and final_codes[b]:
+            code, at = int(final_codes[b]), schedule.t[n]
+        elif not code:          # the final sample counts
+            e = e_final[b]
+            sums = [sums[0] + 1, sums[1] + e * e, max(sums[2], e), sums[3] + tail_n,
+                    sums[4] + tail_n * e * e, e]
+        cause = DivergenceCause(code) if code else None
+        metrics.append(metrics_from_sums(*sums, diverged_at=at, cause=cause, limits=limits))
+    field = lambda name: np.array([getattr(m, name) for m in metrics], dtype=float)
+    return BatchResult(
+        rms_position_error=field("rms_position_error"),
+        max_position_error=field("max_position_error"),
+        rms_position_error_tail=field("rms_position_error_tail"),
+        final_position_error=field("final_position_error"),
+        diverged=np.array([m.diverged for m in metrics], dtype=bool),
+        diverged_at=np.array([m.diverged_at if m.diverged else np.nan for m in metrics]),
+        diverged_cause=[m.diverged_cause for m in metrics],
+        final_state=Z[:, :nX].copy(), seconds=seconds)

@@ -144,12 +144,14 @@ def add_analyze(sub):
                    help="output folder (default: out/analysis)")
     p.add_argument("--grid", type=_positive_int, default=41,
                    help="failure-map points per axis (default 41)")
+    p.add_argument("--duration", type=float, default=20.0,
+                   help="seconds per failure-map flight (default 20)")
     p.set_defaults(func=cmd_analyze)
 
 
 def cmd_analyze(args):
     from .analysis import analyze
-    analyze(_out_dir(args.out), grid=args.grid)
+    analyze(_out_dir(args.out), grid=args.grid, duration=args.duration)
 
 
 def add_export(sub):

@@ -36,3 +36,14 @@ def external(name, lib):
     except RuntimeError as e:
         raise CompileError(f"{lib}: cannot load {name!r} ({str(e).strip().splitlines()[-1]})") \
             from None
+
+
+_in_process = {}
+
+
+def cached_compile(key, build):
+    """``compile_function(build())``, built once per process for the hashable ``key`` (the
+    compiled library itself is also cached on disk by its source)."""
+    if key not in _in_process:
+        _in_process[key] = compile_function(build())
+    return _in_process[key]

@@ -57,7 +57,7 @@ def verdict(claim, m):
         return "no", f"tail RMS {100 * tail:.2f} cm (diverged: {m['diverged']})"
     if claim.kind == "fails":
         if m["diverged"]:
-            return "yes", f"diverged at {m['diverged_at']:.2f} s ({m['diverged_cause']})"
+            return "yes", f"diverged at {m['diverged_at']:.2f} s ({m['diverged_reason']})"
         if tail > FAILS:
             return "partly", (f"not a crash: the vehicle stays up with a standing position "
                               f"error of {tail:.2f} m (tail RMS > {FAILS:.1f} m); the paper "
@@ -161,7 +161,7 @@ def run_paper(out, progress=True, beyond=True):
                          **{k: m[k] for k in ("rms_position_error", "max_position_error",
                                               "final_position_error", "rms_position_error_tail",
                                               "diverged", "diverged_at", "diverged_cause",
-                                              "r_hat_final", "r_G_final")}))
+                                              "diverged_reason", "r_hat_final", "r_G_final")}))
         print(f"  {claim.figure:<9s} holds: {holds:<6s} {note}")
     _comparison_plot(results, out / "cog_step_comparison.png")
     (out / "summary.json").write_text(json.dumps(rows, indent=2) + "\n")

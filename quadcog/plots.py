@@ -32,7 +32,7 @@ def flight_title(controller, name=None):
 def status_text(metrics):
     """'tail RMS error 3.78 cm' or 'diverged at 1.350 s (tilt)'."""
     if metrics.diverged:
-        return f"diverged at {metrics.diverged_at:.3f} s ({metrics.diverged_cause})"
+        return f"diverged at {metrics.diverged_at:.3f} s ({metrics.diverged_reason})"
     return f"tail RMS error {100 * metrics.rms_position_error_tail:.2f} cm"
 
 

@@ -22,7 +22,8 @@ from .errors import InputError
 from .outputs import RunFiles, strict_json, write_csv
 from .plant import TruthOptions
 from .progress import ProgressBar
-from .simulation import Limits, simulate, start_at_reference
+from .divergence import Limits
+from .simulation import simulate, start_at_reference
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, Helix, Hover
 from .waypoints import MinimumSnap
@@ -420,7 +421,7 @@ def run_file(path, out=None, progress=True, overrides=(), plot=True, every=1, fm
         from .animate import animate_run
         animate_run(out, out / "flight.gif")
         written.append("flight.gif")
-    status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_cause']})"
+    status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']})"
               if metrics["diverged"] else
               f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")
     print(f"{scenario.name}: {status}; wrote {out}/{', '.join(written)}")

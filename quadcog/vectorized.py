@@ -14,47 +14,45 @@ import casadi as ca
 import numpy as np
 
 from . import config
-from .batch import _batch_result
-from .closed_loop import TABLE, TABLE_SIZE, monitored_step, step_table
-from .plant import Actuation, TruthOptions, initial_rotor_thrusts
-from .simulation import CHUNK, Limits, _check_time, _compiled, start_at_reference, tail_start
-from .timeline import CogChange, CogProfile, wrench_table
+from .batch import batch_metrics, run_kernel
+from .closed_loop import ACCUMULATORS, CHUNK, monitored_step, packed
+from .compiled import cached_compile
+from .plant import Actuation, initial_rotor_thrusts
+from .schedule import STEP_INPUTS, Schedule, cog_at
+from .simulation import check_time, run_options, start_at_reference
+from .timeline import CogChange, CogProfile
 from .trajectory import as_trajectory
 
 
 def sweep_step(controller, actuation, limits, n_changes):
-    """SX Function (Z, Q, row) -> Z_next: the monitored step with the flight's CoG.
+    """SX Function (Z, Q, per-step inputs (``STEP_INPUTS``), shapes) -> Z_next: the monitored
+    step with the flight's CoG.
 
-    Q = [P (14); D (3 n_changes)] per flight; row = [step-table row (TABLE_SIZE);
-    s_1 .. s_J; active]. A row with active = 0 leaves Z as it is (padding)."""
+    Q = [P (14); D (3 n_changes)] per flight; shapes = [s_1 .. s_J] at the step. Padding steps
+    have dt = 0 and change nothing (the monitored step counts only dt > 0)."""
     step = monitored_step(controller, actuation, limits)
     nZ = step.size1_in(0)
     Z, Q = ca.SX.sym("Z", nZ), ca.SX.sym("Q", 14 + 3 * n_changes)
-    row = ca.SX.sym("row", TABLE_SIZE + n_changes + 1)
-    r = Q[11:14]
+    per_step = {name: ca.SX.sym(name, rows) for name, rows in STEP_INPUTS}
+    shapes = ca.SX.sym("shapes", n_changes)
+    # the flight's CoG profile enters where a single flight's does (the schedule's cog input),
+    # so r_G(t) is formed in one place (``quadcog.schedule.cog_at``)
+    cog = ca.SX.zeros(3)
     for j in range(n_changes):
-        r = r + row[TABLE_SIZE + j] * Q[14 + 3 * j:17 + 3 * j]
-    P = ca.vertcat(Q[:11], r)
-    inner = [row[i] for i in range(TABLE_SIZE)]
-    inner[TABLE["s"]] = 1.0                       # the CoG is all in P here
-    for i in range(TABLE["r_table"].start, TABLE["r_table"].stop):
-        inner[i] = 0.0
-    Z_next = step(Z, P, ca.vertcat(*inner))
-    Z_next = ca.if_else(row[TABLE_SIZE + n_changes] > 0, Z_next, Z)
-    return ca.Function("sweep_step", [Z, Q, row], [Z_next], ["Z", "Q", "row"], ["Z_next"])
+        cog = cog + shapes[j] * Q[14 + 3 * j:17 + 3 * j]
+    inputs = dict(per_step, cog=cog, cog_scale=1.0)
+    Z_next = step(Z, Q[:14], *[inputs[name] for name, _ in STEP_INPUTS])
+    names = [name for name, _ in STEP_INPUTS]
+    return ca.Function("sweep_step", [Z, Q] + [per_step[n] for n in names] + [shapes],
+                       [Z_next], ["Z", "Q"] + names + ["shapes"], ["Z_next"])
 
 
-def batch_table(trajectory, duration, dt, cog_times, disturbances):
-    """(n + 1, TABLE_SIZE + J + 1) rows for the steps at t_0 .. t_n: the step table, the CoG
-    shapes s_j and the active flag (1)."""
-    n = int(round(duration / dt))
-    times = np.arange(n + 1) * dt
-    refs = trajectory.sample(times)
-    table = step_table(times, dt, refs, np.zeros((n + 1, 3)),
-                       wrench_table(disturbances, times), tail_from=tail_start(duration))
+def cog_shapes(times, cog_times):
+    """(N, J) shapes s_j (0 -> 1, a step or a ramp) of the CoG changes (t, ramp) at ``times``."""
     shapes = [CogProfile([CogChange(t, (1.0, 0.0, 0.0), ramp)]).sample(times)[:, 0]
               for t, ramp in cog_times]
-    return np.column_stack([table] + shapes + [np.ones(n + 1)])
+    return np.ascontiguousarray(np.column_stack(shapes) if shapes else
+                                np.zeros((len(times), 0)))
 
 
 def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=None,
@@ -86,64 +84,66 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     -------
     quadcog.BatchResult
     """
-    options = truth or TruthOptions()
-    limits = limits or Limits()
+    options, limits = run_options(truth, limits, None)
     dt = config.get("simulate.dt", dt)
-    _check_time(duration, dt)
-    traj = as_trajectory(trajectory)
+    duration, dt = check_time(duration, dt)
+    schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
+                              disturbances=disturbances)
     actuation = Actuation.of(vehicles[0], options)
     P = np.array([v.parameters() for v in vehicles])
     B, J = P.shape[0], len(cog_times)
     D = np.asarray(D, dtype=float).reshape(B, 3 * J)
-    table = batch_table(traj, duration, dt, cog_times, disturbances)
-    n = table.shape[0] - 1
+    shapes = cog_shapes(schedule.t, cog_times)
+    n = schedule.n_steps
     nc, nf = controller.n_state, actuation.n_rotor_states
+    nX = 12 + nf + nc
     if x0 is None:
-        x0 = start_at_reference(table[0, TABLE["ref"]])
-    Z = np.zeros((B, 12 + nf + nc + 4))
+        x0 = start_at_reference(schedule.ref[0])
+    Z = np.zeros((B, nX + len(ACCUMULATORS)))
     Z[:, :12] = x0
-    s0 = table[0, TABLE_SIZE:TABLE_SIZE + J]
     for b, v in enumerate(vehicles):
-        r0 = v.r_G + (s0 @ D[b].reshape(J, 3) if J else 0.0)
+        r0 = cog_at(v.r_G, 1.0, shapes[0] @ D[b].reshape(J, 3) if J else 0.0)
         Z[b, 12:12 + nf] = initial_rotor_thrusts(v.with_cog(r0), actuation)
-    Z[:, 12 + nf:12 + nf + nc] = controller.initial_state()
-    Z[:, -1] = -1.0
+    Z[:, 12 + nf:nX] = controller.initial_state()
+    Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
     Q = np.hstack([P, D])
     t0 = time.perf_counter()
     run = None
     if kernel in ("auto", "vector"):
         from .kernel import kernel_for
         run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
-                         lambda: sweep_step(controller, actuation, limits, J),
+                         lambda: packed(sweep_step(controller, actuation, limits, J)),
                          required=kernel == "vector")
     if run is not None:
-        Z = run(Z, Q, table[:n], threads=threads)
+        Z = run_kernel(run, Z, Q, schedule, shapes, threads=threads)
     else:
-        Z = _run_casadi(controller, actuation, limits, J, Z, Q, table[:n], threads)
+        Z = _run_casadi(controller, actuation, limits, J, Z, Q, schedule, shapes, threads)
     seconds = time.perf_counter() - t0
-    return _batch_result(Z.T.copy(), n, table, nf + nc, seconds, limits)
+    # the CoG is in P, so the schedule's own CoG (zero) is what batch_metrics sees: it only
+    # needs the reference, the tail and the times
+    return batch_metrics(Z, nX, schedule, limits, seconds)
 
 
-def _run_casadi(controller, actuation, limits, J, Z, Q, rows, threads):
-    key = ("sweep_batch", controller.cache_key(), actuation, limits, J, CHUNK)
-
+def _run_casadi(controller, actuation, limits, J, Z, Q, schedule, shapes, threads):
     def build():
         step = sweep_step(controller, actuation, limits, J)
         acc = step.mapaccum("sweep_chunk", CHUNK)
         z, q = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("Q", step.size1_in(1))
-        r = ca.MX.sym("rows", step.size1_in(2), CHUNK)
-        return ca.Function("sweep_last", [z, q, r], [acc(z, q, r)[:, -1]])
+        per_step = [ca.MX.sym(name, rows, CHUNK) for name, rows in STEP_INPUTS]
+        sh = ca.MX.sym("shapes", J, CHUNK)
+        return ca.Function("sweep_last", [z, q] + per_step + [sh],
+                           [acc(z, ca.repmat(q, 1, CHUNK), *per_step, sh)[:, -1]])
 
-    last = _compiled(key, build)
+    last = cached_compile(("sweep_batch", controller.cache_key(), actuation, limits, J, CHUNK),
+                          build)
     B = Z.shape[0]
-    mapped = last.map("batch", "thread" if threads > 1 else "serial", B, [2], [])
-    n = rows.shape[0]
+    shared = list(range(2, 3 + len(STEP_INPUTS)))     # per-step inputs and shapes
+    mapped = last.map("batch", "thread" if threads > 1 else "serial", B, shared, [])
+    padded = schedule.padded(CHUNK)
+    n_pad = padded.n_steps - schedule.n_steps
+    shapes = np.vstack([shapes, np.repeat(shapes[-1:], n_pad, axis=0)]) if n_pad else shapes
     Zt, Qt = Z.T, Q.T
-    for k in range(0, n, CHUNK):
-        block = rows[k:k + CHUNK]
-        if block.shape[0] < CHUNK:
-            pad = np.repeat(block[-1:], CHUNK - block.shape[0], axis=0)
-            pad[:, -1] = 0.0                      # inactive: Z stays
-            block = np.vstack([block, pad])
-        Zt = np.array(mapped(Zt, Qt, block.T))
+    for k in range(0, schedule.n_steps, CHUNK):
+        block = [a.T if a.ndim == 2 else a[None, :] for a in padded.block(k, k + CHUNK)]
+        Zt = np.array(mapped(Zt, Qt, *block, shapes[k:k + CHUNK].T))
     return Zt.T

@@ -1,8 +1,9 @@
-"""generated/ is what derive/ produces, byte for byte, whatever the hash seed."""
+"""generated/ is what derive/ produces, byte for byte, whatever the hash seed; the commands
+``python -m derive --if-stale`` and ``--check`` end to end (two derivations in all)."""
 import json
 import os
-import shutil
 from pathlib import Path
+import shutil
 import subprocess
 import sys
 
@@ -15,41 +16,53 @@ ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"
 
 
-def _derive(out, seed):
+def _derive(*args, seed=1):
     env = dict(os.environ, PYTHONHASHSEED=str(seed))
-    res = subprocess.run([sys.executable, "-m", "derive", "--out", str(out), "--quiet"],
-                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    return subprocess.run([sys.executable, "-m", "derive", *map(str, args)],
+                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+
+
+def _stale_copy(folder):
+    """A copy of generated/ with one changed line in report.tex."""
+    shutil.copytree(GENERATED, folder)
+    tex = folder / "report.tex"
+    tex.write_text(tex.read_text().replace("Kinematics", "Kinematix", 1))
+    return folder
+
+
+def test_if_stale_skips_a_fresh_folder(tmp_path):
+    fresh = tmp_path / "gen"
+    shutil.copytree(GENERATED, fresh)
+    before = {p: p.stat().st_mtime_ns for p in fresh.rglob("*") if p.is_file()}
+    res = _derive("--if-stale", "--out", fresh)
+    assert res.returncode == 0 and "is up to date" in res.stdout, res.stderr
+    assert {p: p.stat().st_mtime_ns for p in fresh.rglob("*") if p.is_file()} == before
+
+
+def test_if_stale_regenerates_to_generated(tmp_path):
+    """An edited file makes the folder stale; --if-stale derives it again, and the result is
+    generated/ byte for byte: generated/ is fresh."""
+    stale = _stale_copy(tmp_path / "gen")
+    res = _derive("--if-stale", "--out", stale, "--quiet", seed=1)
     assert res.returncode == 0, res.stderr
-
-
-@pytest.fixture(scope="module")
-def fresh(tmp_path_factory):
-    a = tmp_path_factory.mktemp("derive-seed-1")
-    b = tmp_path_factory.mktemp("derive-seed-4242")
-    _derive(a, 1)
-    _derive(b, 4242)
-    return a, b
-
-
-def test_generated_is_fresh(fresh):
-    diff = diff_trees(GENERATED, fresh[0])
+    diff = diff_trees(GENERATED, stale)
     assert not diff, f"generated/ is stale; run `make derive`. Diff:\n{diff}"
 
 
-def test_reproducible_across_hash_seeds(fresh):
-    diff = diff_trees(fresh[0], fresh[1])
-    assert not diff, f"two derivations differ:\n{diff}"
-
-
-def test_diff_is_readable(tmp_path, fresh):
-    """A stale file shows up as a unified diff naming the file and the changed line."""
-    import shutil
-    stale = tmp_path / "gen"
-    shutil.copytree(fresh[0], stale)
-    tex = stale / "report.tex"
-    tex.write_text(tex.read_text().replace("Kinematics", "Kinematix", 1))
-    diff = diff_trees(stale, fresh[0])
-    assert "report.tex" in diff and "-\\section{Kinematix}" in diff and "+\\section{Kinematics}" in diff
+def test_check_reports_a_stale_file_with_a_diff(tmp_path):
+    """--check (under another hash seed) writes nothing, exits 1 and shows a unified diff of
+    the one changed line and nothing else: the derivation does not depend on the seed."""
+    stale = _stale_copy(tmp_path / "gen")
+    before = (stale / "report.tex").read_bytes()
+    res = _derive("--check", "--out", stale, "--quiet", seed=4242)
+    assert res.returncode == 1, (res.stdout, res.stderr)
+    diff = res.stderr
+    assert "is stale; run `make derive`" in diff
+    assert "-\\section{Kinematix}" in diff and "+\\section{Kinematics}" in diff
+    changed = [line for line in diff.splitlines()
+               if line.startswith(("+", "-")) and not line.startswith(("+++", "---"))]
+    assert len(changed) == 2, diff
+    assert (stale / "report.tex").read_bytes() == before
 
 
 def test_headers():

@@ -10,10 +10,11 @@ import pytest
 
 import quadcog
 import quadcog.batch as batch_module
-from quadcog.closed_loop import monitored_step
-from quadcog.kernel import emit_c, kernel_for, vector_flags
+from quadcog.batch import batch_kernel
+from quadcog.closed_loop import monitored_step, packed
+from quadcog.kernel import emit_c, vector_flags
 from quadcog.plant import Actuation
-from quadcog.simulation import Limits
+from quadcog.divergence import Limits
 
 SHAPE = 0.3                      # s: the CoG steps at this time
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
@@ -60,8 +61,7 @@ def test_bits_do_not_depend_on_threads_or_on_the_other_flights():
 def test_threads_means_that_many_threads():
     ctl = quadcog.FeedbackLinearization()
     actuation, limits = Actuation.of(ctl.vehicle), Limits()
-    kernel = kernel_for(("batch", ctl.cache_key(), actuation, limits, 1000),
-                        lambda: monitored_step(ctl, actuation, limits))
+    kernel = batch_kernel(ctl, actuation, limits)
     if kernel is None:
         pytest.skip("no vector kernel here")
     seen, fn = set(), kernel._fn
@@ -94,7 +94,7 @@ def test_gcc_vectorizes_the_step_with_libmvec(tmp_path):
     ctl = quadcog.FeedbackLinearization()           # sin, cos, tan, atan2 like the others
     actuation = Actuation.of(ctl.vehicle)
     src = tmp_path / "k.c"
-    src.write_text(emit_c(monitored_step(ctl, actuation, Limits())))
+    src.write_text(emit_c(packed(monitored_step(ctl, actuation, Limits()))))
     flags = [f for f in vector_flags() if f not in ("-shared", "-fPIC")]
     r = subprocess.run(["cc", *flags, "-fopt-info-vec-optimized", "-c", str(src), "-o",
                         str(tmp_path / "k.o")], capture_output=True, text=True)
@@ -109,4 +109,4 @@ def test_every_controller_has_a_vector_form(name):
     """emit_c refuses operations it cannot vectorize (the batch would fall back to CasADi's
     map): every shipped controller's step must translate."""
     ctl = quadcog.make_controller(name)
-    assert "#pragma omp simd" in emit_c(monitored_step(ctl, Actuation.of(ctl.vehicle), Limits()))
+    assert "#pragma omp simd" in emit_c(packed(monitored_step(ctl, Actuation.of(ctl.vehicle), Limits())))

@@ -40,7 +40,7 @@ def _one_step(U, x=None, vehicle=HUMMINGBIRD, dt=1e-3):
     """The plant's state after one step of a constant input (Python path)."""
     x0 = np.zeros(12) if x is None else np.asarray(x, float)
     x0[2] += 1.0
-    res = simulate(lambda t, x: np.asarray(U, float), "hover", duration=dt, dt=dt,
+    res = simulate(lambda t, x, ref, c: np.asarray(U, float), "hover", duration=dt, dt=dt,
                    vehicle=vehicle, x0=x0, path="python", check_dt=False)
     return res.x[-1], x0
 

@@ -66,25 +66,39 @@ def test_parallel_axis_is_neutral_at_zero_offset():
 
 
 def test_user_python_controller():
+    """A user's controller has the built-ins' protocol: ctrl(t, x, ref, c) -> U or (U, c_dot)."""
     p = quadcog.default_parameters()
     m, g = p[0], p[1]
 
-    def hover_pd(t, x):           # a user's own attitude and altitude PD, no position loop
-        return np.array([m * g - 3.0 * (x[2] - 1.0) - 2.0 * x[8],
+    def hover_pd(t, x, ref, c):   # a user's own attitude and altitude PD, no position loop
+        return np.array([m * g - 3.0 * (x[2] - ref[2]) - 2.0 * x[8],
                          -0.05 * x[3] - 0.01 * x[9], -0.05 * x[4] - 0.01 * x[10],
                          -0.02 * x[5] - 0.01 * x[11]])
 
     x0 = np.zeros(12)
     x0[2], x0[3] = 1.2, 0.1
-    res = simulate(hover_pd, "hover", duration=5.0, path="python", x0=x0)
+    res = simulate(hover_pd, quadcog.Hover(position=(0, 0, 1.5)), duration=5.0, path="python",
+                   x0=x0)
     assert not res.diverged
-    assert abs(res.x[-1, 2] - 1.0) < 0.02 and abs(res.x[-1, 3]) < 0.01
+    assert abs(res.x[-1, 2] - 1.5) < 0.02 and abs(res.x[-1, 3]) < 0.01     # it saw the reference
     assert res.controller == "hover_pd"
+
+    class Ramp:                   # a state: c_dot = 2 per second, from c0 = 0.5
+        n_state, estimates_cog, name = 3, True, "ramp"
+
+        def initial_state(self):
+            return np.full(3, 0.5)
+
+        def __call__(self, t, x, ref, c):
+            return hover_pd(t, x, ref, c), np.full(3, 2.0)
+
+    res = simulate(Ramp(), "hover", duration=0.5, path="python")
+    assert_close(res.r_hat[-1], np.full(3, 1.5), 1e-12, "user controller state")
     with pytest.raises(quadcog.InputError, match="path='python'"):
         simulate(hover_pd, "hover", duration=1.0)
     with pytest.raises(quadcog.InputError, match=r"controller output at t = 0.0 s: expected "
                                                  r"an array of shape \(4,\), got shape \(3,\)"):
-        simulate(lambda t, x: np.zeros(3), "hover", duration=1.0, path="python")
+        simulate(lambda t, x, ref, c: np.zeros(3), "hover", duration=1.0, path="python")
 
 
 @pytest.mark.parametrize("path", ["python", "compiled"])
@@ -94,7 +108,10 @@ def test_divergence_detected_and_named(path):
                    path=path)
     m = res.metrics
     assert m.diverged and 0.2 < m.diverged_at < 10.0
-    assert "deg" in m.diverged_cause or "m" in m.diverged_cause
+    assert m.diverged_cause in (quadcog.DivergenceCause.TILT,
+                                quadcog.DivergenceCause.POSITION_ERROR)
+    assert m.diverged_reason == m.diverged_cause.describe(quadcog.Limits())
+    assert m.rms_position_error_tail == np.inf
     assert np.isfinite(res.x).all() and np.isfinite(res.U).all()
     assert res.t[-1] == pytest.approx(m.diverged_at)
     assert res.t.size < 10001
@@ -103,23 +120,30 @@ def test_divergence_detected_and_named(path):
 def test_divergence_non_finite_and_position():
     with pytest.raises(quadcog.InputError, match=r"controller output at t = 0.0 s: expected 4 "
                                                  r"finite numbers, got \[nan, 0.0, 0.0, 0.0\]"):
-        simulate(lambda t, x: np.array([np.nan, 0, 0, 0]), "hover", duration=1.0, path="python")
-    crazy = simulate(lambda t, x: np.array([1e200, 0, 0, 0]), "hover", duration=1.0,
+        simulate(lambda t, x, ref, c: np.array([np.nan, 0, 0, 0]), "hover", duration=1.0,
+                 path="python")
+    crazy = simulate(lambda t, x, ref, c: np.array([1e200, 0, 0, 0]), "hover", duration=1.0,
                      path="python")
-    assert crazy.metrics.diverged_cause == "non-finite state" and crazy.metrics.diverged_at == 0.001
+    assert crazy.metrics.diverged_cause == quadcog.DivergenceCause.NON_FINITE
+    assert crazy.metrics.diverged_reason.startswith("non-finite state")
+    assert crazy.metrics.diverged_at == 0.001
     assert np.isfinite(crazy.x).all() and np.isfinite(crazy.U).all()
-    rocket = simulate(lambda t, x: np.array([40.0, 0, 0, 0]), "hover", duration=5.0,
+    rocket = simulate(lambda t, x, ref, c: np.array([40.0, 0, 0, 0]), "hover", duration=5.0,
                       path="python")
-    assert rocket.metrics.diverged_cause == "position error over 10 m"
+    assert rocket.metrics.diverged_reason == "position error over 10 m"
+    assert rocket.metrics.as_dict()["diverged_cause"] == "position_error"
+    # the metrics count the samples before the divergence: the error was under the limit
+    assert rocket.metrics.max_position_error <= 10.0 < np.linalg.norm(rocket.x[-1, :3]
+                                                                       - rocket.ref[-1, :3])
 
 
 def test_euler_singularity_named():
-    flip = lambda t, x: np.array([6.0, 0.0, 0.2, 0.0])
+    flip = lambda t, x, ref, c: np.array([6.0, 0.0, 0.2, 0.0])
     with pytest.raises(quadcog.EulerSingularityError, match="reached pi/2"):
         simulate(flip, "hover", duration=3.0, path="python",
                  limits=Limits(max_tilt=np.radians(100)))
     res = simulate(flip, "hover", duration=3.0, path="python")
-    assert res.metrics.diverged_cause == "|phi| or |theta| over 85 deg"
+    assert res.metrics.diverged_reason == "|phi| or |theta| over 85 deg"
 
 
 def test_batch_agrees_with_single_flights():

@@ -89,7 +89,7 @@ def _open_loop(U, duration=0.2, **kw):
     """A flight under a constant commanded input U (a Python controller)."""
     x0 = np.zeros(12)
     x0[2] = 1.0
-    return simulate(lambda t, x: np.array(U, float), "hover", duration=duration, x0=x0,
+    return simulate(lambda t, x, ref, c: np.array(U, float), "hover", duration=duration, x0=x0,
                     path="python", check_dt=False, **kw)
 
 

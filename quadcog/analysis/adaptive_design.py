@@ -10,7 +10,8 @@ import casadi as ca
 import numpy as np
 
 from ..controllers import AdaptiveFeedbackLinearization
-from ..simulation import Limits, simulate
+from ..divergence import Limits
+from ..simulation import simulate
 from ..timeline import CogProfile
 from .adaptive_variants import (OracleAdaptive, OracleBMixin, OracleOutputRegulationAdaptive,
                                 OutputRegulationAdaptive)

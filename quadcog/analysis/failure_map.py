@@ -2,7 +2,6 @@
 of CoG offsets (x_G, y_G) in the rotor plane: the shipped sweep file ``failure-map``."""
 import time
 
-import casadi as ca
 import numpy as np
 
 from ..controllers import (AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization,
@@ -52,14 +51,11 @@ def rk4_stiffness(controller, params, dt=None):
     says more about the integrator than about the controller. dt defaults to
     ``config.defaults["simulate.dt"]``. Returns (B,)."""
     dt = config.get("simulate.dt", dt)
-    x, P = ca.SX.sym("x", 12), ca.SX.sym("P", 14)
     ref = Hover()(0.0)
-    U, _ = controller.function()(0.0, x, ref, controller.initial_state())
-    f = controller.model.casadi_function("truth_dynamics")
-    J = ca.Function("J", [x, P], [ca.jacobian(f(x, U, P, ca.DM.zeros(3), ca.DM.zeros(6)), x)])
     x0 = np.zeros(12)
     x0[2] = ref[2]
-    Js = np.array(J.map(params.shape[0])(x0, params.T)).reshape(12, params.shape[0], 12)
+    J = controller.closed_loop_jacobian()
+    Js = np.array(J.map(params.shape[0])(x0, ref, params.T)).reshape(12, params.shape[0], 12)
     return np.array([np.max(np.abs(np.linalg.eigvals(Js[:, b, :]))) for b in
                      range(params.shape[0])]) * dt
 

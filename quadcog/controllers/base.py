@@ -29,6 +29,7 @@ class Controller:
 
     name = "controller"
     n_state = 0
+    estimates_cog = False        # True when the first 3 states are an estimate of r_G
 
     def __new__(cls, *args, **kwargs):
         self = super().__new__(cls)

@@ -55,8 +55,8 @@ def summary_markdown(summary):
 
 def write_outputs(sweep, columns, summary, out, plots=True):
     """results.parquet, results.csv, summary.json, summary.md and the plots into ``out``."""
-    from .runner import _atomic_write, _pyarrow, to_arrow
-    pa = _pyarrow()
+    from .runner import atomic_write, require_pyarrow, to_arrow
+    pa = require_pyarrow()
     import pyarrow.csv  # noqa: F401
     table = to_arrow(columns)
     for name, write in (("results.parquet", pa.parquet.write_table),
@@ -64,8 +64,8 @@ def write_outputs(sweep, columns, summary, out, plots=True):
         tmp = out / (name + ".tmp")
         write(table, tmp)
         os.replace(tmp, out / name)
-    _atomic_write(out / "summary.json", json.dumps(summary, indent=2) + "\n")
-    _atomic_write(out / "summary.md", summary_markdown(summary))
+    atomic_write(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    atomic_write(out / "summary.md", summary_markdown(summary))
     if plots:
         try:
             import matplotlib  # noqa: F401

@@ -24,7 +24,8 @@ CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"
 
 
-def _pyarrow():
+def require_pyarrow():
+    """The pyarrow module, or a QuadcogError saying how to install it."""
     try:
         import pyarrow
         import pyarrow.parquet  # noqa: F401
@@ -81,7 +82,7 @@ class ChunkStore:
                                  f"this file before an edit); choose another --out folder or "
                                  f"delete {self.out}")
         self.folder.mkdir(parents=True, exist_ok=True)
-        _atomic_write(manifest, json.dumps(
+        atomic_write(manifest, json.dumps(
             {"fingerprint": self.fingerprint, "name": sweep.name, "source": sweep.source,
              "flights": len(sweep.flights), "chunks": len(sweep.chunks())}, indent=2) + "\n")
 
@@ -92,19 +93,20 @@ class ChunkStore:
         return self.path(c).is_file()
 
     def write(self, c, columns):
-        pa = _pyarrow()
+        pa = require_pyarrow()
         tmp = self.path(c).with_suffix(".tmp")
         pa.parquet.write_table(to_arrow(columns), tmp)
         os.replace(tmp, self.path(c))
 
     def read(self, c):
-        pa = _pyarrow()
+        pa = require_pyarrow()
         table = pa.parquet.read_table(self.path(c))
         return {name: table.column(name).to_numpy(zero_copy_only=False)
                 for name in table.column_names}
 
 
-def _atomic_write(path, text):
+def atomic_write(path, text):
+    """Write ``text`` to ``path`` through a temporary file and a rename (all or nothing)."""
     tmp = Path(str(path) + ".tmp")
     tmp.write_text(text)
     os.replace(tmp, path)
@@ -112,7 +114,7 @@ def _atomic_write(path, text):
 
 def to_arrow(columns):
     """A pyarrow Table of {name: numpy array}."""
-    pa = _pyarrow()
+    pa = require_pyarrow()
     arrays = []
     for v in columns.values():
         arrays.append(pa.array(v.tolist() if v.dtype.kind == "U" else v))

@@ -23,8 +23,8 @@ import numpy as np
 from ..admissibility import admissible_radius
 from ..catalog import scenario_path
 from ..errors import InputError, ParameterError
-from ..params import check_parameters, with_cog
 from ..scenario import ScenarioError, parse
+from ..simulation import check_cog_changes
 
 SUFFIX = ".toml"
 MODES = ("grid", "monte-carlo")
@@ -334,10 +334,8 @@ def _expand(dims, mode, samples, seed):
 def cog_admissible(scenario):
     """None when the vehicle with every CoG change of ``scenario`` is admissible, else the
     reason (the ParameterError message)."""
-    P = scenario.vehicle.parameters()
     try:
-        for change in scenario.cog.changes:
-            check_parameters(with_cog(P, P[11:14] + np.asarray(change.r)))
+        check_cog_changes(scenario.vehicle.parameters(), scenario.cog)
     except ParameterError as e:
         return str(e)
     return None
