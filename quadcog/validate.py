@@ -279,10 +279,10 @@ def poles(value, where, n, error=InputError):
     return p
 
 
-# Memory one simulated step of one flight costs: the step table (27 numbers), state and
-# controller state, input, reference and the result arrays handed out. Measured: 470 B per
-# step at the peak of a 60 s run of fig7 (tracemalloc); rounded up.
-BYTES_PER_STEP = 512
+# Memory one simulated step of one flight costs: the schedule (27 numbers), state and
+# controller state, input, reference and the result arrays handed out. Measured: 512 B per
+# step at the peak of a 60 s adaptive figure-8 run (tracemalloc); rounded up.
+BYTES_PER_STEP = 576
 
 
 def step_count(duration, dt, max_steps, where=None, error=InputError):
