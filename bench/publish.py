@@ -5,6 +5,7 @@ wrote, so the README's numbers are copied from runs, never typed.
     python bench/publish.py bench  [FILE]   # default out/bench/results.md (make bench);
                                             # also copies FILE to bench/results.md
     python bench/publish.py paper  [FILE]   # default out/paper/readme_table.md (quadcog paper)
+    python bench/publish.py beyond [FILE]   # default out/paper/beyond/beyond.md (quadcog paper)
 
 tests/test_readme_numbers.py checks that the README's blocks are those files' tables.
 """
@@ -15,7 +16,8 @@ import sys
 
 ROOT = Path(__file__).resolve().parent.parent
 SOURCES = {"bench": ROOT / "out" / "bench" / "results.md",
-           "paper": ROOT / "out" / "paper" / "readme_table.md"}
+           "paper": ROOT / "out" / "paper" / "readme_table.md",
+           "beyond": ROOT / "out" / "paper" / "beyond" / "beyond.md"}
 
 
 def table_of(text):
