@@ -249,31 +249,48 @@ def _run_compiled(controller, P, schedule, X0, actuation, limits, progress):
     return X[:n_steps + 1], U[:n_steps + 1], 0
 
 
-def _user_call(controller, n_state):
-    """(call, project) for a user's Python controller: ``call(t, x, ref, c)`` returns
-    (U (4,), c_dot (n_state,)), checked: a typed error naming the time when the controller
-    raises or returns anything but finite numbers of those shapes."""
-    project = getattr(controller, "project_numpy", lambda c: c)
-
-    def call(t, x, ref, c):
-        when = f"t = {validate.plain(float(t))} s"
-        try:
-            out = controller(float(t), x.copy(), ref.copy(), c.copy())
-        except QuadcogError:
-            raise
-        except Exception as e:          # the user's function failed: say when, keep the cause
-            raise InputError(f"controller raised {type(e).__name__} at {when}: {e}") from e
-        U, c_dot = out if isinstance(out, tuple) and len(out) == 2 else (out, np.zeros(0))
-        return (_finite(U, f"controller output at {when}", 4),
-                _finite(c_dot, f"controller output c_dot at {when}", n_state))
-    return call, project
+def _guarded(fn, what, when, *args):
+    """``fn(*args)`` of a user's controller; an exception it raises becomes an InputError
+    naming ``what`` and ``when`` (the cause kept)."""
+    try:
+        return fn(*args)
+    except QuadcogError:
+        raise
+    except Exception as e:              # the user's function failed: say when, keep the cause
+        hint = (" (a Python controller is called as ctrl(t, x, ref, c))"
+                if isinstance(e, TypeError) and "positional argument" in str(e) else "")
+        raise InputError(f"{what} raised {type(e).__name__} at {when}: {e}{hint}") from e
 
 
 def _finite(value, where, n):
+    """``value`` as n finite numbers, else an InputError naming ``where``."""
     a = validate.vector(value, where, n, finite=False)
     if not np.isfinite(a).all():
         raise InputError(f"{where}: expected {n} finite numbers, got {validate.plain(a.tolist())}")
     return a
+
+
+def _user_call(controller, n_state):
+    """(call, project) for a user's Python controller: ``call(t, x, ref, c)`` returns
+    (U (4,), c_dot (n_state,)) and ``project(c, t)`` its optional ``project_numpy(c)``,
+    checked: a typed error naming the time when the controller raises or returns anything but
+    finite numbers of those shapes."""
+    user_project = getattr(controller, "project_numpy", None)
+
+    def call(t, x, ref, c):
+        when = f"t = {validate.plain(float(t))} s"
+        out = _guarded(controller, "controller", when, float(t), x.copy(), ref.copy(), c.copy())
+        U, c_dot = out if isinstance(out, tuple) and len(out) == 2 else (out, np.zeros(0))
+        return (_finite(U, f"controller output at {when}", 4),
+                _finite(c_dot, f"controller output c_dot at {when}", n_state))
+
+    def project(c, t):
+        if user_project is None:
+            return c
+        when = f"t = {validate.plain(float(t))} s"
+        return _finite(_guarded(user_project, "controller.project_numpy", when, c.copy()),
+                       f"controller.project_numpy output at {when}", n_state)
+    return call, project
 
 
 def _user_state(controller):
@@ -283,7 +300,8 @@ def _user_state(controller):
                          hi=10_000)
     if not hasattr(controller, "initial_state"):
         return n, np.zeros(n)
-    return n, validate.vector(controller.initial_state(), "controller.initial_state()", n)
+    c0 = _guarded(controller.initial_state, "controller.initial_state()", "the start")
+    return n, _finite(c0, "controller.initial_state()", n)
 
 
 def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law):
@@ -301,7 +319,7 @@ def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law
         law = controller.compiled()
         t_in, x_in, ref_in, c_in = law.inputs
         U_out, cdot_out = law.outputs
-        project = controller.project_numpy
+        project = lambda c, t: controller.project_numpy(c)
     else:
         call, project = _user_call(controller, nc)
     px, pf, pU, pP, pw, pdt = plant.inputs
@@ -341,7 +359,7 @@ def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law
             X[k + 1, :12] = x_next
             X[k + 1, 12:ic] = f_next
             if nc:
-                X[k + 1, ic:] = project(c + s.dt[k] * c_dot)
+                X[k + 1, ic:] = project(c + s.dt[k] * c_dot, s.t[k + 1])
             if progress and k % report_every == 0:
                 progress(k / n_steps)
     U[n_steps] = U[n_steps - 1]

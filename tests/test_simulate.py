@@ -101,6 +101,43 @@ def test_user_python_controller():
         simulate(lambda t, x, ref, c: np.zeros(3), "hover", duration=1.0, path="python")
 
 
+class _User:
+    """A user's controller with a state of 2, built from keyword overrides."""
+    n_state = 2
+
+    def __init__(self, **methods):
+        self.__dict__.update(methods)
+
+    def initial_state(self):
+        return np.zeros(2)
+
+    def __call__(self, t, x, ref, c):
+        return np.zeros(4), np.ones(2)
+
+
+@pytest.mark.parametrize("controller, message", [
+    (lambda t, x: np.zeros(4), r"controller raised TypeError at t = 0.0 s: .* \(a Python "
+                               r"controller is called as ctrl\(t, x, ref, c\)\)"),
+    (_User(n_state="2"), r"controller.n_state: expected an integer in \[0, 10000\], got '2'"),
+    (_User(initial_state=lambda: 1 / 0), r"controller.initial_state\(\) raised "
+                                         r"ZeroDivisionError at the start"),
+    (_User(initial_state=lambda: [1.0, 2.0, 3.0]),
+     r"controller.initial_state\(\): expected an array of shape \(2,\), got shape \(3,\)"),
+    (_User(project_numpy=lambda c: 1 / 0), r"controller.project_numpy raised ZeroDivisionError "
+                                          r"at t = 0.001 s"),
+    (_User(project_numpy=lambda c: c * np.nan), r"controller.project_numpy output at t = 0.001 "
+                                               r"s: expected 2 finite numbers, got \[nan, nan\]"),
+    (lambda t, x, ref, c: (np.zeros(4), np.zeros(3)),
+     r"controller output c_dot at t = 0.0 s: expected an array of shape \(0,\)"),
+], ids=["old protocol", "n_state", "initial_state raises", "initial_state shape",
+        "project raises", "project nan", "c_dot shape"])
+def test_user_controller_faults_are_named(controller, message):
+    """Whatever a user's controller does wrong comes back as an InputError naming the part and
+    the time, never a raw traceback and never a NaN in the result."""
+    with pytest.raises(quadcog.InputError, match=message):
+        simulate(controller, "hover", duration=0.01, path="python")
+
+
 @pytest.mark.parametrize("path", ["python", "compiled"])
 def test_divergence_detected_and_named(path):
     cog = CogProfile.step(0.2, (0.06, 0.06, 0.0))
