@@ -7,7 +7,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from . import config
+from . import config, validate
 from .errors import EulerSingularityError
 
 
@@ -19,6 +19,13 @@ class Limits:
         default_factory=lambda: config.defaults["limits.max_position_error"])
     max_tilt: float = field(
         default_factory=lambda: math.radians(config.defaults["limits.max_tilt_deg"]))
+
+    def __post_init__(self):
+        # frozen: set the checked floats through object.__setattr__
+        object.__setattr__(self, "max_position_error", validate.positive(
+            self.max_position_error, "Limits.max_position_error", "m"))
+        object.__setattr__(self, "max_tilt", validate.real(
+            self.max_tilt, "Limits.max_tilt", lo=0.0, hi=math.pi, lo_open=True, unit="rad"))
 
 
 class DivergenceCause(enum.IntEnum):

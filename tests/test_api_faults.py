@@ -57,6 +57,10 @@ NAN = float("nan")
      r"^disturbance force: expected entries within \+-1e\+06"),
     (lambda: Disturbance(t=True, duration=1.0), r"^disturbance t: expected a number >= 0 \(s\), "
                                                 r"got True$"),
+    (lambda: quadcog.Limits(max_tilt="x"), r"^Limits.max_tilt: expected a number in \(0.0, "
+                                           r"3.14\d*\] \(rad\), got 'x'$"),
+    (lambda: quadcog.Limits(max_position_error=NAN), r"^Limits.max_position_error: expected a "
+                                                     r"positive number \(m\), got nan$"),
 ])
 def test_bad_arguments(build, message):
     with pytest.raises(quadcog.InputError, match=message) as e:
