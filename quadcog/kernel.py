@@ -2,8 +2,9 @@
 
 A batch step is a CasADi SX Function ``step(Z, Q, row) -> Z_next``: Z the state of one flight
 (with its metric accumulators), Q its constant parameters, row the step's entry of the step
-table (shared by all flights). This module emits C from the step's SX instructions with the
-flight index as the innermost loop of every operation: flights go in blocks of ``LANES``, the
+table (shared by all flights). This module emits C from the step's SX instructions (the
+operations and the walk are quadcog.sxc's, shared with the embedded export) with the flight
+index as the innermost loop of every operation: flights go in blocks of ``LANES``, the
 whole step is one ``#pragma omp simd`` loop over a block, and gcc turns every operation into a
 vector instruction, with glibc's libmvec for sin, cos, tan and atan2. A block's state stays in
 the L1 cache for all its steps, so memory traffic is a few hundred bytes per flight.
@@ -22,48 +23,22 @@ import platform
 import threading
 import warnings
 
-import casadi as ca
 import numpy as np
 
+from . import sxc
 from .build import compile_library, find_compiler
 from .errors import CompileError, QuadcogError, QuadcogWarning
 
 LANES = 16         # flights per block: four AVX2 vectors of doubles per operation
 
-_UNARY = {
-    "OP_ASSIGN": "{0}", "OP_NEG": "(-{0})", "OP_SQ": "({0}*{0})", "OP_TWICE": "({0}+{0})",
-    "OP_INV": "(1./{0})", "OP_SQRT": "sqrt({0})", "OP_FABS": "fabs({0})",
-    "OP_SIN": "sin({0})", "OP_COS": "cos({0})", "OP_TAN": "tan({0})", "OP_EXP": "exp({0})",
-    "OP_LOG": "log({0})", "OP_ATAN": "atan({0})", "OP_ASIN": "asin({0})",
-    "OP_ACOS": "acos({0})", "OP_TANH": "tanh({0})", "OP_SINH": "sinh({0})",
-    "OP_COSH": "cosh({0})", "OP_FLOOR": "floor({0})", "OP_CEIL": "ceil({0})",
-    "OP_NOT": "({0}==0. ? 1. : 0.)",
-    "OP_SIGN": "({0}<0 ? -1. : ({0}>0 ? 1. : {0}))",
-}
-_BINARY = {
-    "OP_ADD": "({0}+{1})", "OP_SUB": "({0}-{1})", "OP_MUL": "({0}*{1})", "OP_DIV": "({0}/{1})",
-    # logic as selects on doubles (no _Bool or int temporaries, which would not vectorize)
-    "OP_LT": "({0}<{1} ? 1. : 0.)", "OP_LE": "({0}<={1} ? 1. : 0.)",
-    "OP_EQ": "({0}=={1} ? 1. : 0.)", "OP_NE": "({0}!={1} ? 1. : 0.)",
-    "OP_AND": "({0}!=0. ? ({1}!=0. ? 1. : 0.) : 0.)",
-    "OP_OR": "({0}!=0. ? 1. : ({1}!=0. ? 1. : 0.))", "OP_IF_ELSE_ZERO": "({0}!=0. ? {1} : 0.)",
-    # fmin/fmax as selects (vectorizable), with C's rule: a NaN argument yields the other one
-    "OP_FMIN": "({1}!={1} ? {0} : ({0}<{1} || {0}!={0} ? ({0}!={0} ? {1} : {0}) : {1}))",
-    "OP_FMAX": "({1}!={1} ? {0} : ({0}>{1} || {0}!={0} ? ({0}!={0} ? {1} : {0}) : {1}))",
-    "OP_POW": "pow({0},{1})", "OP_CONSTPOW": "pow({0},{1})", "OP_ATAN2": "atan2({0},{1})",
-    "OP_COPYSIGN": "copysign({0},{1})", "OP_FMOD": "fmod({0},{1})",
-}
-# functions libmvec provides in vector form (glibc >= 2.35 for tan, atan2, ...)
+# functions libmvec provides in vector form (glibc >= 2.35 for tan, atan2, erf, hypot, ...)
 _VECTOR_MATH = ("sin", "cos", "tan", "exp", "log", "pow", "atan2", "atan", "asin", "acos",
-                "tanh", "sinh", "cosh")
+                "tanh", "sinh", "cosh", "erf", "hypot")
 
 
 class KernelError(QuadcogError):
-    """The vector kernel cannot be built here (no compiler, no libmvec, an unknown op)."""
-
-
-def _op_names():
-    return {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")}
+    """The vector kernel cannot be built here (no compiler, no libmvec, an operation without
+    a C form in quadcog.sxc)."""
 
 
 def _literal(v):
@@ -74,6 +49,10 @@ def _literal(v):
     if math.isinf(v):
         return "__builtin_inf()" if v > 0 else "(-__builtin_inf())"
     return repr(v)
+
+
+# exact double literals, fmin/fmax as selects (a call would stop the vectorizer)
+_TARGET = sxc.Target(literal=_literal, suffix="", selects=True, error=KernelError)
 
 
 def vector_flags():
@@ -101,41 +80,24 @@ def emit_c(step, name="qc_kernel", lanes=LANES):
     Q (n_blocks, nQ, lanes)."""
     if not step.is_a("SXFunction"):
         raise KernelError(f"{step.name()}: expected an SX Function")
-    names = _op_names()
     nZ, nQ, nR = (step.nnz_in(i) for i in range(3))
     if step.nnz_out(0) != nZ or step.n_in() != 3 or step.n_out() != 1:
         raise KernelError(f"{step.name()}: expected step(Z, Q, row) -> Z_next of equal size")
-    body, used = [], set()
-    for k in range(step.n_instructions()):
-        op = names[step.instruction_id(k)]
-        ins, outs = step.instruction_input(k), step.instruction_output(k)
-        if op == "OP_CONST":
-            body.append(f"w{outs[0]} = {_literal(step.instruction_constant(k))};")
-        elif op == "OP_INPUT":
-            i, nz = ins
-            src = (f"z[{nz * lanes}+j]", f"q[{nz * lanes}+j]", f"row[{nz}]")[i]
-            body.append(f"w{outs[0]} = {src};")
-        elif op == "OP_OUTPUT":
-            body.append(f"zn[{outs[1] * lanes}+j] = w{ins[0]};")
-        elif op in _UNARY:
-            body.append(f"w{outs[0]} = " + _UNARY[op].format(f"w{ins[0]}") + ";")
-        elif op in _BINARY:
-            body.append(f"w{outs[0]} = " + _BINARY[op].format(f"w{ins[0]}", f"w{ins[1]}")
-                        + ";")
-        else:
-            raise KernelError(f"{step.name()}: operation {op} has no vector form here")
-        used.update(f for f in _VECTOR_MATH if f"{f}(" in body[-1])
+    inputs = (lambda nz: f"z[{nz * lanes}+j]", lambda nz: f"q[{nz * lanes}+j]",
+              lambda nz: f"row[{nz}]")
+    c = sxc.walk(step, _TARGET, read=lambda i, nz: inputs[i](nz),
+                 write=lambda i, nz: f"zn[{nz * lanes}+j]")
     # const + simd: gcc may call libmvec's vector versions (flags: -fno-builtin-sin/cos, or
-    # gcc merges sin and cos into a sincos that has no vector form)
-    decls = "".join(f"double {f}(double{', double' if f in ('pow', 'atan2') else ''}) "
-                    f"__attribute__((const, __simd__(\"notinbranch\")));\n"
-                    for f in sorted(used))
+    # gcc merges sin and cos into a sincos that has no vector form); sqrt, fabs, floor, ceil
+    # and copysign are inlined as vector instructions
+    decls = "".join(f"double {f}({', '.join(['double'] * n)})"
+                    + (" __attribute__((const, __simd__(\"notinbranch\")))"
+                       if f in _VECTOR_MATH else "") + ";\n"
+                    for f, n in sorted(c.calls.items()))
     work = ", ".join(f"w{i}" for i in range(step.sz_w()))
-    lines = "\n      ".join(body)
+    lines = "\n      ".join(c.statements)
     return f"""/* quadcog vector kernel for {step.name()}: generated, do not edit. */
-{decls}double sqrt(double); double fabs(double); double floor(double); double ceil(double);
-double copysign(double, double); double fmod(double, double);
-#define LANES {lanes}
+{decls}#define LANES {lanes}
 #define NZ {nZ}
 #define NQ {nQ}
 #define NR {nR}
