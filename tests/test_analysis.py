@@ -13,6 +13,7 @@ from quadcog.analysis.report import jsonable
 from quadcog.analysis.zero_dynamics import (nonlinear_check, rg_sensitivity,
                                             zero_dynamics_eigenvalues)
 from quadcog.conventions import IDX
+from conftest import assert_close
 
 
 @pytest.fixture(scope="module")
@@ -159,12 +160,33 @@ def test_zero_dynamics_nonlinear_held_vs_moving():
 
 # -- 3. adaptive design ---------------------------------------------------------------------------
 
-def test_adaptive_design_matrices():
-    d = design_checks()
-    assert d["max_real_eig_A"] < 0
-    assert d["P_asymmetry"] < 1e-12
-    assert d["eig_P"][0] > 0
-    assert d["lyapunov_residual_relative"] < 1e-10
+def test_adaptive_error_model_and_its_lyapunov_matrix():
+    """The error model A of the adaptive law (e_s = [e, e_dot], e_ddot = -kp e - kd e_dot
+    for z, phi, theta, psi) has the poles it was given, and P is the Lyapunov matrix of that
+    model for Q by its definition, not by the equation the design solves: along the flow
+    e(t) = exp(A t) e0, V(e0) = e0^T P e0 = int_0^inf e^T Q e dt, i.e.
+    P = int_0^inf exp(A^T t) Q exp(A t) dt (Simpson's rule on the exact flow). A Q with
+    distinct entries makes a transposed A or a mis-ordered Q in the design show;
+    design_checks reports the same eigenvalues and P."""
+    from scipy.linalg import expm
+    poles = dict(poles_z=(-2.0, -5.0), poles_attitude=(-8.0, -13.0), poles_psi=(-3.0, -4.5))
+    Q = np.diag([4.0, 3.0, 2.0, 1.5, 1.0, 0.5, 0.3, 0.2])
+    ctl = quadcog.AdaptiveFeedbackLinearization(Q=Q, **poles)
+    chosen = np.sort(np.r_[poles["poles_z"], poles["poles_attitude"], poles["poles_attitude"],
+                           poles["poles_psi"]])
+    assert np.allclose(np.sort(np.linalg.eigvals(ctl.A_error).real), chosen, atol=1e-9)
+    h, n = 1e-3, 12000                    # 12 s: exp(-2 * 2 * 12) of V left at the slowest pole
+    step, flow = expm(ctl.A_error * h), np.eye(8)
+    P = np.zeros((8, 8))
+    for k in range(n + 1):
+        weight = 1 if k in (0, n) else (4 if k % 2 else 2)
+        P += weight * flow.T @ Q @ flow
+        flow = step @ flow
+    P *= h / 3
+    assert_close(ctl.P, P, 1e-7, "P against int exp(A^T t) Q exp(A t) dt")
+    d = design_checks(ctl)
+    assert np.allclose(np.sort(d["eig_A"].real), chosen, atol=1e-9) and d["max_real_eig_A"] < 0
+    assert np.allclose(d["eig_P"], np.linalg.eigvalsh(P), rtol=1e-8) and d["eig_P"][0] > 0
 
 
 @pytest.fixture(scope="module")
