@@ -151,10 +151,10 @@ def test_zero_dynamics_r_G_sensitivity_over_the_manifold():
 
 def test_zero_dynamics_nonlinear_held_vs_moving():
     offsets = [(0.0, 0.0, 0.0), (0.06, 0.06, 0.0), (-0.05, 0.03, 0.02)]
-    held = nonlinear_check(offsets, duration=3.0)
+    held = nonlinear_check(offsets, duration=1.5)
     assert held["max_spread"] < 1e-7
     assert held["max_error_vs_analytic"] < 1e-7      # u0 exp(-c t / m), x = u0 m / c (1 - ...)
-    moving = nonlinear_check(offsets, duration=3.0, moving=True)
+    moving = nonlinear_check(offsets, duration=1.5, moving=True)
     assert moving["max_spread"] > 1e-3               # internal dynamics do see r_G
 
 

@@ -10,6 +10,7 @@ CoG), and c accumulates them over the steps: measured at most 9e-6 of each outpu
 magnitude in float32 and 2e-14 in double. The bounds are 1e-4 (float32, about 800 ulps) and
 1e-11 (double), an order of magnitude above what is measured.
 """
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 import tempfile
 
@@ -24,27 +25,33 @@ pytestmark = [pytest.mark.slow, pytest.mark.skipif(
     reason=f"needs {target.DEBIAN_PACKAGES} (CI installs them: .ci/run)")]
 
 
+def _run_one(name, precision, nc, data):
+    """Build one module for the target and the host, run both: one entry of ``runs``."""
+    module = build.embedded_dir() / precision
+    elf = target.build_target(module, name, nc, data, data)
+    exe = target.build_host_harness(module, name, nc, data, data)
+    return dict(nc=nc, target=target.parse_output(target.run_qemu(elf), precision, nc),
+                host=target.parse_output(target.run_host(exe), precision, nc),
+                size=target.object_cost(data / f"quadcog_{name}.o"))
+
+
 @pytest.fixture(scope="module")
 def runs():
-    """Each committed module, run once on the target and once on the host."""
+    """Each committed module, run once on the target and once on the host. The builds and
+    runs are independent processes writing files named by controller: two at a time (QEMU
+    counts instructions with -icount, so the costs do not depend on the load)."""
     x, ref, dt = build.recording()
     assert len(x) >= 2000
-    out = {}
-    with tempfile.TemporaryDirectory() as tmp:
+    jobs = {}
+    with tempfile.TemporaryDirectory() as tmp, ThreadPoolExecutor(max_workers=2) as pool:
         for precision in ("float32", "double"):
             data = Path(tmp) / precision
             data.mkdir()
             target.write_data(data / "harness_data.h", x, ref, dt, precision)
             for name in build.CONTROLLERS:
                 nc = make_controller(name).n_state
-                module = build.embedded_dir() / precision
-                elf = target.build_target(module, name, nc, data, data)
-                exe = target.build_host_harness(module, name, nc, data, data)
-                out[name, precision] = dict(
-                    nc=nc, target=target.parse_output(target.run_qemu(elf), precision, nc),
-                    host=target.parse_output(target.run_host(exe), precision, nc),
-                    size=target.object_cost(data / f"quadcog_{name}.o"))
-    return out
+                jobs[name, precision] = pool.submit(_run_one, name, precision, nc, data)
+        return {key: job.result() for key, job in jobs.items()}
 
 
 @pytest.mark.parametrize("precision", ["float32", "double"])

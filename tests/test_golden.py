@@ -16,18 +16,21 @@ GENERATED = ROOT / "generated"
 
 
 def _derive(out, seed):
+    """Start `python -m derive --out out` under hash seed ``seed``; returns the process."""
     env = dict(os.environ, PYTHONHASHSEED=str(seed))
-    res = subprocess.run([sys.executable, "-m", "derive", "--out", str(out), "--quiet"],
-                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
-    assert res.returncode == 0, res.stderr
+    return subprocess.Popen([sys.executable, "-m", "derive", "--out", str(out), "--quiet"],
+                            cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
 
 
 @pytest.fixture(scope="module")
 def fresh(tmp_path_factory):
     a = tmp_path_factory.mktemp("derive-seed-1")
     b = tmp_path_factory.mktemp("derive-seed-4242")
-    _derive(a, 1)
-    _derive(b, 4242)
+    runs = [_derive(a, 1), _derive(b, 4242)]          # at once: independent processes
+    for proc in runs:
+        _, err = proc.communicate(timeout=300)
+        assert proc.returncode == 0, err
     return a, b
 
 

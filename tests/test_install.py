@@ -9,6 +9,7 @@ visible through a .pth line pointing at this environment's site-packages, which 
 quadcog package (the editable install is a finder hook that a plain .pth line never runs).
 The test proves that quadcog is imported from the installed wheel, not from the checkout.
 """
+from concurrent.futures import ThreadPoolExecutor
 import json
 import os
 from pathlib import Path
@@ -49,17 +50,22 @@ def _wheel(src, out):
 def wheels(tmp_path_factory):
     """(wheel built from a copy of the tree, wheel built from the sdist of that copy)."""
     tmp = tmp_path_factory.mktemp("build")
-    src = tmp / "src"
-    shutil.copytree(ROOT, src, ignore=SKIP)
-    from_tree = _wheel(src, tmp / "wheel")
-    _run([sys.executable, "-c", "from setuptools import build_meta as b; "
-          f"print(b.build_sdist({str(tmp / 'sdist')!r}))"], cwd=src)
-    (sdist,) = (tmp / "sdist").glob("quadcog-*.tar.gz")
-    with tarfile.open(sdist) as tar:
-        tar.extractall(tmp / "unpacked", filter="data")
-    (unpacked,) = (tmp / "unpacked").iterdir()
-    from_sdist = _wheel(unpacked, tmp / "wheel-from-sdist")
-    return from_tree, from_sdist
+    src, src_for_sdist = tmp / "src", tmp / "src-for-sdist"
+    for folder in (src, src_for_sdist):        # one copy per build: they write into the tree
+        shutil.copytree(ROOT, folder, ignore=SKIP)
+
+    def via_sdist():
+        _run([sys.executable, "-c", "from setuptools import build_meta as b; "
+              f"print(b.build_sdist({str(tmp / 'sdist')!r}))"], cwd=src_for_sdist)
+        (sdist,) = (tmp / "sdist").glob("quadcog-*.tar.gz")
+        with tarfile.open(sdist) as tar:
+            tar.extractall(tmp / "unpacked", filter="data")
+        (unpacked,) = (tmp / "unpacked").iterdir()
+        return _wheel(unpacked, tmp / "wheel-from-sdist")
+
+    with ThreadPoolExecutor(max_workers=2) as pool:      # independent builds, at once
+        from_tree, from_sdist = pool.submit(_wheel, src, tmp / "wheel"), pool.submit(via_sdist)
+        return from_tree.result(), from_sdist.result()
 
 
 def test_every_package_is_listed():
@@ -119,7 +125,8 @@ def test_wheel_runs_a_scenario_in_a_fresh_venv(wheels, tmp_path):
     assert Path(where[0]).is_relative_to(site / "quadcog"), where
     assert Path(where[1]) == (site / "quadcog" / "_generated").resolve(), where
     assert not Path(where[0]).is_relative_to(ROOT)
-    out = _run([venv / "bin" / "quadcog", "run", "fig3a", "--out", "flight"], cwd=work)
+    out = _run([venv / "bin" / "quadcog", "run", "fig3a", "--out", "flight", "--no-plot"],
+               cwd=work)                      # the figure: tests/test_cli.py, same code
     metrics = json.loads((work / "flight" / "metrics.json").read_text())
     assert metrics["name"] == "fig3a" and not metrics["diverged"], out
     assert "fig3a" in _run([venv / "bin" / "quadcog", "scenarios"], cwd=work)
