@@ -223,6 +223,7 @@ def test_lyapunov_rises_with_M_hat_in_the_law(lyapunov_runs):
 
 # -- 4. failure map ----------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_failure_map_small_grid(tmp_path):
     # x_G, y_G in {-12, -6, 0, 6, 12} cm: |r_G| >= 12 cm is inadmissible for this vehicle
     fm = failure_map(grid=5, half_width=0.12, duration=10.0)

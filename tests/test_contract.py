@@ -9,6 +9,8 @@ import shutil
 import subprocess
 import sys
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 SKIP = shutil.ignore_patterns("__pycache__")
 
@@ -39,6 +41,7 @@ print(json.dumps({"file": quadcog.__file__, "folder": str(m.folder),
 """
 
 
+@pytest.mark.slow
 def test_runtime_follows_the_contract_in_derive(tmp_path):
     for part in ("derive", "quadcog", "generated"):
         shutil.copytree(ROOT / part, tmp_path / part, ignore=SKIP)

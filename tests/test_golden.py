@@ -34,16 +34,19 @@ def fresh(tmp_path_factory):
     return a, b
 
 
+@pytest.mark.slow
 def test_generated_is_fresh(fresh):
     diff = diff_trees(GENERATED, fresh[0])
     assert not diff, f"generated/ is stale; run `make derive`. Diff:\n{diff}"
 
 
+@pytest.mark.slow
 def test_reproducible_across_hash_seeds(fresh):
     diff = diff_trees(fresh[0], fresh[1])
     assert not diff, f"two derivations differ:\n{diff}"
 
 
+@pytest.mark.slow
 def test_diff_is_readable(tmp_path, fresh):
     """A stale file shows up as a unified diff naming the file and the changed line."""
     import shutil

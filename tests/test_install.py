@@ -86,6 +86,7 @@ def test_every_package_is_listed():
     assert not sorted(listed - needed), "pyproject.toml lists packages that do not exist"
 
 
+@pytest.mark.slow
 def test_wheel_and_sdist_ship_the_generated_files(wheels):
     manifest = json.loads((ROOT / "generated" / "manifest.json").read_text())
     expected = {f"quadcog/_generated/{rel}" for rel in manifest["files"]}
@@ -106,6 +107,7 @@ def test_wheel_and_sdist_ship_the_generated_files(wheels):
     assert not any(n.startswith(("derive/", "tests/", "generated/")) for n in listings[0])
 
 
+@pytest.mark.slow
 def test_wheel_runs_a_scenario_in_a_fresh_venv(wheels, tmp_path):
     venv = tmp_path / "venv"
     _run([sys.executable, "-m", "venv", "--without-pip", venv], cwd=tmp_path)
