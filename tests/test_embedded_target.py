@@ -19,6 +19,7 @@ import pytest
 
 from quadcog.controllers import make_controller
 from quadcog.embedded import build, target
+from conftest import background_job, background_result
 
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(
     bool(target.missing_tools()),
@@ -35,23 +36,39 @@ def _run_one(name, precision, nc, data):
                 size=target.object_cost(data / f"quadcog_{name}.o"))
 
 
-@pytest.fixture(scope="module")
-def runs():
-    """Each committed module, run once on the target and once on the host. The builds and
-    runs are independent processes writing files named by controller: two at a time (QEMU
-    counts instructions with -icount, so the costs do not depend on the load)."""
+def _start_runs():
+    """In the main thread: the recording (a simulation) and the state sizes; returns the
+    builds and runs, which are subprocesses and files only (conftest.background_job starts
+    them at collection). Nothing to do without the tools: the module is skipped."""
+    if target.missing_tools():
+        return lambda: None
     x, ref, dt = build.recording()
     assert len(x) >= 2000
-    jobs = {}
-    with tempfile.TemporaryDirectory() as tmp, ThreadPoolExecutor(max_workers=2) as pool:
-        for precision in ("float32", "double"):
-            data = Path(tmp) / precision
-            data.mkdir()
-            target.write_data(data / "harness_data.h", x, ref, dt, precision)
-            for name in build.CONTROLLERS:
-                nc = make_controller(name).n_state
-                jobs[name, precision] = pool.submit(_run_one, name, precision, nc, data)
-        return {key: job.result() for key, job in jobs.items()}
+    nc = {name: make_controller(name).n_state for name in build.CONTROLLERS}
+
+    def work():
+        """Two at a time: QEMU counts instructions with -icount, so the costs do not depend
+        on the load."""
+        jobs = {}
+        with tempfile.TemporaryDirectory() as tmp, ThreadPoolExecutor(max_workers=2) as pool:
+            for precision in ("float32", "double"):
+                data = Path(tmp) / precision
+                data.mkdir()
+                target.write_data(data / "harness_data.h", x, ref, dt, precision)
+                for name in build.CONTROLLERS:
+                    jobs[name, precision] = pool.submit(_run_one, name, precision, nc[name],
+                                                        data)
+            return {key: job.result() for key, job in jobs.items()}
+    return work
+
+
+background_job("embedded: target and host runs", __file__, "runs", _start_runs)
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """Each committed module, run once on the target and once on the host."""
+    return background_result("embedded: target and host runs")
 
 
 @pytest.mark.parametrize("precision", ["float32", "double"])

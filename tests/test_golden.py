@@ -8,6 +8,7 @@ import sys
 
 import pytest
 
+from conftest import background_dir, background_job, background_result
 from derive.compare import diff_trees, is_foreign
 from derive.manifest import derive_sources, sha256
 
@@ -23,15 +24,23 @@ def _derive(out, seed):
                             text=True)
 
 
-@pytest.fixture(scope="module")
-def fresh(tmp_path_factory):
-    a = tmp_path_factory.mktemp("derive-seed-1")
-    b = tmp_path_factory.mktemp("derive-seed-4242")
-    runs = [_derive(a, 1), _derive(b, 4242)]          # at once: independent processes
+def _derive_twice():
+    """Two derivations at once (independent processes), under hash seeds 1 and 4242; started
+    in the background at collection (conftest.background_job)."""
+    a, b = background_dir("derive-seed-1"), background_dir("derive-seed-4242")
+    runs = [_derive(a, 1), _derive(b, 4242)]
     for proc in runs:
         _, err = proc.communicate(timeout=300)
         assert proc.returncode == 0, err
     return a, b
+
+
+background_job("golden: two derivations", __file__, "fresh", lambda: _derive_twice)
+
+
+@pytest.fixture(scope="module")
+def fresh():
+    return background_result("golden: two derivations")
 
 
 @pytest.mark.slow

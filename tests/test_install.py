@@ -23,6 +23,8 @@ import zipfile
 
 import pytest
 
+from conftest import background_dir, background_job, background_result
+
 ROOT = Path(__file__).resolve().parent.parent
 SKIP = shutil.ignore_patterns(".git", ".venv", "out", "build", "dist", "*.egg-info",
                               "__pycache__", ".pytest_cache", ".generated-*")
@@ -46,10 +48,11 @@ def _wheel(src, out):
     return wheel
 
 
-@pytest.fixture(scope="module")
-def wheels(tmp_path_factory):
-    """(wheel built from a copy of the tree, wheel built from the sdist of that copy)."""
-    tmp = tmp_path_factory.mktemp("build")
+def _build_wheels():
+    """(wheel built from a copy of the tree, wheel built from the sdist of another copy), both
+    builds at once; subprocesses and files only, started in the background at collection
+    (conftest.background_job)."""
+    tmp = background_dir("wheels")
     src, src_for_sdist = tmp / "src", tmp / "src-for-sdist"
     for folder in (src, src_for_sdist):        # one copy per build: they write into the tree
         shutil.copytree(ROOT, folder, ignore=SKIP)
@@ -63,9 +66,18 @@ def wheels(tmp_path_factory):
         (unpacked,) = (tmp / "unpacked").iterdir()
         return _wheel(unpacked, tmp / "wheel-from-sdist")
 
-    with ThreadPoolExecutor(max_workers=2) as pool:      # independent builds, at once
+    with ThreadPoolExecutor(max_workers=2) as pool:
         from_tree, from_sdist = pool.submit(_wheel, src, tmp / "wheel"), pool.submit(via_sdist)
         return from_tree.result(), from_sdist.result()
+
+
+background_job("install: wheels", __file__, "wheels", lambda: _build_wheels)
+
+
+@pytest.fixture(scope="module")
+def wheels():
+    """(wheel built from the tree, wheel built from the sdist)."""
+    return background_result("install: wheels")
 
 
 def test_every_package_is_listed():
@@ -127,8 +139,8 @@ def test_wheel_runs_a_scenario_in_a_fresh_venv(wheels, tmp_path):
     assert Path(where[0]).is_relative_to(site / "quadcog"), where
     assert Path(where[1]) == (site / "quadcog" / "_generated").resolve(), where
     assert not Path(where[0]).is_relative_to(ROOT)
-    out = _run([venv / "bin" / "quadcog", "run", "fig3a", "--out", "flight", "--no-plot"],
-               cwd=work)                      # the figure: tests/test_cli.py, same code
+    out = _run([venv / "bin" / "quadcog", "run", "fig3a", "--out", "flight", "--no-plot",
+                "--set", "duration=2"], cwd=work)     # the figure: tests/test_cli.py, same code
     metrics = json.loads((work / "flight" / "metrics.json").read_text())
     assert metrics["name"] == "fig3a" and not metrics["diverged"], out
     assert "fig3a" in _run([venv / "bin" / "quadcog", "scenarios"], cwd=work)
