@@ -1,4 +1,10 @@
-"""Shared fixtures: seeded samplers of admissible parameter sets and states."""
+"""Shared fixtures: seeded samplers of admissible parameter sets and states; long subprocess
+jobs started in the background (background_job)."""
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+import shutil
+import tempfile
+
 import numpy as np
 import pytest
 
@@ -36,3 +42,70 @@ def assert_close(actual, expected, rtol, what, point=None):
         + (f" at point {point}" if point is not None else "")
         + f"\nactual:\n{actual}\nexpected:\n{expected}")
     return err / scale
+
+
+# -- long subprocess jobs, started in the background ------------------------------------------
+# A few tests wait for seconds on work that is only subprocesses and files (a derivation, the
+# cross-compilations and QEMU runs, wheel builds). A test module registers such a job with
+# background_job(); once the tests are collected, the jobs of the tests that will run start
+# on one background thread, in registration (file) order, while the first tests run on the
+# other core. The test then takes the result with background_result(), which runs the job
+# there and then if it was not started (--collect-only). A job's exception is raised in the
+# test that takes its result.
+
+_JOBS = {}            # name -> dict(module=file name, user, prepare=callable, future=None)
+_POOL = []
+_DIRS = []
+
+
+def background_dir(prefix):
+    """A temporary folder for a job's files, removed at the end of the session."""
+    _DIRS.append(Path(tempfile.mkdtemp(prefix=f"quadcog-test-{prefix}-")))
+    return _DIRS[-1]
+
+
+def background_job(name, module, user, prepare):
+    """Register ``prepare`` for ``user``, the fixture or the test of ``module`` (its __file__)
+    that takes the result: the job starts if a collected test of that module is or uses it.
+    ``prepare`` is called in the main thread (for anything that touches CasADi or quadcog
+    state) and returns the function that does the long work on the background thread; that
+    function's return value is the job's result."""
+    _JOBS.setdefault(name, dict(module=Path(module).name, user=user, prepare=prepare,
+                                future=None))
+
+
+def background_result(name):
+    """The result of job ``name`` (waits for it; runs it now if it was not started)."""
+    job = _JOBS[name]
+    if job["future"] is None:
+        return job["prepare"]()()
+    future, job["future"] = job["future"], None          # a second call runs it again
+    return future.result()
+
+
+def _start(job):
+    try:
+        work = job["prepare"]()
+    except Exception as e:                               # raised in the test, not here
+        def work(e=e):
+            raise e
+    return _POOL[0].submit(work)
+
+
+def pytest_collection_finish(session):
+    if session.config.option.collectonly:
+        return
+    for job in _JOBS.values():
+        if any(item.path.name == job["module"] and (job["user"] in item.fixturenames or
+                                                     job["user"] == item.originalname)
+               for item in session.items):
+            if not _POOL:
+                _POOL.append(ThreadPoolExecutor(max_workers=1, thread_name_prefix="tests-bg"))
+            job["future"] = _start(job)
+
+
+def pytest_sessionfinish(session):
+    for pool in _POOL:
+        pool.shutdown(wait=True, cancel_futures=True)
+    for folder in _DIRS:
+        shutil.rmtree(folder, ignore_errors=True)

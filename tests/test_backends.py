@@ -37,10 +37,12 @@ def _args(names, x, U, p, v):
              "wrench": wrench}[n] for n in names]
 
 
+@pytest.mark.slow
 def test_every_function_exported(lambdified):
     assert set(lambdified) == set(FUNCTIONS)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(FUNCTIONS))
 def test_c_casadi_sympy_agree(name, model, lambdified, points):
     names, fns, gamma_fn = lambdified[name]

@@ -18,11 +18,21 @@ def test_convergence_time_against_a_hand_made_estimate():
 
 
 def test_variants_share_the_poles_and_keep_the_composite_settings():
+    """The paper's law flown on a composite scenario gets the same attitude poles and drops
+    what it does not take (it builds), the composite keeps all its settings, and both fly the
+    same sensing and truth."""
     base = load_scenario("fig6-real")
-    paper = variant(base, "adaptive")
-    assert paper.controller_params == {"poles_attitude": [-20.0, -24.0]}
-    assert variant(base, "composite").controller_params["motor_lag"] is True
-    assert paper.sensing == base.sensing and paper.truth == base.truth
+    paper, composite = variant(base, "adaptive"), variant(base, "composite")
+    assert set(base.controller_params) >= {"poles_attitude", "motor_lag"}
+    p1, p2 = base.controller_params["poles_attitude"]
+    for v in (paper, composite):       # s^2 + kd s + kp = (s - p1)(s - p2) on phi and theta
+        inner = v.make_controller().inner
+        assert np.allclose([inner.kp[1], inner.kd[1]], [p1 * p2, -(p1 + p2)])
+    assert "motor_lag" not in paper.controller_params
+    assert composite.controller_params == base.controller_params
+    assert composite.make_controller().inner.motor_lag is True
+    for v in (paper, composite):
+        assert v.sensing == base.sensing and v.truth == base.truth
 
 
 def test_composite_meets_the_fig6_real_targets():

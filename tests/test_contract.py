@@ -9,6 +9,10 @@ import shutil
 import subprocess
 import sys
 
+import pytest
+
+from conftest import background_dir, background_job, background_result
+
 ROOT = Path(__file__).resolve().parent.parent
 SKIP = shutil.ignore_patterns("__pycache__")
 
@@ -39,7 +43,11 @@ print(json.dumps({"file": quadcog.__file__, "folder": str(m.folder),
 """
 
 
-def test_runtime_follows_the_contract_in_derive(tmp_path):
+def _edit_and_derive():
+    """Copy derive/, quadcog/ and generated/, apply EDITS, run `python -m derive` there:
+    (folder, environment, the derive's CompletedProcess). Started in the background at
+    collection (conftest.background_job): it is a subprocess and files only."""
+    tmp_path = background_dir("contract")
     for part in ("derive", "quadcog", "generated"):
         shutil.copytree(ROOT / part, tmp_path / part, ignore=SKIP)
     spec = tmp_path / "derive" / "contract.py"
@@ -52,6 +60,16 @@ def test_runtime_follows_the_contract_in_derive(tmp_path):
            "PYTHONPATH": str(tmp_path), "CC": "no-such-compiler"}     # the VM: nothing to build
     res = subprocess.run([sys.executable, "-m", "derive", "--quiet"], cwd=tmp_path, env=env,
                          capture_output=True, text=True, timeout=300)
+    return tmp_path, env, res
+
+
+background_job("contract: edited derive", __file__, "test_runtime_follows_the_contract_in_derive",
+               lambda: _edit_and_derive)
+
+
+@pytest.mark.slow
+def test_runtime_follows_the_contract_in_derive():
+    tmp_path, env, res = background_result("contract: edited derive")
     assert res.returncode == 0, res.stderr
     manifest = json.loads((tmp_path / "generated" / "manifest.json").read_text())
     assert "nu_dot_cmd" in manifest["vectors"] and "weight" in manifest["functions"]

@@ -37,15 +37,19 @@ def test_module_docstrings():
 
 def _project_files():
     """The repository's own text files (what a fresh clone has), without build products."""
+    import os
     from pathlib import Path
     root = Path(__file__).resolve().parent.parent
     skip = {".git", ".venv", "out", "build", "dist", "__pycache__", ".pytest_cache"}
-    for path in sorted(root.rglob("*")):
-        rel = path.relative_to(root)
-        if (path.is_file() and not skip & set(rel.parts) and not rel.parts[0].endswith(".egg-info")
-                and path.suffix in (".py", ".md", ".tex", ".toml", ".json", ".h", ".c", ".txt",
-                                    ".cfg", ".in", "") ):
-            yield rel, path.read_text(encoding="utf-8", errors="replace")
+    paths = []
+    for folder, dirs, files in os.walk(root):        # not into the skipped folders at all
+        top = Path(folder) == root
+        dirs[:] = [d for d in dirs if d not in skip and not (top and d.endswith(".egg-info"))]
+        paths += [Path(folder) / f for f in files if f not in skip]
+    for path in sorted(paths):
+        if path.is_file() and path.suffix in (".py", ".md", ".tex", ".toml", ".json", ".h",
+                                              ".c", ".txt", ".cfg", ".in", ""):
+            yield path.relative_to(root), path.read_text(encoding="utf-8", errors="replace")
 
 
 def test_nothing_points_outside_the_repository():

@@ -100,6 +100,7 @@ def _max_diff(a, b):
     return float(np.max(np.abs(a - b))) / max(1.0, float(np.max(np.abs(b)))) if a.size else 0.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fig", ["fig6", "fig7"])
 def test_double_closed_loop_equals_python_path(libraries, flights, fig):
     """The exported double steps, flown with the double truth plant, reproduce the Python
@@ -114,6 +115,7 @@ def test_double_closed_loop_equals_python_path(libraries, flights, fig):
             assert _max_diff(C[:, :3], res.r_hat) <= 1e-9, (fig, name)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fig", ["fig6", "fig7"])
 def test_float32_closed_loop_stays_with_double(libraries, flights, fig):
     """float32 flights: tail RMS error within 1 mm of the double flight's, r_hat within 1 %."""

@@ -10,6 +10,7 @@ CoG), and c accumulates them over the steps: measured at most 9e-6 of each outpu
 magnitude in float32 and 2e-14 in double. The bounds are 1e-4 (float32, about 800 ulps) and
 1e-11 (double), an order of magnitude above what is measured.
 """
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 import tempfile
 
@@ -18,33 +19,56 @@ import pytest
 
 from quadcog.controllers import make_controller
 from quadcog.embedded import build, target
+from conftest import background_job, background_result
 
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(
     bool(target.missing_tools()),
     reason=f"needs {target.DEBIAN_PACKAGES} (CI installs them: .ci/run)")]
 
 
+def _run_one(name, precision, nc, data):
+    """Build one module for the target and the host, run both: one entry of ``runs``."""
+    module = build.embedded_dir() / precision
+    elf = target.build_target(module, name, nc, data, data)
+    exe = target.build_host_harness(module, name, nc, data, data)
+    return dict(nc=nc, target=target.parse_output(target.run_qemu(elf), precision, nc),
+                host=target.parse_output(target.run_host(exe), precision, nc),
+                size=target.object_cost(data / f"quadcog_{name}.o"))
+
+
+def _start_runs():
+    """In the main thread: the recording (a simulation) and the state sizes; returns the
+    builds and runs, which are subprocesses and files only (conftest.background_job starts
+    them at collection). Nothing to do without the tools: the module is skipped."""
+    if target.missing_tools():
+        return lambda: None
+    x, ref, dt = build.recording()
+    assert len(x) >= 2000
+    nc = {name: make_controller(name).n_state for name in build.CONTROLLERS}
+
+    def work():
+        """Two at a time: QEMU counts instructions with -icount, so the costs do not depend
+        on the load."""
+        jobs = {}
+        with tempfile.TemporaryDirectory() as tmp, ThreadPoolExecutor(max_workers=2) as pool:
+            for precision in ("float32", "double"):
+                data = Path(tmp) / precision
+                data.mkdir()
+                target.write_data(data / "harness_data.h", x, ref, dt, precision)
+                for name in build.CONTROLLERS:
+                    jobs[name, precision] = pool.submit(_run_one, name, precision, nc[name],
+                                                        data)
+            return {key: job.result() for key, job in jobs.items()}
+    return work
+
+
+background_job("embedded: target and host runs", __file__, "runs", _start_runs)
+
+
 @pytest.fixture(scope="module")
 def runs():
     """Each committed module, run once on the target and once on the host."""
-    x, ref, dt = build.recording()
-    assert len(x) >= 2000
-    out = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        for precision in ("float32", "double"):
-            data = Path(tmp) / precision
-            data.mkdir()
-            target.write_data(data / "harness_data.h", x, ref, dt, precision)
-            for name in build.CONTROLLERS:
-                nc = make_controller(name).n_state
-                module = build.embedded_dir() / precision
-                elf = target.build_target(module, name, nc, data, data)
-                exe = target.build_host_harness(module, name, nc, data, data)
-                out[name, precision] = dict(
-                    nc=nc, target=target.parse_output(target.run_qemu(elf), precision, nc),
-                    host=target.parse_output(target.run_host(exe), precision, nc),
-                    size=target.object_cost(data / f"quadcog_{name}.o"))
-    return out
+    return background_result("embedded: target and host runs")
 
 
 @pytest.mark.parametrize("precision", ["float32", "double"])

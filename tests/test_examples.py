@@ -4,6 +4,7 @@ imports cost more than the notebooks)."""
 from pathlib import Path
 
 import nbformat
+import pytest
 from nbclient import NotebookClient
 from nbformat.v4 import new_code_cell
 
@@ -11,6 +12,7 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 NOTEBOOKS = ("first_flight.ipynb", "cog_step.ipynb")
 
 
+@pytest.mark.slow
 def test_notebooks_run(tmp_path, monkeypatch):
     monkeypatch.setenv("MPLBACKEND", "Agg")
     books = [nbformat.read(EXAMPLES / name, as_version=4) for name in NOTEBOOKS]

@@ -39,6 +39,7 @@ def test_if_stale_skips_a_fresh_folder(tmp_path):
     assert {p: p.stat().st_mtime_ns for p in fresh.rglob("*") if p.is_file()} == before
 
 
+@pytest.mark.slow              # one derivation (SymPy), about 5 s
 def test_if_stale_regenerates_to_generated(tmp_path):
     """An edited file makes the folder stale; --if-stale derives it again, and the result is
     generated/ byte for byte: generated/ is fresh."""
@@ -49,6 +50,7 @@ def test_if_stale_regenerates_to_generated(tmp_path):
     assert not diff, f"generated/ is stale; run `make derive`. Diff:\n{diff}"
 
 
+@pytest.mark.slow              # one derivation (SymPy), about 5 s
 def test_check_reports_a_stale_file_with_a_diff(tmp_path):
     """--check (under another hash seed) writes nothing, exits 1 and shows a unified diff of
     the one changed line and nothing else: the derivation does not depend on the seed."""

@@ -209,11 +209,6 @@ def test_central_inertia_matches_parallel_axis(kane, points):
                                    quadcog.inertia_about_cog(p), rtol=0, atol=1e-15)
 
 
-def test_sampled_parameters_are_admissible(points):
-    for _, _, p in points:
-        quadcog.check_parameters(p)           # raises ParameterError if inadmissible
-
-
 def test_dynamics_match_kane(kane, model, points):
     err, k, i = _compare(kane["fn"], model, points)
     assert err <= RTOL, (

@@ -9,6 +9,7 @@ visible through a .pth line pointing at this environment's site-packages, which 
 quadcog package (the editable install is a finder hook that a plain .pth line never runs).
 The test proves that quadcog is imported from the installed wheel, not from the checkout.
 """
+from concurrent.futures import ThreadPoolExecutor
 import json
 import os
 from pathlib import Path
@@ -21,6 +22,8 @@ import tomllib
 import zipfile
 
 import pytest
+
+from conftest import background_dir, background_job, background_result
 
 ROOT = Path(__file__).resolve().parent.parent
 SKIP = shutil.ignore_patterns(".git", ".venv", "out", "build", "dist", "*.egg-info",
@@ -45,21 +48,36 @@ def _wheel(src, out):
     return wheel
 
 
+def _build_wheels():
+    """(wheel built from a copy of the tree, wheel built from the sdist of another copy), both
+    builds at once; subprocesses and files only, started in the background at collection
+    (conftest.background_job)."""
+    tmp = background_dir("wheels")
+    src, src_for_sdist = tmp / "src", tmp / "src-for-sdist"
+    for folder in (src, src_for_sdist):        # one copy per build: they write into the tree
+        shutil.copytree(ROOT, folder, ignore=SKIP)
+
+    def via_sdist():
+        _run([sys.executable, "-c", "from setuptools import build_meta as b; "
+              f"print(b.build_sdist({str(tmp / 'sdist')!r}))"], cwd=src_for_sdist)
+        (sdist,) = (tmp / "sdist").glob("quadcog-*.tar.gz")
+        with tarfile.open(sdist) as tar:
+            tar.extractall(tmp / "unpacked", filter="data")
+        (unpacked,) = (tmp / "unpacked").iterdir()
+        return _wheel(unpacked, tmp / "wheel-from-sdist")
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        from_tree, from_sdist = pool.submit(_wheel, src, tmp / "wheel"), pool.submit(via_sdist)
+        return from_tree.result(), from_sdist.result()
+
+
+background_job("install: wheels", __file__, "wheels", lambda: _build_wheels)
+
+
 @pytest.fixture(scope="module")
-def wheels(tmp_path_factory):
-    """(wheel built from a copy of the tree, wheel built from the sdist of that copy)."""
-    tmp = tmp_path_factory.mktemp("build")
-    src = tmp / "src"
-    shutil.copytree(ROOT, src, ignore=SKIP)
-    from_tree = _wheel(src, tmp / "wheel")
-    _run([sys.executable, "-c", "from setuptools import build_meta as b; "
-          f"print(b.build_sdist({str(tmp / 'sdist')!r}))"], cwd=src)
-    (sdist,) = (tmp / "sdist").glob("quadcog-*.tar.gz")
-    with tarfile.open(sdist) as tar:
-        tar.extractall(tmp / "unpacked", filter="data")
-    (unpacked,) = (tmp / "unpacked").iterdir()
-    from_sdist = _wheel(unpacked, tmp / "wheel-from-sdist")
-    return from_tree, from_sdist
+def wheels():
+    """(wheel built from the tree, wheel built from the sdist)."""
+    return background_result("install: wheels")
 
 
 def test_every_package_is_listed():
@@ -80,6 +98,7 @@ def test_every_package_is_listed():
     assert not sorted(listed - needed), "pyproject.toml lists packages that do not exist"
 
 
+@pytest.mark.slow
 def test_wheel_and_sdist_ship_the_generated_files(wheels):
     manifest = json.loads((ROOT / "generated" / "manifest.json").read_text())
     expected = {f"quadcog/_generated/{rel}" for rel in manifest["files"]}
@@ -100,6 +119,7 @@ def test_wheel_and_sdist_ship_the_generated_files(wheels):
     assert not any(n.startswith(("derive/", "tests/", "generated/")) for n in listings[0])
 
 
+@pytest.mark.slow
 def test_wheel_runs_a_scenario_in_a_fresh_venv(wheels, tmp_path):
     venv = tmp_path / "venv"
     _run([sys.executable, "-m", "venv", "--without-pip", venv], cwd=tmp_path)
@@ -119,7 +139,8 @@ def test_wheel_runs_a_scenario_in_a_fresh_venv(wheels, tmp_path):
     assert Path(where[0]).is_relative_to(site / "quadcog"), where
     assert Path(where[1]) == (site / "quadcog" / "_generated").resolve(), where
     assert not Path(where[0]).is_relative_to(ROOT)
-    out = _run([venv / "bin" / "quadcog", "run", "fig3a", "--out", "flight"], cwd=work)
+    out = _run([venv / "bin" / "quadcog", "run", "fig3a", "--out", "flight", "--no-plot",
+                "--set", "duration=2"], cwd=work)     # the figure: tests/test_cli.py, same code
     metrics = json.loads((work / "flight" / "metrics.json").read_text())
     assert metrics["name"] == "fig3a" and not metrics["diverged"], out
     assert "fig3a" in _run([venv / "bin" / "quadcog", "scenarios"], cwd=work)

@@ -6,6 +6,8 @@ import pytest
 
 from quadcog.paper import run_paper
 
+pytestmark = pytest.mark.slow      # the seven paper flights with their figures, once
+
 
 @pytest.fixture(scope="module")
 def summary(tmp_path_factory):

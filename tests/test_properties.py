@@ -7,6 +7,7 @@ import tempfile
 import tomllib
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 from hypothesis.configuration import set_hypothesis_home_dir
 
@@ -56,6 +57,7 @@ def _set(doc, path, value, delete=False):
         target[path[-1]] = value
 
 
+@pytest.mark.slow
 @settings(max_examples=250, **SETTINGS)
 @given(st.sampled_from(sorted(SHIPPED)), st.data())
 def test_mutated_scenarios_parse_or_give_scenario_errors(name, data):

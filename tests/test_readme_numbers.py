@@ -2,6 +2,7 @@
 the paper table is compared with a fresh run in tests/test_paper.py."""
 from pathlib import Path
 import importlib.util
+import sys
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -30,7 +31,24 @@ def test_publish_replaces_only_its_block(tmp_path):
                                   "\n<!-- END paper -->\nrest\n")
 
 
-def test_make_bench_writes_into_out_not_the_tracked_file():
-    text = (ROOT / "bench" / "run.py").read_text()
-    assert 'ROOT / "out" / "bench" / "results.md"' in text
-    assert 'ROOT / "bench" / "results.md"' not in text
+def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
+    """`make bench` (bench/run.py's main, its measurements stubbed, its root moved to a
+    temporary folder) writes the table into out/bench/results.md and nothing into bench/."""
+    monkeypatch.setattr(sys, "path", list(sys.path))          # run.py inserts the root
+    spec = importlib.util.spec_from_file_location("bench_run", ROOT / "bench" / "run.py")
+    run = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(run)
+    for name in ("bench_single_call", "bench_controllers", "bench_op_estimate",
+                 "bench_vector_limits", "bench_rotorpy_batched", "bench_rotorpy"):
+        monkeypatch.setattr(run, name, lambda *args: None)
+    monkeypatch.setattr(run, "bench_flight", lambda: (None, None))
+    monkeypatch.setattr(run, "bench_batch", lambda n: (1.0, 1.0))
+    monkeypatch.setattr(run, "rows", [("a measurement", "1.5", "s", "", "", "")])
+    monkeypatch.setattr(run, "ROOT", tmp_path)
+    monkeypatch.setattr(sys, "argv", ["run.py"])
+    tracked = (ROOT / "bench" / "results.md").read_bytes()
+    run.main()
+    written = (tmp_path / "out" / "bench" / "results.md").read_text()
+    assert "| a measurement | 1.5 | s |" in written
+    assert not (tmp_path / "bench").exists()
+    assert (ROOT / "bench" / "results.md").read_bytes() == tracked

@@ -192,6 +192,7 @@ def test_a_folder_of_another_sweep_is_refused(small, tmp_path):
         sweep(load_sweep(small[0], samples=3, chunk=1), out, progress=False, plots=False)
 
 
+@pytest.mark.slow
 def test_grid_is_every_combination_and_the_failure_map_ships():
     s = load_sweep("failure-map")
     assert len(s.flights) == 3 * 41 * 41
