@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench embedded clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench mutations embedded clean
 
 OUT ?= out
 
@@ -67,6 +67,13 @@ test: $(STAMP)
 # copies it into README.md and bench/results.md).
 bench: compile
 	$(PY) bench/run.py
+
+# Would the tests catch wrong physics? Each deliberate mistake (bench/mutations.py --list) is
+# applied to a copy of the repository, which runs the physics tests; writes
+# out/mutations/results.md and fails when a mutation survives. MUTATIONS_ARGS: e.g.
+# --only gravity_sign, --tests tests/test_physics.py.
+mutations: $(STAMP)
+	$(PY) bench/mutations.py $(MUTATIONS_ARGS)
 
 # The controllers as C99 modules (float32, double) in generated/embedded/, checked with strict
 # flags, run on a Cortex-M4 in QEMU; prints the cost table (needs $(ARM_PACKAGES)).

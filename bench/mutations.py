@@ -1,0 +1,395 @@
+"""`make mutations`: would the tests catch wrong physics? Each mutation is one deliberate
+mistake, applied as a small textual edit to a copy of the repository; the tests run in that
+copy and must fail.
+
+    python bench/mutations.py                     # every mutation, default test files
+    python bench/mutations.py --only gravity_sign # one (repeat --only for several)
+    python bench/mutations.py --tests tests/test_physics.py tests/test_vehicle.py
+    python bench/mutations.py --list              # the mutations and their edits
+
+For each mutation the script copies the tracked files (``git ls-files``, as they are in the
+working tree) into a temporary folder, applies the edit (it must match exactly once, or the
+script stops: a moved source must not silently test nothing), regenerates ``generated/`` with
+``python -m derive`` when the edit is in ``derive/`` (and checks that the generated C changed,
+so the mistake reaches the compiled model as a real one would), and runs pytest there with this
+interpreter, cwd and PYTHONPATH set to the copy. A small pytest plugin checks, inside that pytest
+process, that ``quadcog``, ``derive``, ``report`` and the generated folder are the copy's (an
+editable install points at the checkout). The unmutated copy runs first as a control: every
+selected test must pass there, else the script aborts.
+
+When ``python -m derive`` itself refuses a mutated derivation (its own symbolic self-checks,
+e.g. that the hover trim U* gives x_dot = 0), the mistake never reaches generated/: that
+counts as caught, by derive. A ``*_past_derive`` variant of the same mistake then switches that
+one self-check off (a second edit, also asserted), so that the tests show whether they would
+catch it on their own.
+
+Prints a table (mutation | where | tests that fail | count) and writes it, with the full list of
+failing tests, to out/mutations/results.md. Exit status: 0 when every mutation is caught, 1
+when one survives (no test fails and derive accepts it), 2 when the control fails or an edit does not apply.
+The user's checkout is never written to except out/mutations/.
+"""
+import argparse
+from dataclasses import dataclass
+import json
+import os
+from pathlib import Path
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# Fast test files relevant to physics (about 40 s together on a free core, compiled code cached).
+DEFAULT_TESTS = [
+    "tests/test_physics.py", "tests/test_vehicle.py", "tests/test_identities.py",
+    "tests/test_independent_mechanics.py", "tests/test_hover.py", "tests/test_kinematics.py",
+    "tests/test_regressor.py", "tests/test_lie.py", "tests/test_bad_input.py",
+    "tests/test_simulate.py", "tests/test_controllers.py",
+]
+
+
+@dataclass(frozen=True)
+class Mutation:
+    name: str
+    path: str          # file of the edit, relative to the repository
+    old: str           # text that must occur exactly once in that file
+    new: str           # its replacement
+    what: str          # the mistake, in words
+    # further edits (path, old, new), each also applied exactly once: used to switch off one of
+    # derive's own self-checks, so that a mistake those checks refuse still reaches generated/
+    # and the tests show whether they would catch it on their own
+    bypass: tuple = ()
+
+    @property
+    def derived(self):
+        """True when the edit is in the derivation: generated/ is rewritten in the copy."""
+        return self.path.startswith("derive/")
+
+
+MUTATIONS = [
+    Mutation("products_of_inertia", "quadcog/plant.py",
+             "return p_eff, -m * ca.vertcat(x * y, x * z, y * z)",
+             "return p_eff, m * ca.vertcat(x * y, x * z, y * z)",
+             "sign of the products of inertia of the truth model's parallel-axis I_O"),
+    Mutation("products_of_inertia_derive", "derive/model.py",
+             "I_O = sp.Matrix([[sym.Ixx, Ixy, Ixz], [Ixy, sym.Iyy, Iyz], [Ixz, Iyz, sym.Izz]])",
+             "I_O = sp.Matrix([[sym.Ixx, -Ixy, -Ixz], [-Ixy, sym.Iyy, -Iyz], "
+             "[-Ixz, -Iyz, sym.Izz]])",
+             "sign of the products of inertia in the derived truth model (tensor vs. product "
+             "convention)"),
+    Mutation("products_of_inertia_admissibility", "quadcog/admissibility.py",
+             "- p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
+             "- p[IDX[\"m\"]] * (r @ r * np.eye(3) + np.outer(r, r)))",
+             "sign of the products r r^T in the admissibility check's I_G"),
+    Mutation("mixer_yaw_sign", "quadcog/vehicle.py",
+             "self.moment_constant * np.asarray(self.rotor_directions, float)])",
+             "-self.moment_constant * np.asarray(self.rotor_directions, float)])",
+             "sign of the yaw row of the mixer (rotor drag moments)"),
+    Mutation("rotors_2_4_swapped", "quadcog/vehicle.py",
+             "pos = np.asarray(self.rotor_positions, dtype=float)\n"
+             "        return np.vstack([np.ones(N_ROTORS), pos[:, 1], -pos[:, 0],",
+             "pos = np.asarray(self.rotor_positions, dtype=float)[[0, 3, 2, 1]]\n"
+             "        return np.vstack([np.ones(N_ROTORS), pos[:, 1], -pos[:, 0],",
+             "rotors 2 and 4 swapped in the mixer (positions exchanged, directions kept)"),
+    Mutation("rotors_2_4_swapped_layout", "quadcog/vehicle.py",
+             "return ((a, 0.0), (0.0, a), (-a, 0.0), (0.0, -a))",
+             "return ((a, 0.0), (0.0, -a), (-a, 0.0), (0.0, a))",
+             "rotors 2 and 4 swapped in the \"+\" layout"),
+    Mutation("parallel_axis_dropped", "quadcog/plant.py",
+             "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1] + diag,",
+             "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1],",
+             "parallel-axis term m (|r|^2 - r_i^2) dropped from the truth model's diagonal I_O"),
+    Mutation("parallel_axis_dropped_admissibility", "quadcog/admissibility.py",
+             "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"
+             "                - p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
+             "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"
+             "                - 0.0 * (r @ r * np.eye(3) - np.outer(r, r)))",
+             "parallel-axis term dropped from I_G in the admissibility check"),
+    Mutation("jerk_feed_forward_dropped", "quadcog/controllers/feedback_linearization.py",
+             "a_cmd_dot = ref[JERK] + drag * ref[ACC]",
+             "a_cmd_dot = drag * ref[ACC]",
+             "reference jerk dropped from the rate of the commanded attitude (FL, adaptive FL)"),
+    Mutation("gravity_sign", "derive/newton_euler.py",
+             "f_G = R.T * sp.Matrix([0, 0, -m * g])",
+             "f_G = R.T * sp.Matrix([0, 0, m * g])",
+             "sign of gravity in the derivation (weight up); derive's trim self-check refuses "
+             "it, generated/ is left as it was"),
+    Mutation("gravity_sign_past_derive", "derive/newton_euler.py",
+             "f_G = R.T * sp.Matrix([0, 0, -m * g])",
+             "f_G = R.T * sp.Matrix([0, 0, m * g])",
+             "gravity_sign with derive's trim self-check switched off: the weight points up in "
+             "dynamics and truth_dynamics",
+             bypass=(("derive/report.py", 'raise AssertionError("U* is not a trim")',
+                      "pass"),)),
+    Mutation("gravity_sign_controller", "quadcog/controllers/shaping.py",
+             "lift = g + a[2]",
+             "lift = -g + a[2]",
+             "sign of gravity in the controllers' thrust direction (a_cmd + g e_z)"),
+    Mutation("drag_sign", "derive/newton_euler.py",
+             "D = sp.diag(c_x, c_y, c_z, c_phi, c_theta, c_psi)",
+             "D = -sp.diag(c_x, c_y, c_z, c_phi, c_theta, c_psi)",
+             "sign of the drag matrix D in the derivation (drag pushes along the velocity)"),
+    Mutation("drag_sign_eom", "derive/vector_field.py",
+             "n = body.C * nu + body.D * nu + body.g_G",
+             "n = body.C * nu - body.D * nu + body.g_G",
+             "sign of D nu in the equations of motion only (D itself exported as diag(c)); "
+             "derive's linearization self-check refuses it"),
+    Mutation("drag_sign_eom_past_derive", "derive/vector_field.py",
+             "n = body.C * nu + body.D * nu + body.g_G",
+             "n = body.C * nu - body.D * nu + body.g_G",
+             "drag_sign_eom with derive's linearization self-check switched off: drag pushes "
+             "along the velocity in dynamics and truth_dynamics",
+             bypass=(("derive/report.py", 'raise AssertionError("linearization at the trim is '
+                      'not -M^{-1}[dg_G/deta, D]")', "pass"),)),
+]
+
+PROBE = '''"""Loaded by bench/mutations.py with -p: records which quadcog, derive and report this
+pytest process imports, and stops the session when they are not the copy's."""
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+
+def pytest_collection_finish(session):
+    import derive, quadcog, quadcog.paths, report
+    root = Path(os.environ["QUADCOG_MUTATION_COPY"]).resolve()
+    found = {"quadcog": quadcog.__file__, "derive": derive.__file__, "report": report.__file__,
+             "generated": str(quadcog.paths.generated_dir())}
+    Path(os.environ["QUADCOG_MUTATION_PROBE"]).write_text(json.dumps(found))
+    bad = {k: v for k, v in found.items() if not Path(v).resolve().is_relative_to(root)}
+    if bad:
+        pytest.exit(f"not the copy's modules: {bad}", returncode=3)
+'''
+
+
+class Abort(Exception):
+    """The check cannot be trusted (an edit did not apply, the control failed, ...)."""
+
+
+def tracked_files(root):
+    out = subprocess.run(["git", "ls-files", "-z"], cwd=root, check=True, capture_output=True)
+    return [f for f in out.stdout.decode().split("\0") if f]
+
+
+def make_pristine(dest):
+    """The tracked files of the checkout, as they are in its working tree, copied to dest."""
+    for rel in tracked_files(ROOT):
+        src = ROOT / rel
+        if not src.is_file():              # deleted in the working tree
+            continue
+        (dest / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(src, dest / rel)
+    (dest / "_mutation_probe.py").write_text(PROBE)
+
+
+def edit(name, copy, path, old, new):
+    """Replace ``old`` by ``new`` in copy/path; returns 'path:line'. Aborts unless ``old``
+    occurs exactly once."""
+    f = copy / path
+    if not f.is_file():
+        raise Abort(f"{name}: {path} does not exist")
+    text = f.read_text()
+    n = text.count(old)
+    if n != 1:
+        raise Abort(f"{name}: the text to edit occurs {n} times in {path} "
+                    f"(expected exactly once; did the source move?):\n{old}")
+    line = text[:text.index(old)].count("\n") + 1
+    f.write_text(text.replace(old, new))
+    return f"{path}:{line}"
+
+
+def apply(mutation, copy):
+    """Apply the mutation's edit (and its bypass edits) in ``copy``; returns where."""
+    where = edit(mutation.name, copy, mutation.path, mutation.old, mutation.new)
+    for path, old, new in mutation.bypass:
+        where += f" (check off: {edit(mutation.name, copy, path, old, new)})"
+    return where
+
+
+def environment(copy, cache):
+    env = dict(os.environ)
+    env.pop("QUADCOG_GENERATED", None)            # the copy's generated/, nothing else
+    env["PYTHONPATH"] = str(copy) + (os.pathsep + env["PYTHONPATH"]
+                                     if env.get("PYTHONPATH") else "")
+    env["QUADCOG_CACHE_DIR"] = str(cache)
+    env["QUADCOG_MUTATION_COPY"] = str(copy)
+    env["PYTHONDONTWRITEBYTECODE"] = "1"
+    return env
+
+
+def regenerate(mutation, copy, env, pristine):
+    """python -m derive in the copy; None, or the derivation's error when it refuses."""
+    res = subprocess.run([sys.executable, "-m", "derive", "--quiet"], cwd=copy, env=env,
+                         capture_output=True, text=True, timeout=900)
+    if res.returncode != 0:
+        last = (res.stderr.strip().splitlines() or ["?"])[-1]
+        return f"python -m derive refuses it ({last[:160]})"
+    c = "generated/c/quadcog_gen.c"
+    if (copy / c).read_bytes() == (pristine / c).read_bytes():
+        raise Abort(f"{mutation.name}: {c} did not change after python -m derive; the "
+                    "mutation would not reach the compiled model")
+    return None
+
+
+def run_tests(copy, env, tests, workdir, label):
+    """pytest in the copy; (failed test ids, exit code, seconds)."""
+    xml, probe = workdir / f"{label}.xml", workdir / f"{label}.probe.json"
+    for f in (xml, probe):
+        f.unlink(missing_ok=True)
+    env = dict(env, QUADCOG_MUTATION_PROBE=str(probe))
+    cmd = [sys.executable, "-m", "pytest", "-q", "-rfE", "-p", "no:cacheprovider",
+           "-p", "_mutation_probe", "-o", "junit_family=xunit1", f"--junitxml={xml}", *tests]
+    t0 = time.perf_counter()
+    res = subprocess.run(cmd, cwd=copy, env=env, capture_output=True, text=True, timeout=1800)
+    seconds = time.perf_counter() - t0
+    (workdir / f"{label}.log").write_text(res.stdout + res.stderr)
+    if not probe.is_file():
+        raise Abort(f"{label}: pytest exited {res.returncode} before collection finished; see "
+                    f"{workdir / (label + '.log')}\n{(res.stdout + res.stderr)[-2000:]}")
+    found = json.loads(probe.read_text())
+    root = copy.resolve()
+    bad = {k: v for k, v in found.items() if not Path(v).resolve().is_relative_to(root)}
+    if bad or res.returncode == 3:
+        raise Abort(f"{label}: pytest imported modules outside the copy {copy}: {bad or found}")
+    if res.returncode not in (0, 1) or not xml.is_file():
+        raise Abort(f"{label}: pytest exited {res.returncode}; see {workdir / (label + '.log')}")
+    failed = []
+    for case in ET.parse(xml).getroot().iter("testcase"):
+        if case.find("failure") is not None or case.find("error") is not None:
+            failed.append(f"{case.get('file') or case.get('classname')}::{case.get('name')}")
+    if res.returncode == 1 and not failed:
+        raise Abort(f"{label}: pytest exited 1 but the report names no failing test")
+    return failed, res.returncode, seconds
+
+
+def short(test_id):
+    return test_id.removeprefix("tests/")
+
+
+def table(rows, limit=None):
+    lines = ["| mutation | where | tests that fail | count |", "|---|---|---|---|"]
+    for name, where, failed, refused, _ in rows:
+        shown = [short(t) for t in failed]
+        if limit and len(shown) > limit:
+            shown = shown[:limit] + [f"... (+{len(shown) - limit} more)"]
+        cell = "<br>".join(s.replace("|", "\\|") for s in shown) or (
+            f"none run: {refused}" if refused else "**none: survives**")
+        lines.append(f"| {name} | {where} | {cell} | {len(failed)} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--tests", nargs="+", default=DEFAULT_TESTS,
+                    help="test files (or node ids) to run in each copy; default: %(default)s")
+    ap.add_argument("--only", action="append", metavar="NAME",
+                    help="run only this mutation (repeatable)")
+    ap.add_argument("--list", action="store_true", help="list the mutations and exit")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "mutations")
+    ap.add_argument("--cache-dir", type=Path, default=None,
+                    help="QUADCOG_CACHE_DIR of the copies (compiled code, keyed by source hash); "
+                         "default: OUT/cache, kept between runs")
+    ap.add_argument("--keep", action="store_true", help="keep the temporary copies")
+    args = ap.parse_args(argv)
+
+    if args.list:
+        for m in MUTATIONS:
+            print(f"{m.name}  ({m.path}{', regenerates generated/' if m.derived else ''})\n"
+                  f"    {m.what}\n    - {m.old!r}\n    + {m.new!r}")
+            for path, old, new in m.bypass:
+                print(f"    and in {path}:\n    - {old!r}\n    + {new!r}")
+        return 0
+    names = {m.name for m in MUTATIONS}
+    unknown = sorted(set(args.only or ()) - names)
+    if unknown:
+        ap.error(f"unknown mutation(s) {unknown}; expected some of {sorted(names)}")
+    selected = [m for m in MUTATIONS if not args.only or m.name in args.only]
+    for t in args.tests:
+        if not (ROOT / t.split("::")[0]).exists():
+            ap.error(f"no such test file: {t}")
+
+    out = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    cache = (args.cache_dir or out / "cache").resolve()
+    cache.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix="quadcog-mutations-"))
+    t_start = time.perf_counter()
+    rows, timings = [], {}
+    try:
+        pristine = tmp / "pristine"
+        make_pristine(pristine)
+        logs = tmp / "logs"
+        logs.mkdir()
+        print(f"copies in {tmp}; tests: {' '.join(args.tests)}", flush=True)
+
+        control = tmp / "control"
+        shutil.copytree(pristine, control)
+        failed, _, seconds = run_tests(control, environment(control, cache), args.tests, logs,
+                                       "control")
+        timings["control"] = seconds
+        print(f"control (no mutation): {len(failed)} failing, {seconds:.0f} s", flush=True)
+        if failed:
+            raise Abort("the control (no mutation) fails, so a failure under a mutation would "
+                        "mean nothing:\n  " + "\n  ".join(failed))
+        shutil.rmtree(control)
+
+        for m in selected:
+            t0 = time.perf_counter()
+            copy = tmp / m.name
+            shutil.copytree(pristine, copy)
+            where = apply(m, copy)
+            env = environment(copy, cache)
+            refused = regenerate(m, copy, env, pristine) if m.derived else None
+            failed = [] if refused else run_tests(copy, env, args.tests, logs, m.name)[0]
+            timings[m.name] = time.perf_counter() - t0
+            rows.append((m.name, where, failed, refused, m.what))
+            print(f"{m.name}: {refused or f'{len(failed)} failing'} ({where}), "
+                  f"{timings[m.name]:.0f} s", flush=True)
+            if not args.keep:
+                shutil.rmtree(copy)
+    except Abort as e:
+        print(f"mutations: abort: {e}", file=sys.stderr)
+        return 2
+    finally:
+        if args.keep:
+            print(f"copies kept in {tmp}")
+        else:
+            if (tmp / "logs").is_dir():       # pytest output and junit xml of this run
+                shutil.rmtree(out / "logs", ignore_errors=True)
+                shutil.copytree(tmp / "logs", out / "logs")
+            shutil.rmtree(tmp, ignore_errors=True)
+
+    total = time.perf_counter() - t_start
+    survivors = [name for name, _, failed, refused, _ in rows if not failed and not refused]
+    printed = table(rows, limit=4)
+    print()
+    print(printed)
+    print(f"\n{len(rows)} mutations, {len(rows) - len(survivors)} caught; total {total:.0f} s "
+          f"(control {timings['control']:.0f} s)")
+    details = ["", "## Failing tests per mutation", ""]
+    for name, where, failed, refused, what in rows:
+        details += [f"### {name}", "", f"{what} ({where}, {timings[name]:.0f} s)", ""]
+        details += [f"- `{t}`" for t in failed] or [
+            f"- no test run: {refused}" if refused else "- none: the mutation survives"]
+        details.append("")
+    (out / "results.md").write_text(
+        "# Mutation check (bench/mutations.py)\n\n"
+        f"Tests: {' '.join(args.tests)}\n\n" + table(rows) + "\n\n"
+        f"{len(rows)} mutations, {len(rows) - len(survivors)} caught; "
+        f"{total:.0f} s in total (control {timings['control']:.0f} s)\n"
+        + "\n".join(details))
+    print(f"written {out / 'results.md'}")
+    if survivors:
+        print(f"surviving mutations (no test fails): {', '.join(survivors)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
