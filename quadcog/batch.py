@@ -169,8 +169,7 @@ def _run_map(controller, actuation, limits, Z, params, schedule, threads, progre
     padded, n = schedule.padded(CHUNK), schedule.n_steps
     k = 0
     while k < n:
-        block = [a.T if a.ndim == 2 else a[None, :] for a in padded.block(k, k + CHUNK)]
-        Zp = np.array(mapped(Zp, Pp, *block))
+        Zp = np.array(mapped(Zp, Pp, *padded.matrices(k, k + CHUNK)))
         k += min(CHUNK, n - k)
         if progress:
             progress(k / n)

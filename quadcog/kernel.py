@@ -16,7 +16,6 @@ the block it is in (every lane runs the same vector code; a partial block is pad
 results are the same for any batch size, thread count or chunking.
 """
 import ctypes
-import functools
 import hashlib
 import math
 import platform

@@ -108,6 +108,11 @@ class Schedule:
                   for a in extra]
         return np.ascontiguousarray(np.hstack(parts))
 
+    def matrices(self, start, stop):
+        """The per-step inputs of steps start .. stop - 1 as CasADi-shaped matrices (rows x
+        steps, one per input in ``STEP_INPUTS`` order), for the mapped CasADi functions."""
+        return [a.T if a.ndim == 2 else a[None, :] for a in self.block(start, stop)]
+
     def block(self, start, stop):
         """The per-step inputs of steps start .. stop - 1 as a list of C-contiguous arrays in
         ``STEP_INPUTS`` order (views, no copies)."""

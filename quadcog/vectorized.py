@@ -94,7 +94,6 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     B, J = P.shape[0], len(cog_times)
     D = np.asarray(D, dtype=float).reshape(B, 3 * J)
     shapes = cog_shapes(schedule.t, cog_times)
-    n = schedule.n_steps
     nc, nf = controller.n_state, actuation.n_rotor_states
     nX = 12 + nf + nc
     if x0 is None:
@@ -144,6 +143,5 @@ def _run_casadi(controller, actuation, limits, J, Z, Q, schedule, shapes, thread
     shapes = np.vstack([shapes, np.repeat(shapes[-1:], n_pad, axis=0)]) if n_pad else shapes
     Zt, Qt = Z.T, Q.T
     for k in range(0, schedule.n_steps, CHUNK):
-        block = [a.T if a.ndim == 2 else a[None, :] for a in padded.block(k, k + CHUNK)]
-        Zt = np.array(mapped(Zt, Qt, *block, shapes[k:k + CHUNK].T))
+        Zt = np.array(mapped(Zt, Qt, *padded.matrices(k, k + CHUNK), shapes[k:k + CHUNK].T))
     return Zt.T
