@@ -55,7 +55,7 @@ report: $(STAMP)
 	@command -v pdflatex >/dev/null || { echo "pdflatex not found; install TeX Live (as root):"; \
 	  echo "  apt-get update && apt-get install -y --no-install-recommends $(TEXLIVE)"; exit 1; }
 	$(PY) -m report.verify --out $(OUT)/report/verification.tex --points 200
-	$(PY) -m report.build --out $(OUT)/report --paper $(OUT)/paper --analysis $(OUT)/analysis
+	$(PY) -m report.pdf --out $(OUT)/report --paper $(OUT)/paper --analysis $(OUT)/analysis
 
 analyze: compile
 	$(PY) -m quadcog analyze --out $(OUT)/analysis

@@ -70,7 +70,7 @@ class Mutation:
 
 
 MUTATIONS = [
-    Mutation("products_of_inertia", "quadcog/plant.py",
+    Mutation("products_of_inertia", "quadcog/sim/plant.py",
              "return p_eff, -m * ca.vertcat(x * y, x * z, y * z)",
              "return p_eff, m * ca.vertcat(x * y, x * z, y * z)",
              "sign of the products of inertia of the truth model's parallel-axis I_O"),
@@ -80,29 +80,29 @@ MUTATIONS = [
              "[-Ixz, -Iyz, sym.Izz]])",
              "sign of the products of inertia in the derived truth model (tensor vs. product "
              "convention)"),
-    Mutation("products_of_inertia_admissibility", "quadcog/admissibility.py",
+    Mutation("products_of_inertia_admissibility", "quadcog/model/admissibility.py",
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) + np.outer(r, r)))",
              "sign of the products r r^T in the admissibility check's I_G"),
-    Mutation("mixer_yaw_sign", "quadcog/vehicle.py",
+    Mutation("mixer_yaw_sign", "quadcog/vehicles/vehicle.py",
              "self.moment_constant * np.asarray(self.rotor_directions, float)])",
              "-self.moment_constant * np.asarray(self.rotor_directions, float)])",
              "sign of the yaw row of the mixer (rotor drag moments)"),
-    Mutation("rotors_2_4_swapped", "quadcog/vehicle.py",
+    Mutation("rotors_2_4_swapped", "quadcog/vehicles/vehicle.py",
              "pos = np.asarray(self.rotor_positions, dtype=float)\n"
              "        return np.vstack([np.ones(N_ROTORS), pos[:, 1], -pos[:, 0],",
              "pos = np.asarray(self.rotor_positions, dtype=float)[[0, 3, 2, 1]]\n"
              "        return np.vstack([np.ones(N_ROTORS), pos[:, 1], -pos[:, 0],",
              "rotors 2 and 4 swapped in the mixer (positions exchanged, directions kept)"),
-    Mutation("rotors_2_4_swapped_layout", "quadcog/vehicle.py",
+    Mutation("rotors_2_4_swapped_layout", "quadcog/vehicles/vehicle.py",
              "return ((a, 0.0), (0.0, a), (-a, 0.0), (0.0, -a))",
              "return ((a, 0.0), (0.0, -a), (-a, 0.0), (0.0, a))",
              "rotors 2 and 4 swapped in the \"+\" layout"),
-    Mutation("parallel_axis_dropped", "quadcog/plant.py",
+    Mutation("parallel_axis_dropped", "quadcog/sim/plant.py",
              "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1] + diag,",
              "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1],",
              "parallel-axis term m (|r|^2 - r_i^2) dropped from the truth model's diagonal I_O"),
-    Mutation("parallel_axis_dropped_admissibility", "quadcog/admissibility.py",
+    Mutation("parallel_axis_dropped_admissibility", "quadcog/model/admissibility.py",
              "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"
              "                - p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
              "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"
@@ -122,7 +122,7 @@ MUTATIONS = [
              "f_G = R.T * sp.Matrix([0, 0, m * g])",
              "gravity_sign with derive's trim self-check switched off: the weight points up in "
              "dynamics and truth_dynamics",
-             bypass=(("derive/report.py", 'raise AssertionError("U* is not a trim")',
+             bypass=(("derive/latex.py", 'raise AssertionError("U* is not a trim")',
                       "pass"),)),
     Mutation("gravity_sign_controller", "quadcog/controllers/shaping.py",
              "lift = g + a[2]",
@@ -142,7 +142,7 @@ MUTATIONS = [
              "n = body.C * nu - body.D * nu + body.g_G",
              "drag_sign_eom with derive's linearization self-check switched off: drag pushes "
              "along the velocity in dynamics and truth_dynamics",
-             bypass=(("derive/report.py", 'raise AssertionError("linearization at the trim is '
+             bypass=(("derive/latex.py", 'raise AssertionError("linearization at the trim is '
                       'not -M^{-1}[dg_G/deta, D]")', "pass"),)),
 ]
 

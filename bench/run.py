@@ -21,11 +21,10 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import quadcog  # noqa: E402
-from quadcog import (AdaptiveFeedbackLinearization, CogProfile, simulate,  # noqa: E402
-                     simulate_batch)
-from quadcog.closed_loop import closed_loop_step  # noqa: E402
-from quadcog.compiled import compile_function  # noqa: E402
-from quadcog.plant import Actuation, TruthOptions  # noqa: E402
+from quadcog import AdaptiveFeedbackLinearization, CogProfile, simulate, simulate_batch
+from quadcog.sim.closed_loop import closed_loop_step
+from quadcog.codegen.compiled import compile_function
+from quadcog.sim.plant import Actuation, TruthOptions
 
 rows = []
 
@@ -152,7 +151,7 @@ def bench_op_estimate(ctl, measured_step):
     counts, times = [], []
     for kind in classes:
         f = _kernel(kind)
-        call = quadcog.fastcall.FastCall(compile_function(f))
+        call = quadcog.codegen.fastcall.FastCall(compile_function(f))
         call.inputs[0][:] = np.linspace(0.1, 0.9, 16)
         times.append(per_call(call.eval, 2000))
         n = _op_classes(f)
@@ -181,7 +180,7 @@ def bench_batch(n_flights):
     """The vector kernel against the CasADi map it replaces, the single-flight path, and its
     memory per flight. Returns (ns per flight-step with 1 thread, flight-steps/s, 2 threads)."""
     import tracemalloc
-    import quadcog.batch as qb
+    import quadcog.sim.batch as qb
     print(f"{n_flights} adaptive flights of 20 s at 1 kHz (CoG step at 1 s), batch")
     ctl = AdaptiveFeedbackLinearization()
     vehicles = _batch_vehicles(n_flights)
@@ -249,10 +248,10 @@ def bench_vector_limits(ns_per_flight_step):
     """What bounds the vector kernel: per-lane rates of arithmetic, division and
     transcendental operations measured through the same kernel (random DAGs), weighted by
     the op counts of the batch step."""
-    from quadcog.closed_loop import monitored_step, packed
-    from quadcog.kernel import VectorKernel
-    from quadcog.plant import Actuation
-    from quadcog.divergence import Limits
+    from quadcog.sim.closed_loop import monitored_step, packed
+    from quadcog.codegen.vector_kernel import VectorKernel
+    from quadcog.sim.plant import Actuation
+    from quadcog.sim.divergence import Limits
     print("vector kernel against its op-count limit")
     counts, times = [], []
     B, n = 1024, 2000          # n: enough steps for the 10 ms resolution of CPU times

@@ -5,10 +5,10 @@ import sys
 import tempfile
 import time
 
-from .compare import diff_trees
-from .manifest import is_fresh
-from .pipeline import generate, generate_atomically
-from .to_casadi import UnsupportedAtomError
+from derive.compare import diff_trees
+from derive.manifest import is_fresh
+from derive.pipeline import generate, generate_atomically
+from derive.to_casadi import UnsupportedAtomError
 
 ROOT = Path(__file__).resolve().parent.parent
 

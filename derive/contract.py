@@ -2,10 +2,10 @@
 the vectors (the names of their entries, in order, and their symbols) and, per function, its
 arguments and outputs. ``export.py`` builds the functions from it, ``manifest.py`` writes it
 into generated/manifest.json (with the output shapes), and the runtime reads it from there
-(``quadcog.conventions``); nothing else spells it out."""
+(``quadcog.model.conventions``); nothing else spells it out."""
 from dataclasses import dataclass
 
-from . import symbols as sym
+from derive import symbols as sym
 
 # argument name -> (entry names, SymPy symbols), in order.
 VECTORS = {

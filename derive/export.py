@@ -4,9 +4,9 @@ import tempfile
 
 import casadi as ca
 
-from .contract import FUNCTIONS, VECTORS
-from .headers import c_header
-from .to_casadi import Translator
+from derive.contract import FUNCTIONS, VECTORS
+from derive.headers import c_header
+from derive.to_casadi import Translator
 
 C_BASENAME = "quadcog_gen"
 

@@ -1,7 +1,7 @@
 """Kinematics: R (body to ground, ZYX), Q (body rates to Euler rates), J = blockdiag(R, Q)."""
 import sympy as sp
 
-from .symbols import phi, psi, theta
+from derive.symbols import phi, psi, theta
 
 
 def elementary_rotations():

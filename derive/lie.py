@@ -6,8 +6,8 @@ import random
 
 import sympy as sp
 
-from .contract import output_symbols
-from .symbols import state
+from derive.contract import output_symbols
+from derive.symbols import state
 
 OUTPUTS = sp.Matrix(output_symbols())
 

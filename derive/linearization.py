@@ -1,5 +1,5 @@
 """Jacobian linearization A = df/dx, B = df/dU of x_dot = f(x) + g(x) U."""
-from .symbols import U, state
+from derive.symbols import U, state
 
 
 def linearization(xdot):

@@ -15,9 +15,9 @@ import platform
 import casadi
 import sympy
 
-from .compare import is_foreign
-from .contract import describe
-from .headers import NOTICE
+from derive.compare import is_foreign
+from derive.contract import describe
+from derive.headers import NOTICE
 
 DERIVE_DIR = Path(__file__).parent
 MANIFEST = "manifest.json"
@@ -29,14 +29,22 @@ def sha256(path):
 
 
 def _local_imports(path):
-    """Names of the derive modules that the module at ``path`` imports (relative imports)."""
+    """Names of the derive modules that the module at ``path`` imports (``from derive.x
+    import ...``, ``from derive import x`` or their relative forms)."""
     names = set()
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.ImportFrom) and node.level == 1:
-            if node.module:
-                names.add(node.module.split(".")[0])
-            else:
-                names.update(alias.name for alias in node.names)
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        if node.level == 1:
+            module = node.module
+        elif node.level == 0 and node.module and node.module.split(".")[0] == "derive":
+            module = node.module.partition(".")[2]
+        else:
+            continue
+        if module:
+            names.add(module.split(".")[0])
+        else:
+            names.update(alias.name for alias in node.names)
     return names
 
 

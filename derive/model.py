@@ -4,13 +4,14 @@ import time
 
 import sympy as sp
 
-from . import symbols as sym
-from .kinematics import kinematics
-from .lie import OutputDerivatives, output_derivatives
-from .linearization import linearization
-from .newton_euler import RigidBody, inverse_inertia_definition, rigid_body, solve_accelerations
-from .regressor import regressor
-from .vector_field import dynamics, vector_field
+from derive import symbols as sym
+from derive.kinematics import kinematics
+from derive.lie import OutputDerivatives, output_derivatives
+from derive.linearization import linearization
+from derive.newton_euler import (RigidBody, inverse_inertia_definition, rigid_body,
+                                 solve_accelerations)
+from derive.regressor import regressor
+from derive.vector_field import dynamics, vector_field
 
 
 @dataclass

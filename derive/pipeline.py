@@ -4,11 +4,11 @@ import shutil
 import tempfile
 import time
 
-from .compare import FOREIGN
-from .export import build_functions, write_c, write_casadi
-from .manifest import write_manifest
-from .model import derive_model
-from .report import render
+from derive.compare import FOREIGN
+from derive.export import build_functions, write_c, write_casadi
+from derive.manifest import write_manifest
+from derive.model import derive_model
+from derive.latex import render
 
 
 def _log(stage, seconds, echo):

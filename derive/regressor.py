@@ -1,5 +1,5 @@
 """The regressor Phi = d/dr_G [M vartheta + C(nu) nu + g_G(eta)] (docs/model.md sec. 3.1)."""
-from .symbols import nu, r_G, vartheta
+from derive.symbols import nu, r_G, vartheta
 
 
 def regressor(body):

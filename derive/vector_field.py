@@ -1,8 +1,8 @@
 """The 12-state control-affine vector field x_dot = f(x) + g(x) U."""
 import sympy as sp
 
-from .newton_euler import solve_accelerations
-from .symbols import U, nu, nu1, nu2
+from derive.newton_euler import solve_accelerations
+from derive.symbols import U, nu, nu1, nu2
 
 
 def vector_field(R, Q, body):

@@ -4,27 +4,27 @@
 ``coriolis``, ``damping``, ``gravity``, ``regressor``, ``decoupling``, ``drift``,
 ``linearization``) as fast numpy callables. This package never imports SymPy.
 """
-from . import config
-from .catalog import scenario_names, scenario_path, shipped_scenarios
-from .conventions import (B_U, FUNCTIONS, INPUT_NAMES, OUTPUT_NAMES, OUTPUT_ROWS, PARAM_NAMES,
-                          STATE_NAMES, hover_trim, rotation_matrix)
-from .errors import (CompileError, EulerSingularityError, GeneratedFilesError, InputError,
-                     ParameterError, QuadcogError, QuadcogWarning)
-from .model import Linearization, Model, load
-from .params import check_parameters, inertia_about_cog, with_cog
-from .vehicle import (CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters, plus_layout,
-                      x_layout)
-from .controllers import (AdaptiveFeedbackLinearization, CascadePD, CompositeAdaptive,
-                          Controller, FeedbackLinearization, FeedbackLinearizationIntegral,
-                          make_controller)
-from .plant import TruthOptions
-from .sensing import Sensed, Sensing
-from .result import Metrics, SimulationResult
-from .batch import BatchResult, simulate_batch
-from .divergence import DivergenceCause, Limits
-from .simulation import simulate
-from .sweeps import sweep
-from .timeline import CogChange, CogProfile, Disturbance
-from .trajectory import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
+from quadcog import config
+from quadcog.scenarios.files import scenario_names, scenario_path, shipped_scenarios
+from quadcog.model.conventions import (B_U, FUNCTIONS, INPUT_NAMES, OUTPUT_NAMES, OUTPUT_ROWS,
+                                       PARAM_NAMES, STATE_NAMES, hover_trim, rotation_matrix)
+from quadcog.errors import (CompileError, EulerSingularityError, GeneratedFilesError, InputError,
+                            ParameterError, QuadcogError, QuadcogWarning)
+from quadcog.model.functions import Linearization, Model, load
+from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
+from quadcog.vehicles.vehicle import (CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters,
+                                      plus_layout, x_layout)
+from quadcog.controllers import (AdaptiveFeedbackLinearization, CascadePD, CompositeAdaptive,
+                                 Controller, FeedbackLinearization, FeedbackLinearizationIntegral,
+                                 make_controller)
+from quadcog.sim.plant import TruthOptions
+from quadcog.sim.sensing import Sensed, Sensing
+from quadcog.sim.result import Metrics, SimulationResult
+from quadcog.sim.batch import BatchResult, simulate_batch
+from quadcog.sim.divergence import DivergenceCause, Limits
+from quadcog.sim.flight import simulate
+from quadcog.sweeps import sweep
+from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
+from quadcog.trajectories.analytic import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
 
 __version__ = "0.1.0"

@@ -11,7 +11,7 @@ from pathlib import Path
 import sys
 import warnings
 
-from .errors import QuadcogError
+from quadcog.errors import QuadcogError
 
 
 def _out_dir(path):
@@ -41,7 +41,7 @@ def add_tour(sub):
 
 
 def cmd_tour(args):
-    from .tour import tour
+    from quadcog.studies.tour import tour
     tour()
 
 
@@ -53,7 +53,7 @@ def add_scenarios(sub):
 
 
 def cmd_scenarios(args):
-    from .catalog import shipped_scenarios
+    from quadcog.scenarios.files import shipped_scenarios
     scenarios = shipped_scenarios()
     width = max(map(len, scenarios), default=0)
     for name, description in scenarios.items():
@@ -90,7 +90,7 @@ def add_run(sub):
 
 
 def cmd_run(args):
-    from .scenario import default_out, run_file
+    from quadcog.scenarios.scenario import default_out, run_file
     out = _out_dir(args.out if args.out is not None else default_out(args.scenario))
     run_file(args.scenario, out, progress=not args.quiet, overrides=args.overrides,
              plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate)
@@ -113,7 +113,7 @@ def add_animate(sub):
 
 
 def cmd_animate(args):
-    from .animate import animate_run
+    from quadcog.viz.animation import animate_run
     path = animate_run(args.run_dir, args.output, fps=args.fps, speed=args.speed,
                        max_frames=args.max_frames)
     print(f"wrote {path}")
@@ -130,7 +130,7 @@ def add_paper(sub):
 
 
 def cmd_paper(args):
-    from .paper import run_paper
+    from quadcog.studies.paper import run_paper
     run_paper(_out_dir(args.out))
 
 
@@ -150,7 +150,7 @@ def add_analyze(sub):
 
 
 def cmd_analyze(args):
-    from .analysis import analyze
+    from quadcog.studies.analysis import analyze
     analyze(_out_dir(args.out), grid=args.grid, duration=args.duration)
 
 
@@ -167,7 +167,7 @@ def add_export(sub):
 
 
 def cmd_export(args):
-    from .embedded import export_controller
+    from quadcog.embedded import export_controller
     for path in export_controller(args.controller, args.precision, _out_dir(args.out)):
         print(f"wrote {path}")
 
@@ -187,7 +187,7 @@ def add_sweep(sub):
 
 
 def cmd_sweep(args):
-    from .sweeps.runner import run_cli
+    from quadcog.sweeps.runner import run_cli
     run_cli(args.sweep, _out_dir(args.out), workers=args.workers, scheduler=args.scheduler)
 
 
@@ -196,7 +196,7 @@ SUBCOMMANDS = [add_tour, add_scenarios, add_run, add_animate, add_paper, add_ana
 
 
 def _version():
-    from . import __version__
+    from quadcog import __version__
     return f"quadcog {__version__}"
 
 

@@ -17,7 +17,7 @@ import operator
 
 import numpy as np
 
-from .errors import InputError
+from quadcog.errors import InputError
 
 __all__ = ["plain", "fail", "real", "positive", "nonnegative", "integer", "flag", "choice",
            "array", "vector", "poles", "step_count", "BYTES_PER_STEP"]

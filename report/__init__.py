@@ -3,5 +3,5 @@
 
 - ``report/identities.py``: the identities of the generated functions (pytest uses them too);
 - ``python -m report.verify``: evaluates them and writes the LaTeX table;
-- ``python -m report.build``: builds generated/report.tex into a PDF with pdflatex.
+- ``python -m report.pdf``: builds generated/report.tex into a PDF with pdflatex.
 """

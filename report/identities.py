@@ -1,6 +1,6 @@
 """The identities of the generated functions, defined once: each is evaluated with the
 runtime (``quadcog.load()``, the compiled C when there is a compiler) at random admissible
-points (``quadcog.sampling``). ``tests/test_identities.py`` asserts every bound, and
+points (``quadcog.model.sampling``). ``tests/test_identities.py`` asserts every bound, and
 ``python -m report.verify`` writes the same results as the report's verification table.
 
 Each check's oracle is independent of the function it checks: a definition written out in
@@ -13,9 +13,8 @@ import casadi as ca
 import numpy as np
 
 import quadcog
-from quadcog.conventions import (B_U, FUNCTIONS, IDX, OUTPUT_ROWS, hover_trim,
-                                 rotation_matrix)
-from quadcog.sampling import random_points
+from quadcog.model.conventions import B_U, FUNCTIONS, IDX, OUTPUT_ROWS, hover_trim, rotation_matrix
+from quadcog.model.sampling import random_points
 
 SEED = 20110828
 

@@ -18,7 +18,7 @@ import numpy as np
 
 import quadcog
 
-from .identities import SEED, run
+from report.identities import SEED, run
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -44,7 +44,7 @@ def table(results, seed, backend, seconds):
         rf"admissible points (seed {seed}): states with $|\phi|, |\theta| \le 1.2$, "
         r"parameters with $m$, $g$, $I_O > 0$, $c \ge 0$, each component of $r_G$ within "
         r"$\pm0.1$\,m and $I_G$ "
-        r"positive definite (the samplers of \code{quadcog.sampling}). Error: "
+        r"positive definite (the samplers of \code{quadcog.model.sampling}). Error: "
         r"$\max|a - b| / \max(1, \max|b|)$, the largest over all points; the bound is the "
         r"test suite's tolerance.",
         "",

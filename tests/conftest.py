@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog.sampling import random_points
+from quadcog.model.sampling import random_points
 
 N_POINTS = 200       # every identity is checked at this many random points at least
 

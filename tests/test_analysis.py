@@ -1,18 +1,19 @@
-"""quadcog.analysis: PD design, zero dynamics, adaptive design and Lyapunov function,
+"""quadcog.studies.analysis: PD design, zero dynamics, adaptive design and Lyapunov function,
 failure map. Each test checks a number that could come out otherwise."""
 import numpy as np
 import pytest
 
 import quadcog
-from quadcog.analysis.adaptive_design import design_checks, lyapunov_study
-from quadcog.analysis.failure_map import failure_map, plot_failure_map, save_failure_map
-from quadcog.analysis.frequency import channel_loop, channel_margins, gain_range_by_eigenvalues
-from quadcog.analysis.linear import hover_statespace
-from quadcog.analysis.pd_design import pd_design
-from quadcog.analysis.report import jsonable
-from quadcog.analysis.zero_dynamics import (nonlinear_check, rg_sensitivity,
-                                            zero_dynamics_eigenvalues)
-from quadcog.conventions import IDX
+from quadcog.studies.analysis.adaptive_design import design_checks, lyapunov_study
+from quadcog.studies.analysis.failure_map import failure_map, plot_failure_map, save_failure_map
+from quadcog.studies.analysis.frequency import (channel_loop, channel_margins,
+                                                gain_range_by_eigenvalues)
+from quadcog.studies.analysis.linear import hover_statespace
+from quadcog.studies.analysis.pd_design import pd_design
+from quadcog.studies.analysis.analysis_files import jsonable
+from quadcog.studies.analysis.zero_dynamics import (nonlinear_check, rg_sensitivity,
+                                                    zero_dynamics_eigenvalues)
+from quadcog.model.conventions import IDX
 from conftest import assert_close
 
 
@@ -255,7 +256,7 @@ def test_jsonable_handles_inf_nan_complex():
 
 
 def test_latex_text_escapes_every_special_character():
-    from quadcog.analysis.report import _tex
+    from quadcog.studies.analysis.analysis_files import _tex
     out = _tex(r"V_dot = -e^T Q e, 10 % & #1 {a} ~b $c <d> \e")
     plain = out.replace(r"\_", "").replace(r"\^{}", "").replace(r"\%", "").replace(r"\&", "")
     plain = plain.replace(r"\#", "").replace(r"\{", "").replace(r"\}", "").replace(r"\$", "")
@@ -265,7 +266,7 @@ def test_latex_text_escapes_every_special_character():
 
 def test_report_copies_only_fragments_and_figures(tmp_path):
     """`make report` must not copy the runs' trajectories a second time."""
-    from report.build import _copy_results
+    from report.pdf import _copy_results
     src = tmp_path / "paper"
     (src / "fig6").mkdir(parents=True)
     (src / "report_fragment.tex").write_text("x")

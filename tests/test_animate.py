@@ -3,7 +3,7 @@ import numpy as np
 from PIL import Image
 import pytest
 
-from quadcog.animate import frame_times
+from quadcog.viz.animation import frame_times
 from quadcog.cli import main
 
 

@@ -51,7 +51,7 @@ NAN = float("nan")
     (lambda: CogProfile("abc"), r"^cog: expected a CogProfile or a list"),
     (lambda: CogProfile([(0.5, "abc")]),
      r"^cog change 0: r: expected 3 finite numbers \(m\), got 'abc'"),
-    (lambda: quadcog.timeline.wrench_table([None], [0.0]), r"^disturbances\[0\]: expected a "
+    (lambda: quadcog.sim.timeline.wrench_table([None], [0.0]), r"^disturbances\[0\]: expected a "
                                                            r"Disturbance"),
     (lambda: Disturbance(t=0.0, duration=1.0, force=(1e300, 0, 0)),
      r"^disturbance force: expected entries within \+-1e\+06"),

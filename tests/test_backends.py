@@ -6,7 +6,7 @@ import sympy as sp
 from conftest import assert_close
 from derive import symbols as sym
 from derive.contract import FUNCTIONS as SPECS, VECTORS
-from quadcog.conventions import FUNCTIONS
+from quadcog.model.conventions import FUNCTIONS
 
 RTOL = 1e-12
 

@@ -13,7 +13,7 @@ from derive import pipeline
 from derive.__main__ import main as derive_main
 from derive.manifest import sha256
 from derive.to_casadi import UnsupportedAtomError
-from quadcog.generated import read_manifest
+from quadcog.model.generated_files import read_manifest
 
 ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"

@@ -9,7 +9,7 @@ from quadcog import Disturbance, HUMMINGBIRD, simulate
 from quadcog.controllers import CompositeAdaptive, FeedbackLinearizationIntegral
 from quadcog.controllers.allocation import prioritized_input
 from quadcog.controllers.composite import unpack_covariance
-from quadcog.plant import Actuation, plant_step_function
+from quadcog.sim.plant import Actuation, plant_step_function
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog.build import compile_library, library_path
+from quadcog.codegen.compiler import compile_library, library_path
 
 ROOT = Path(__file__).resolve().parent.parent
 

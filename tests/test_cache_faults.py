@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog import build
-from quadcog.build import compile_library, file_digest, is_verified
+from quadcog.codegen import compiler as build
+from quadcog.codegen.compiler import compile_library, file_digest, is_verified
 
 ROOT = Path(__file__).resolve().parent.parent
 TWICE = b"double f(double x) { return 2.0 * x; }\n"
@@ -162,7 +162,7 @@ def test_killed_build_is_cleaned_up_by_the_next(tmp_path):
     slow.write_text('#!/bin/sh\n[ "$1" = --version ] && { echo slowcc; exit 0; }\nexec sleep 60\n')
     slow.chmod(0o755)
     cache = tmp_path / "cache"
-    code = (f"from quadcog.build import compile_library; "
+    code = (f"from quadcog.codegen.compiler import compile_library; "
             f"compile_library({TWICE!r}, 't', cc={str(slow)!r}, folder={str(cache)!r})")
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     for sig in (signal.SIGKILL, signal.SIGINT):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from quadcog.cli import main, parser
-from quadcog.columns import trajectory_columns
+from quadcog.model.columns import trajectory_columns
 
 ROOT = Path(__file__).resolve().parent.parent
 SHORT = ["--set", "duration=0.3", "--quiet"]        # keep the flights short

@@ -25,7 +25,7 @@ EDITS = [
 
 PROBE = """
 import json, numpy as np, quadcog
-from quadcog.conventions import rotation_matrix
+from quadcog.model.conventions import rotation_matrix
 m = quadcog.load()
 x = np.array([0.1, 0.2, 0.3, 0.3, -0.2, 0.7, 0, 0, 0, 0, 0, 0])
 p = quadcog.default_parameters(m=0.9)

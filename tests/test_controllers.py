@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog.conventions import B_U
-from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile,
-                     FeedbackLinearization, simulate)
+from quadcog.model.conventions import B_U
+from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile, FeedbackLinearization,
+                     simulate)
 from conftest import assert_close
 
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from quadcog.controllers import make_controller
-from quadcog.embedded import build, target
+from quadcog.embedded import make_embedded as build, target
 from conftest import background_job, background_result
 
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(

@@ -2,7 +2,7 @@
 CoG (an identity in report/identities.py); without its moments the vehicle tips."""
 import numpy as np
 
-from quadcog.conventions import hover_trim
+from quadcog.model.conventions import hover_trim
 
 
 def test_hover_without_moment_accelerates(model, points):

@@ -103,7 +103,8 @@ def test_wheel_and_sdist_ship_the_generated_files(wheels):
     manifest = json.loads((ROOT / "generated" / "manifest.json").read_text())
     expected = {f"quadcog/_generated/{rel}" for rel in manifest["files"]}
     expected |= {"quadcog/_generated/manifest.json"}
-    expected |= {f"quadcog/scenarios/{p.name}" for p in (ROOT / "quadcog/scenarios").glob("*")}
+    expected |= {f"quadcog/scenarios/{p.name}" for p in (ROOT / "quadcog/scenarios").glob("*")
+                 if p.is_file()}
     listings = []
     for wheel in wheels:
         with zipfile.ZipFile(wheel) as z:

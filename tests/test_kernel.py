@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import quadcog
-import quadcog.batch as batch_module
-from quadcog.batch import batch_kernel
-from quadcog.closed_loop import monitored_step, packed
-from quadcog.kernel import emit_c, vector_flags
-from quadcog.plant import Actuation
-from quadcog.divergence import Limits
+import quadcog.sim.batch as batch_module
+from quadcog.sim.batch import batch_kernel
+from quadcog.sim.closed_loop import monitored_step, packed
+from quadcog.codegen.vector_kernel import emit_c, vector_flags
+from quadcog.sim.plant import Actuation
+from quadcog.sim.divergence import Limits
 
 SHAPE = 0.3                      # s: the CoG steps at this time
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
@@ -117,9 +117,9 @@ def test_every_controller_has_a_vector_form(name):
 
 @pytest.mark.parametrize("kernel", ["vector", "casadi"])
 def test_sweep_engine_equals_single_flights(kernel):
-    """The sweep engine (per-flight CoG steps, quadcog.vectorized) on both of its paths, at
+    """The sweep engine (per-flight CoG steps, quadcog.sim.vector_batch) on both of its paths, at
     1.55 s (the CasADi map pads its second chunk), against single flights."""
-    from quadcog.vectorized import fly_batch
+    from quadcog.sim.vector_batch import fly_batch
     ctl = quadcog.AdaptiveFeedbackLinearization()
     D = np.array([[0.03, 0.0, 0.0], [0.0, 0.04, 0.0], [0.05, 0.05, 0.0]])
     b = fly_batch(ctl, [quadcog.HUMMINGBIRD] * 3, D, duration=1.55, cog_times=[(SHAPE, 0.0)],

@@ -5,7 +5,7 @@ import sympy as sp
 
 from conftest import assert_close
 from derive import symbols as sym
-from quadcog.conventions import rotation_matrix
+from quadcog.model.conventions import rotation_matrix
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +37,7 @@ def test_rotation_zyx(kin, points):
         Rx = np.array([[1, 0, 0], [0, c(ph), -s(ph)], [0, s(ph), c(ph)]])
         Rk = np.array(R(x[3:6]))
         assert_close(Rk, Rz @ Ry @ Rx, 1e-14, "R", k)
-        # the runtime's numpy R (quadcog.conventions) is the same matrix
+        # the runtime's numpy R (quadcog.model.conventions) is the same matrix
         assert_close(rotation_matrix(ph, th, ps), Rz @ Ry @ Rx, 1e-14, "rotation_matrix", k)
         assert_close(Rk.T @ Rk, np.eye(3), 1e-14, "R^T R", k)
 

@@ -7,7 +7,7 @@ import shutil
 import pytest
 
 import quadcog
-from quadcog.generated import required_files, verify
+from quadcog.model.generated_files import required_files, verify
 
 GENERATED = quadcog.paths.generated_dir()
 

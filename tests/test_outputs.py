@@ -14,9 +14,9 @@ import tracemalloc
 import numpy as np
 import pytest
 
-import quadcog.plots
-from quadcog.outputs import RunFiles, plot_text, strict_json, write_csv
-from quadcog.scenario import load_scenario, output_files, parse, write_outputs
+import quadcog.viz.plots
+from quadcog.files import RunFiles, plot_text, strict_json, write_csv
+from quadcog.scenarios.scenario import load_scenario, output_files, parse, write_outputs
 
 OUTPUT_FILES = output_files()
 
@@ -82,7 +82,7 @@ def test_outputs_all_or_none(tmp_path, short_run, monkeypatch):
     for failure in (KeyboardInterrupt, RuntimeError):
         def plot(*args, **kwargs):
             raise failure("while plotting")
-        monkeypatch.setattr(quadcog.plots, "plot_flight", plot)
+        monkeypatch.setattr(quadcog.viz.plots, "plot_flight", plot)
         with pytest.raises(failure):
             write_outputs(result, scenario, tmp_path)
         assert _snapshot(tmp_path) == before        # nothing new, nothing left over

@@ -23,7 +23,7 @@ def test_import_quadcog_is_light():
     code = ("import json, sys, numpy as np; import quadcog; "
             f"after_import = [m for m in {HEAVY!r} if m in sys.modules]; "
             "m = quadcog.load(); m.dynamics(np.zeros(12), np.zeros(4), quadcog.default_parameters()); "
-            "from quadcog import tour; quadcog.simulate(quadcog.AdaptiveFeedbackLinearization(), "
+            "from quadcog.studies import tour; quadcog.simulate(quadcog.AdaptiveFeedbackLinearization(), "
             "duration=0.01); "
             "print(json.dumps([after_import, 'sympy' in sys.modules, quadcog.__file__, "
             "str(m.folder)]))")
@@ -49,7 +49,7 @@ def test_c_compiles_without_warnings(tmp_path):
 
 
 def test_header_declares_every_function():
-    from quadcog.conventions import FUNCTIONS
+    from quadcog.model.conventions import FUNCTIONS
     header = (ROOT / "generated" / "c" / "quadcog_gen.h").read_text()
     for name in FUNCTIONS:
         assert re.search(rf"\bint {name}\(const casadi_real\*\* arg", header), name

@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from quadcog.paper import run_paper
+from quadcog.studies.paper import run_paper
 
 pytestmark = pytest.mark.slow      # the seven paper flights with their figures, once
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog import (HUMMINGBIRD, Circle, FeedbackLinearization, Figure8, Helix,
-                     TruthOptions, simulate)
-from quadcog.plant import truth_arguments
+from quadcog import (HUMMINGBIRD, Circle, FeedbackLinearization, Figure8, Helix, TruthOptions,
+                     simulate)
+from quadcog.sim.plant import truth_arguments
 from conftest import assert_close
 
 

@@ -7,8 +7,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from quadcog import AdaptiveFeedbackLinearization, CascadePD, CogProfile, Disturbance, simulate  # noqa: E402
-from quadcog.plots import flight_title, plot_flight  # noqa: E402
+from quadcog import AdaptiveFeedbackLinearization, CascadePD, CogProfile, Disturbance, simulate
+from quadcog.viz.plots import flight_title, plot_flight
 
 
 PULSE = [Disturbance(t=0.3, duration=0.1, force=(0.5, 0, 0))]

@@ -12,9 +12,9 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from hypothesis.configuration import set_hypothesis_home_dir
 
 import quadcog
-from quadcog.catalog import scenario_names, scenario_path
+from quadcog.scenarios.files import scenario_names, scenario_path
 from quadcog.errors import QuadcogError
-from quadcog.scenario import parse
+from quadcog.scenarios.scenario import parse
 
 # hypothesis caches under .hypothesis/ even without a database: keep the checkout clean
 set_hypothesis_home_dir(tempfile.mkdtemp(prefix="quadcog-hypothesis-"))
@@ -102,7 +102,7 @@ def test_api_calls_with_hostile_arguments(kind, a, b):
         "circle": lambda: quadcog.Circle(radius=a, period=b).sample([0.0, 1.0]),
         "hover": lambda: quadcog.Hover(position=a, yaw=b).sample([0.0]),
         "cog": lambda: quadcog.CogProfile([(a, b, 0.0)]).sample([0.0, 1.0]),
-        "disturbance": lambda: quadcog.timeline.wrench_table([(a, 1.0, b)], [0.0]),
+        "disturbance": lambda: quadcog.sim.timeline.wrench_table([(a, 1.0, b)], [0.0]),
     }
     try:
         out = calls[kind]()

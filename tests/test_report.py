@@ -1,4 +1,4 @@
-"""The report as a PDF (report/build.py) and its verification table (report/verify.py, from
+"""The report as a PDF (report/pdf.py) and its verification table (report/verify.py, from
 the identities of report/identities.py).
 
 The PDF tests need pdflatex (Debian: texlive-latex-base, texlive-latex-recommended); they are
@@ -15,7 +15,7 @@ import zlib
 
 import pytest
 
-from report import build as build_report, identities, verify
+from report import pdf as build_report, identities, verify
 
 ROOT = Path(__file__).resolve().parent.parent
 REPORT = ROOT / "generated" / "report.tex"
@@ -237,7 +237,7 @@ def test_build_fails_on_latex_error(tmp_path):
 @needs_pdflatex
 def test_command_line_build(tmp_path):
     out = tmp_path / "report"
-    res = subprocess.run([sys.executable, "-m", "report.build", "--out", str(out),
+    res = subprocess.run([sys.executable, "-m", "report.pdf", "--out", str(out),
                           "--paper", str(tmp_path / "no-paper")], cwd=ROOT,
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stdout + res.stderr

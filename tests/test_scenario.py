@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from quadcog.cli import main
-from quadcog.paper import CLAIMS, scenario_path
-from quadcog.scenario import ScenarioError, load_scenario, parse, run_file
+from quadcog.studies.paper import CLAIMS, scenario_path
+from quadcog.scenarios.scenario import ScenarioError, load_scenario, parse, run_file
 
 ROOT = Path(__file__).resolve().parent.parent
 BASE = {"name": "t", "controller": "fl", "duration": 1.0}
@@ -141,7 +141,7 @@ def test_run_time_error_names_the_file(tmp_path):
 
 
 def test_shipped_scenarios_by_name(tmp_path, monkeypatch):
-    from quadcog.catalog import scenario_path, shipped_scenarios
+    from quadcog.scenarios.files import scenario_path, shipped_scenarios
     listed = shipped_scenarios()
     # every figure of the paper ships, with its description read from the file
     assert {c.scenario for c in CLAIMS} <= set(listed)

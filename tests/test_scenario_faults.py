@@ -2,7 +2,7 @@
 file, the key, the value and what was expected (or in a correct run)."""
 import pytest
 
-from quadcog.scenario import ScenarioError, load_scenario
+from quadcog.scenarios.scenario import ScenarioError, load_scenario
 
 HEAD = 'name = "t"\ncontroller = "fl"\n'
 

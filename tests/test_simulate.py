@@ -6,7 +6,7 @@ import pytest
 import quadcog
 from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile, Disturbance,
                      FeedbackLinearization, Limits, TruthOptions, simulate, simulate_batch)
-from quadcog.vehicle import HUMMINGBIRD
+from quadcog.vehicles.vehicle import HUMMINGBIRD
 from conftest import assert_close
 
 COG = CogProfile([(0.3, (0.03, -0.02, 0.005), 0.0), (1.0, (0.05, 0.01, 0.0), 0.5)])
@@ -262,7 +262,7 @@ def test_config_defaults_are_read_at_call_time():
     """One place for the defaults: changing quadcog.config.defaults changes dt, the divergence
     limits and the tail of the metrics wherever they are not given."""
     from quadcog import config
-    from quadcog.result import position_metrics
+    from quadcog.sim.result import position_metrics
     t = np.linspace(0.0, 1.0, 11)
     ref = np.zeros((11, 14))
     x = np.zeros((11, 12))

@@ -3,9 +3,9 @@ model at random points are in report/identities.py (tests/test_identities.py); h
 runtime's numpy B_U against the derivation."""
 import numpy as np
 
-from quadcog.conventions import B_U
+from quadcog.model.conventions import B_U
 
 
 def test_input_matrix_is_the_derived_one(derived):
-    """The runtime's numpy B_U (quadcog.conventions) is the B_u of the SymPy derivation."""
+    """The runtime's numpy B_U (quadcog.model.conventions) is the B_u of the SymPy derivation."""
     assert np.array(derived.body.B_u, dtype=float).tolist() == B_U.tolist()

@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from quadcog.scenario import parse
+from quadcog.scenarios.scenario import parse
 from quadcog import sweep
 from quadcog.sweeps import SweepError, load_sweep
 

@@ -1,4 +1,4 @@
-"""quadcog.sxc, the one table from CasADi operations to C: every operation in it, emitted by
+"""quadcog.codegen.sx_to_c, the one table from CasADi operations to C: every operation in it, emitted by
 both C emitters (the embedded export in double and float32, the vector kernel), compiled with
 the C compiler and evaluated at points with zeros of both signs, equal operands and NaN, gives
 CasADi's own values; an operation missing from the table is refused with each emitter's typed
@@ -12,10 +12,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from quadcog import sxc
-from quadcog.build import find_compiler
+from quadcog.codegen import sx_to_c as sxc
+from quadcog.codegen.compiler import find_compiler
 from quadcog.embedded.emit import C_TYPE, ExportError, body
-from quadcog.kernel import KernelError, VectorKernel, emit_c, vector_flags
+from quadcog.codegen.vector_kernel import KernelError, VectorKernel, emit_c, vector_flags
 
 CC = find_compiler()
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler")
@@ -36,7 +36,7 @@ NOT_IN_SX = {ca.OP_ASSIGN}
 
 def every_operation(skip=()):
     """(ops, step): step(Z (n), Q (1), row (1)) -> Z_next (n), entry k of Z_next being ops[k]
-    applied to a = Z[0] (and b = Z[1]); every operation of quadcog.sxc.OPERATIONS but
+    applied to a = Z[0] (and b = Z[1]); every operation of quadcog.codegen.sx_to_c.OPERATIONS but
     NOT_IN_SX and ``skip``."""
     ops = [op for op in sxc.OPERATIONS if op not in NOT_IN_SX and op not in skip]
     Z, Q, row = ca.SX.sym("Z", len(ops)), ca.SX.sym("Q"), ca.SX.sym("row")
@@ -94,7 +94,7 @@ def _embedded(step, n, precision, tmp_path):
 
 
 def _kernel(step, n):
-    """Through quadcog.kernel.emit_c, one step of a batch of len(POINTS) flights."""
+    """Through quadcog.codegen.vector_kernel.emit_c, one step of a batch of len(POINTS) flights."""
     Z = np.zeros((len(POINTS), n))
     Z[:, :2] = POINTS
     return VectorKernel(step)(Z, np.zeros((len(POINTS), 1)), np.zeros((1, 1)))

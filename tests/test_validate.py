@@ -1,11 +1,11 @@
-"""The shared checks of quadcog.validate and the admissibility margin of quadcog.admissibility."""
+"""The shared checks of quadcog.validate and the admissibility margin of quadcog.model.admissibility."""
 import numpy as np
 import pytest
 
 import quadcog
 from quadcog import validate as v
-from quadcog.admissibility import MARGIN, admissible_radius, inertia_ratio, is_admissible
-from quadcog.conventions import IDX, PARAM_NAMES
+from quadcog.model.admissibility import MARGIN, admissible_radius, inertia_ratio, is_admissible
+from quadcog.model.conventions import IDX, PARAM_NAMES
 
 BASE = quadcog.HUMMINGBIRD.parameters()
 

@@ -5,9 +5,8 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog import (CRAZYFLIE, HUMMINGBIRD, FeedbackLinearization, TruthOptions, Vehicle,
-                     simulate)
-from quadcog.scenario import ScenarioError, parse
+from quadcog import CRAZYFLIE, HUMMINGBIRD, FeedbackLinearization, TruthOptions, Vehicle, simulate
+from quadcog.scenarios.scenario import ScenarioError, parse
 from conftest import assert_close
 
 F = np.array([1.0, 2.0, 3.0, 4.5])         # distinct rotor thrusts (N): every sign shows

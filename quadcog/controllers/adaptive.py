@@ -10,12 +10,12 @@ the sphere, and each discrete update is scaled back onto it); without it this is
 import casadi as ca
 import numpy as np
 
-from ..conventions import B_U
-from .. import validate
-from ..admissibility import LARGEST
-from ..errors import InputError
-from .feedback_linearization import FeedbackLinearization
-from .shaping import kinematics
+from quadcog.model.conventions import B_U
+from quadcog import validate
+from quadcog.model.admissibility import LARGEST
+from quadcog.errors import InputError
+from quadcog.controllers.feedback_linearization import FeedbackLinearization
+from quadcog.controllers.shaping import kinematics
 
 
 def admissible_estimate_radius(vehicle, margin=0.95):

@@ -1,7 +1,7 @@
 """What every controller is: a CasADi control law, compiled on demand, callable from Python.
 
 A controller maps (t, x, ref, c) to (U, c_dot): time (s), state x (12,), reference ref (14,)
-(see ``quadcog.trajectory``), its own state c (``n_state``,; the adaptive controller's r_hat)
+(see ``quadcog.trajectories.analytic``), its own state c (``n_state``,; the adaptive controller's r_hat)
 to the input U (4,) and the rate of its state. ``function()`` is that law as a CasADi Function
 (SX, to compose into bigger expressions), ``compiled()`` an allocation-free compiled call.
 
@@ -15,13 +15,13 @@ parameters and their settings as keywords.
 import casadi as ca
 import numpy as np
 
-from ..compiled import compile_function
-from ..errors import InputError
-from ..fastcall import FastCall
-from ..model import load
-from ..params import with_cog
-from ..trajectory import REF_SIZE
-from ..vehicle import HUMMINGBIRD, Vehicle
+from quadcog.codegen.compiled import compile_function
+from quadcog.errors import InputError
+from quadcog.codegen.fastcall import FastCall
+from quadcog.model.functions import load
+from quadcog.model.parameters import with_cog
+from quadcog.trajectories.analytic import REF_SIZE
+from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
 
 class Controller:

@@ -10,13 +10,14 @@ so all 12 closed-loop eigenvalues are exactly the chosen poles.
 import casadi as ca
 import numpy as np
 
-from ..conventions import IDX
-from .. import validate
-from ..errors import InputError
-from ..params import with_cog
-from ..trajectory import ACC, POS, VEL, YAW, YAW_RATE
-from .base import Controller
-from .shaping import drag_over_mass, kinematics, tilt_limit, wrap_angle, yaw_rotation_T
+from quadcog.model.conventions import IDX
+from quadcog import validate
+from quadcog.errors import InputError
+from quadcog.model.parameters import with_cog
+from quadcog.trajectories.analytic import ACC, POS, VEL, YAW, YAW_RATE
+from quadcog.controllers.base import Controller
+from quadcog.controllers.shaping import (drag_over_mass, kinematics, tilt_limit, wrap_angle,
+                                         yaw_rotation_T)
 
 # (states, input) of each decoupled loop of the hover linearization (yaw 0, r_G = 0).
 LOOPS = {"z": ([2, 8], 0), "psi": ([5, 11], 3),

@@ -45,10 +45,10 @@ controller believes its rotors deliver (``motor_lag``). ``STATE_SLICES`` names t
 import casadi as ca
 import numpy as np
 
-from ..conventions import B_U
-from .. import validate
-from .adaptive import AdaptiveFeedbackLinearization
-from .allocation import prioritized_input
+from quadcog.model.conventions import B_U
+from quadcog import validate
+from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization
+from quadcog.controllers.allocation import prioritized_input
 
 _P_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 

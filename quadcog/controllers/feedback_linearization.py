@@ -4,11 +4,11 @@ y = [z, phi, theta, psi], and an outer position loop that commands phi and theta
 import casadi as ca
 import numpy as np
 
-from ..conventions import IDX
-from ..trajectory import ACC, JERK, POS, VEL, YAW, YAW_RATE
-from .base import Controller
-from .shaping import (desired_tilt, drag_over_mass, kinematics, second_order_gains, tilt_limit,
-                      wrap_angle)
+from quadcog.model.conventions import IDX
+from quadcog.trajectories.analytic import ACC, JERK, POS, VEL, YAW, YAW_RATE
+from quadcog.controllers.base import Controller
+from quadcog.controllers.shaping import (desired_tilt, drag_over_mass, kinematics,
+                                         second_order_gains, tilt_limit, wrap_angle)
 
 
 class FeedbackLinearization(Controller):

@@ -15,8 +15,8 @@ Controller state c (3): the integrals of the phi, theta and psi errors (rad s).
 import casadi as ca
 import numpy as np
 
-from .. import validate
-from .feedback_linearization import FeedbackLinearization
+from quadcog import validate
+from quadcog.controllers.feedback_linearization import FeedbackLinearization
 
 ATTITUDE_ROWS = slice(1, 4)          # phi, theta, psi in y = [z, phi, theta, psi]
 

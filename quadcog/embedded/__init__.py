@@ -1,7 +1,7 @@
 """The controllers as self-contained C99 modules (float32 or double) for a flight controller,
 and the tools that check them on a Cortex-M4 in QEMU (``make embedded``)."""
-from .emit import PRECISIONS, ExportError
-from .export import export_controller, render, short_name, step_function
+from quadcog.embedded.emit import PRECISIONS, ExportError
+from quadcog.embedded.export import export_controller, render, short_name, step_function
 
 __all__ = ["PRECISIONS", "ExportError", "export_controller", "render", "short_name",
            "step_function"]

@@ -1,6 +1,6 @@
 """``python -m quadcog.embedded`` (``make embedded``)."""
 import sys
 
-from .build import main
+from quadcog.embedded.make_embedded import main
 
 sys.exit(main())

@@ -3,7 +3,7 @@
 CasADi's own code generator writes double literals and calls sin/cos even with
 casadi_real=float, so a float32 build promotes to double (software double on a Cortex-M4).
 Here every instruction of the SX algorithm becomes one C statement on a local scalar (the
-operations and the walk are quadcog.sxc's, shared with the vector kernel): float literals with
+operations and the walk are quadcog.codegen.sx_to_c's, shared with the vector kernel): float literals with
 an f suffix and sinf/cosf/fminf/... for float32, 15-digit literals for double. The output
 depends only on the algorithm, so it is byte-reproducible.
 """
@@ -12,8 +12,8 @@ import functools
 import casadi as ca
 import numpy as np
 
-from .. import sxc
-from ..errors import QuadcogError
+from quadcog.codegen import sx_to_c as sxc
+from quadcog.errors import QuadcogError
 
 
 class ExportError(QuadcogError):
@@ -49,7 +49,7 @@ def literal(value, precision):
 
 @functools.cache
 def target(precision):
-    """The ``quadcog.sxc.Target`` of a precision: its literals, sinf/fminf... in float32, fmin
+    """The ``quadcog.codegen.sx_to_c.Target`` of a precision: its literals, sinf/fminf... in float32, fmin
     and fmax as calls (the C library's, exact on any target)."""
     if precision not in PRECISIONS:
         raise ExportError(f"precision must be one of {PRECISIONS}, got {precision!r}")

@@ -7,15 +7,15 @@ import subprocess
 
 import numpy as np
 
-from ..build import find_compiler
-from ..compiled import compile_function
-from ..errors import CompileError
-from ..fastcall import FastCall
-from ..model import load
-from ..conventions import R_G
-from ..plant import Actuation, initial_rotor_thrusts, plant_step_function
-from ..result import position_metrics
-from ..timeline import wrench_table
+from quadcog.codegen.compiler import find_compiler
+from quadcog.codegen.compiled import compile_function
+from quadcog.errors import CompileError
+from quadcog.codegen.fastcall import FastCall
+from quadcog.model.functions import load
+from quadcog.model.conventions import R_G
+from quadcog.sim.plant import Actuation, initial_rotor_thrusts, plant_step_function
+from quadcog.sim.result import position_metrics
+from quadcog.sim.timeline import wrench_table
 
 # What the issue promises the code compiles with, on the host and on the target.
 STRICT_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wdouble-promotion",

@@ -14,9 +14,9 @@ import subprocess
 
 import numpy as np
 
-from ..build import find_compiler
-from ..errors import CompileError, QuadcogError
-from .host import STRICT_FLAGS, compile_checked
+from quadcog.codegen.compiler import find_compiler
+from quadcog.errors import CompileError, QuadcogError
+from quadcog.embedded.host import STRICT_FLAGS, compile_checked
 
 TARGET_DIR = Path(__file__).parent / "target"
 ARM_GCC = "arm-none-eabi-gcc"

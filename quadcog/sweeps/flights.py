@@ -10,9 +10,9 @@ import json
 
 import numpy as np
 
-from ..scenario import parse
-from ..simulation import start_at_reference
-from .spec import set_key
+from quadcog.scenarios.scenario import parse
+from quadcog.sim.flight import start_at_reference
+from quadcog.sweeps.spec import set_key
 
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
            "final_position_error", "diverged", "diverged_at")
@@ -89,7 +89,7 @@ def cog_steps(scenario):
 
 def fly_group(key, scenarios, threads=1):
     """Metrics of scenarios that differ only in their truth CoG, flown as one batch."""
-    from ..vectorized import fly_batch            # the batch engine
+    from quadcog.sim.vector_batch import fly_batch
     s0 = scenarios[0]
     ctl = _controllers.get(key)
     if ctl is None:

@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
-from ..errors import QuadcogError
-from .flights import make_job, run_chunk
-from .spec import Sweep, SweepError, from_dict, load_sweep
+from quadcog.errors import QuadcogError
+from quadcog.sweeps.flights import make_job, run_chunk
+from quadcog.sweeps.spec import Sweep, SweepError, from_dict, load_sweep
 
 CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"
@@ -266,7 +266,7 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
         else:
             _local(pending, os.cpu_count() or 1, on_done)
     columns = _concat([results[c] if store is None else store.read(c) for c, _ in chunks])
-    from .report import summarize, write_outputs
+    from quadcog.sweeps.summary import summarize, write_outputs
     summary = summarize(s, columns)
     if out is not None:
         write_outputs(s, columns, summary, Path(out), plots=plots)
@@ -276,7 +276,7 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
 
 def run_cli(spec, out, workers=None, scheduler=None):
     """`quadcog sweep FILE --out DIR`: run (or resume), then print the summary table."""
-    from .report import summary_markdown
+    from quadcog.sweeps.summary import summary_markdown
     result = sweep(spec, out, workers=workers, scheduler=scheduler)
     print(summary_markdown(result.summary))
     print(f"{result.flown} flights flown in {result.seconds:.1f} s; wrote {out}/results.parquet, "

@@ -20,11 +20,11 @@ import tomllib
 
 import numpy as np
 
-from ..admissibility import admissible_radius
-from ..catalog import scenario_path
-from ..errors import InputError, ParameterError
-from ..scenario import ScenarioError, parse
-from ..simulation import check_cog_changes
+from quadcog.model.admissibility import admissible_radius
+from quadcog.scenarios.files import scenario_path
+from quadcog.errors import InputError, ParameterError
+from quadcog.scenarios.scenario import ScenarioError, parse
+from quadcog.sim.flight import check_cog_changes
 
 SUFFIX = ".toml"
 MODES = ("grid", "monte-carlo")

@@ -1,0 +1,131 @@
+"""C from a CasADi SX Function: the one table of operations and the walk over its instructions.
+
+Both C emitters of quadcog use this module: ``quadcog.embedded.emit`` (straight-line C99 for a
+flight controller, in double or float32) and ``quadcog.codegen.vector_kernel`` (the vectorized batch kernel,
+flights in the vector lanes). Every instruction of the SX algorithm becomes one C statement on a
+local scalar ``w<slot>`` (CasADi's work-vector slots, already reused). What differs between
+the two is a ``Target``: how constants are written (and so the literals 1 and 0 of the logic),
+the suffix of the math functions (``sinf`` for float32), and whether fmin/fmax are calls or
+selects; how inputs are read and outputs written is given to ``walk`` by the caller.
+
+Logic (comparisons, not, and, or, if_else_zero, sign) is written as selects on the floating
+type, never as _Bool or int temporaries: a select vectorizes, and it is valid C99 on a
+flight controller.
+"""
+import re
+from typing import Callable, NamedTuple
+
+import casadi as ca
+
+from quadcog.errors import QuadcogError
+
+# operation -> C expression of the operands {0}, {1}; {one} and {zero} are the target's literals
+# of 1 and 0; {f} is the suffix of the math functions ("f" in float32: sinf, fminf).
+OPERATIONS = {
+    ca.OP_ASSIGN: "{0}",
+    ca.OP_ADD: "{0} + {1}", ca.OP_SUB: "{0} - {1}", ca.OP_MUL: "{0} * {1}",
+    ca.OP_DIV: "{0} / {1}",
+    ca.OP_NEG: "-{0}", ca.OP_SQ: "{0} * {0}", ca.OP_TWICE: "{0} + {0}",
+    ca.OP_INV: "{one} / {0}",
+    ca.OP_LT: "({0} < {1}) ? {one} : {zero}", ca.OP_LE: "({0} <= {1}) ? {one} : {zero}",
+    ca.OP_EQ: "({0} == {1}) ? {one} : {zero}", ca.OP_NE: "({0} != {1}) ? {one} : {zero}",
+    ca.OP_NOT: "({0} == {zero}) ? {one} : {zero}",
+    ca.OP_AND: "({0} != {zero} && {1} != {zero}) ? {one} : {zero}",
+    ca.OP_OR: "({0} != {zero} || {1} != {zero}) ? {one} : {zero}",
+    ca.OP_IF_ELSE_ZERO: "({0} != {zero}) ? {1} : {zero}",
+    ca.OP_SIGN: "({0} > {zero}) ? {one} : (({0} < {zero}) ? -{one} : {0})",
+    ca.OP_SQRT: "sqrt{f}({0})", ca.OP_FABS: "fabs{f}({0})",
+    ca.OP_FLOOR: "floor{f}({0})", ca.OP_CEIL: "ceil{f}({0})",
+    ca.OP_SIN: "sin{f}({0})", ca.OP_COS: "cos{f}({0})", ca.OP_TAN: "tan{f}({0})",
+    ca.OP_ASIN: "asin{f}({0})", ca.OP_ACOS: "acos{f}({0})", ca.OP_ATAN: "atan{f}({0})",
+    ca.OP_SINH: "sinh{f}({0})", ca.OP_COSH: "cosh{f}({0})", ca.OP_TANH: "tanh{f}({0})",
+    ca.OP_EXP: "exp{f}({0})", ca.OP_LOG: "log{f}({0})", ca.OP_ERF: "erf{f}({0})",
+    ca.OP_ATAN2: "atan2{f}({0}, {1})", ca.OP_HYPOT: "hypot{f}({0}, {1})",
+    ca.OP_POW: "pow{f}({0}, {1})", ca.OP_CONSTPOW: "pow{f}({0}, {1})",
+    ca.OP_FMOD: "fmod{f}({0}, {1})", ca.OP_COPYSIGN: "copysign{f}({0}, {1})",
+    ca.OP_FMIN: "fmin{f}({0}, {1})", ca.OP_FMAX: "fmax{f}({0}, {1})",
+}
+# fmin and fmax as selects, with C's rule (a NaN argument yields the other argument): a call to
+# fmin stops gcc's vectorizer (libmvec has no fmin), a select does not. Keep this form: the
+# shorter equivalent "({1} != {1} || {0} < {1}) ? {0} : {1}" gives the same values alone, but
+# gcc then compiles the kernel around it differently and the batch metrics change in their
+# last bits.
+SELECTS = {
+    ca.OP_FMIN: "({1} != {1}) ? {0} : "
+                "((({0} < {1}) || ({0} != {0})) ? (({0} != {0}) ? {1} : {0}) : {1})",
+    ca.OP_FMAX: "({1} != {1}) ? {0} : "
+                "((({0} > {1}) || ({0} != {0})) ? (({0} != {0}) ? {1} : {0}) : {1})",
+}
+_CALL = re.compile(r"^(\w+)\{f\}\((.*)\)$")
+
+
+class Target(NamedTuple):
+    """What the C of one target differs in: ``literal(value) -> str`` (a constant as C text;
+    it may raise for a constant the target cannot hold), ``suffix`` of the math functions,
+    ``selects`` (fmin/fmax as SELECTS instead of calls) and ``error``, the QuadcogError
+    subclass raised for an operation with no C form."""
+    literal: Callable[[float], str]
+    suffix: str = ""
+    selects: bool = False
+    error: type = QuadcogError
+
+
+class Walk(NamedTuple):
+    """The C of an SX Function: ``statements`` (one per instruction, in order, unindented),
+    ``slots`` (the work slots written: declare ``w<slot>`` for each), ``inputs`` (the indices of
+    the inputs read) and ``calls`` ({C function without suffix: number of arguments})."""
+    statements: list
+    slots: set
+    inputs: set
+    calls: dict
+
+
+def op_name(op):
+    """CasADi's name of an operation code ('OP_SIN'), or the number if it has none."""
+    return _NAMES.get(op, str(op))
+
+
+_NAMES = {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")}
+
+
+def template(op, target):
+    """The C template of ``op`` for ``target`` (see OPERATIONS), or None if there is none."""
+    if target.selects and op in SELECTS:
+        return SELECTS[op]
+    return OPERATIONS.get(op)
+
+
+def walk(fn, target, read, write):
+    """Walk the instructions of the SX Function ``fn`` into C statements (a ``Walk``).
+
+    ``read(i, nz)`` is the C expression of nonzero ``nz`` of input ``i``; ``write(i, nz)`` is
+    the C lvalue of nonzero ``nz`` of output ``i``. An operation without a C form raises
+    ``target.error`` naming it."""
+    one, zero = target.literal(1.0), target.literal(0.0)
+    statements, slots, inputs, calls = [], set(), set(), {}
+    for k in range(fn.n_instructions()):
+        op = fn.instruction_id(k)
+        ins, outs = fn.instruction_input(k), fn.instruction_output(k)
+        if op == ca.OP_INPUT:
+            statements.append(f"w{outs[0]} = {read(ins[0], ins[1])};")
+            slots.add(outs[0])
+            inputs.add(ins[0])
+            continue
+        if op == ca.OP_OUTPUT:
+            statements.append(f"{write(outs[0], outs[1])} = w{ins[0]};")
+            continue
+        if op == ca.OP_CONST:
+            rhs = target.literal(fn.instruction_constant(k))
+        else:
+            form = template(op, target)
+            if form is None:
+                raise target.error(f"{fn.name()}: CasADi operation {op_name(op)} (instruction "
+                                   f"{k}) has no C form in quadcog.codegen.sx_to_c; rewrite the function "
+                                   "without it, or add it to quadcog.codegen.sx_to_c.OPERATIONS")
+            call = _CALL.match(form)
+            if call:
+                calls[call.group(1)] = call.group(2).count(",") + 1
+            rhs = form.format(*(f"w{n}" for n in ins), one=one, zero=zero, f=target.suffix)
+        statements.append(f"w{outs[0]} = {rhs};")
+        slots.add(outs[0])
+    return Walk(statements, slots, inputs, calls)

@@ -1,0 +1,179 @@
+"""``make embedded``: export every controller in both precisions into generated/embedded/,
+compile each with the strict flags on the host (and for the Cortex-M4), run each on the
+Cortex-M4 in QEMU over a recorded flight, and print the cost table."""
+import difflib
+from pathlib import Path
+import tempfile
+
+from quadcog.controllers import BY_NAME, make_controller
+from quadcog.paths import generated_dir
+from quadcog.embedded.emit import PRECISIONS
+from quadcog.embedded.export import render
+from quadcog.embedded.host import build_host_library
+from quadcog.embedded import target
+
+# The paper's three laws; controllers added to BY_NAME later export the same way.
+CONTROLLERS = tuple(BY_NAME)
+RECORDING = ("fig6", 900, 2900)      # scenario, first and end step: 2 s around the CoG step
+
+
+def embedded_dir():
+    return Path(generated_dir()) / "embedded"
+
+
+def command(name, precision):
+    return f"quadcog export --controller {name} --precision {precision} --out DIR"
+
+
+def render_all(names=CONTROLLERS):
+    """{relative path: text} of every exported module, as committed in generated/embedded/."""
+    files = {}
+    for name in names:
+        ctl = make_controller(name)
+        for precision in PRECISIONS:
+            for fname, text in render(ctl, precision, name, command(name, precision)).items():
+                files[f"{precision}/{fname}"] = text
+    return files
+
+
+def check(folder=None, files=None):
+    """'' when generated/embedded/ holds exactly what the exporter writes, else a diff."""
+    folder = Path(folder or embedded_dir())
+    files = render_all() if files is None else files
+    on_disk = {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*"))
+               if p.is_file()} if folder.is_dir() else {}
+    out = []
+    for rel in sorted(set(files) | set(on_disk)):
+        if rel not in files:
+            out.append(f"only in {folder}: {rel}\n")
+        elif rel not in on_disk:
+            out.append(f"missing in {folder}: {rel}\n")
+        else:
+            old = on_disk[rel].read_text()
+            if old != files[rel]:
+                out.extend(difflib.unified_diff(old.splitlines(True), files[rel].splitlines(True),
+                                                f"{folder}/{rel}", f"exporter/{rel}"))
+    return "".join(out[:300])
+
+
+def write(folder=None, files=None):
+    folder = Path(folder or embedded_dir())
+    files = render_all() if files is None else files
+    for rel, text in files.items():
+        path = folder / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    for path in sorted(folder.rglob("*")):           # drop modules no longer exported
+        if path.is_file() and path.relative_to(folder).as_posix() not in files:
+            path.unlink()
+    return folder
+
+
+def recording():
+    """(x (N, 12), ref (N, 14), dt): states and references of a host flight (the Python
+    compiled path of the RECORDING scenario), for the target runs."""
+    from quadcog.scenarios.scenario import load_scenario
+    scenario, first, end = RECORDING
+    sc = load_scenario(scenario)
+    res = sc.run()
+    return res.x[first:end], res.ref[first:end], sc.dt
+
+
+def target_costs(folder=None, names=CONTROLLERS, work=None):
+    """Run every module of ``folder`` on the Cortex-M4 in QEMU and on the host; returns rows
+    {controller, precision, flash, ram, stack_static, stack_measured, instructions_mean,
+    instructions_max, max_U_diff, max_c_diff, calibration}."""
+    folder = Path(folder or embedded_dir())
+    x, ref, dt = recording()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(work or tmp)
+        for precision in PRECISIONS:
+            data = work / precision
+            data.mkdir(parents=True, exist_ok=True)
+            target.write_data(data / "harness_data.h", x, ref, dt, precision)
+            for name in names:
+                nc = int(make_controller(name).n_state)
+                module = folder / precision
+                elf = target.build_target(module, name, nc, data, data)
+                exe = target.build_host_harness(module, name, nc, data, data)
+                U, c, info = target.parse_output(target.run_qemu(elf), precision, nc)
+                U_h, c_h, _ = target.parse_output(target.run_host(exe), precision, nc)
+                size = target.object_cost(data / f"quadcog_{name}.o")
+                rows.append(dict(
+                    controller=name, precision=precision, flash=size["text"] + size["data"],
+                    ram=size["data"] + size["bss"], stack_static=size["stack"],
+                    stack_measured=info["stack_bytes"],
+                    instructions_mean=info["instructions_mean"],
+                    instructions_max=info["instructions_max"],
+                    max_U_diff=float(abs(U - U_h).max()),
+                    max_c_diff=float(abs(c - c_h).max()) if nc else 0.0,
+                    rel_diff=max(target.relative_difference(U, U_h),
+                                 target.relative_difference(c, c_h, per_column=False)),
+                    calibration=(info["calibration_counted"], info["calibration_true"])))
+    return rows
+
+
+def cost_table(rows):
+    """The cost table as Markdown."""
+    head = ("| controller | precision | flash (B) | RAM (B) | stack, -fstack-usage (B) | "
+            "stack, measured (B) | instructions per step, mean | max | at 168 MHz (us) |\n"
+            "|---|---|---|---|---|---|---|---|---|\n")
+    lines = [f"| {r['controller']} | {r['precision']} | {r['flash']} | {r['ram']} | "
+             f"{r['stack_static']} | {r['stack_measured']} | {r['instructions_mean']:.0f} | "
+             f"{r['instructions_max']:.0f} | {r['instructions_mean'] / 168:.1f} |"
+             for r in rows]
+    return head + "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    import argparse
+    import sys
+    import time
+    ap = argparse.ArgumentParser(prog="python -m quadcog.embedded", description=__doc__)
+    ap.add_argument("--check", action="store_true",
+                    help="only compare generated/embedded/ with the exporter; write nothing")
+    ap.add_argument("--no-target", action="store_true",
+                    help="skip the Cortex-M4 build and the QEMU runs")
+    args = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    files = render_all()
+    if args.check:
+        diff = check(files=files)
+        if diff:
+            sys.stderr.write(f"generated/embedded/ is stale; run `make embedded`:\n{diff}")
+            return 1
+        print("generated/embedded/ is up to date")
+        return 0
+    folder = write(files=files)
+    print(f"exported {len(files) // 2} modules into {folder} ({time.perf_counter() - t0:.1f} s)")
+    with tempfile.TemporaryDirectory() as tmp:
+        for precision in PRECISIONS:
+            build_host_library(folder / precision, CONTROLLERS, Path(tmp) / f"{precision}.so")
+    print("host: every module compiles with " + " ".join(target.STRICT_FLAGS))
+    if args.no_target:
+        return 0
+    missing = target.missing_tools()
+    if missing:
+        print(f"no Cortex-M4 run: missing {', '.join(missing)}; install (as root): "
+              f"apt-get install -y --no-install-recommends {target.DEBIAN_PACKAGES}")
+        return 0
+    rows = target_costs(folder)
+    x_steps = RECORDING[2] - RECORDING[1]
+    print(f"Cortex-M4 (QEMU {target.BOARD}, -icount shift=0), {x_steps} recorded steps of "
+          f"{RECORDING[0]}; calibration loop counted "
+          f"{rows[0]['calibration'][0]} of {rows[0]['calibration'][1]} instructions:")
+    print(cost_table(rows), end="")
+    bad = 0
+    for r in rows:
+        tol = target.target_rtol(r["controller"], r["precision"])
+        ok = r["rel_diff"] <= tol
+        bad += not ok
+        print(f"  {r['controller']:>8s} {r['precision']:>7s}: target vs host build, max |dU| = "
+              f"{r['max_U_diff']:.3g} N (N m), max |dc| = {r['max_c_diff']:.3g}, relative "
+              f"{r['rel_diff']:.2g} (tolerance {tol:g})"
+              + ("" if ok else "  FAILED"))
+    if rows[0]["calibration"][0] != rows[0]["calibration"][1]:
+        print("the instruction count is not exact: the calibration loop was miscounted")
+        bad += 1
+    return 1 if bad else 0

@@ -1,0 +1,132 @@
+"""Writing the files of a run: all or nothing, strict JSON, streaming CSV.
+
+``RunFiles`` writes every file of a run under a temporary name in the output folder and renames
+them into place together only when all of them are complete (with Ctrl-C held off during the
+renames), so an interrupted or failed run leaves the previous run's files as they were and no
+mix of the two. ``strict_json`` writes ``null`` where a number is not finite (JSON has no NaN
+or Infinity). ``write_csv`` formats the rows block by block, so memory does not grow with the
+length of the run beyond the arrays it is given.
+"""
+import contextlib
+import csv
+import json
+import math
+import numbers
+import os
+from pathlib import Path
+import signal
+import threading
+
+import numpy as np
+
+from quadcog.errors import QuadcogError
+
+CSV_BLOCK = 1024            # rows formatted at a time
+CSV_DECIMALS = 10           # values are rounded to this many decimals ...
+_ROUND_BELOW = 1e290        # ... when that cannot overflow (|v| * 10^10 < float max)
+
+
+def plain_value(value):
+    """``value`` as plain JSON data: numpy scalars and arrays to Python numbers and lists,
+    non-finite floats to None."""
+    if isinstance(value, dict):
+        return {str(k): plain_value(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [plain_value(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def strict_json(value):
+    """JSON text of ``value`` (indented, newline-terminated): standard JSON only, ``null``
+    where a number is NaN or infinite."""
+    return json.dumps(plain_value(value), indent=2, allow_nan=False) + "\n"
+
+
+def rounded(block):
+    """``block`` rounded to CSV_DECIMALS decimals where that is exact arithmetic (np.round
+    multiplies by 10^decimals, which overflows for |v| above ~1e298: those stay as they are)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.where(np.abs(block) < _ROUND_BELOW, np.round(block, CSV_DECIMALS), block)
+
+
+def write_csv(fh, header, columns, n_rows):
+    """Write ``header`` and ``n_rows`` rows to the text file ``fh``; ``columns`` are arrays of
+    shape (n_rows,) or (n_rows, k), concatenated side by side. Rows are formatted CSV_BLOCK at a
+    time (Python's float repr after rounding), so the extra memory is one block."""
+    writer = csv.writer(fh, lineterminator="\n")
+    writer.writerow(header)
+    for start in range(0, n_rows, CSV_BLOCK):
+        stop = min(start + CSV_BLOCK, n_rows)
+        block = np.hstack([np.asarray(c[start:stop], dtype=float).reshape(stop - start, -1)
+                           for c in columns])
+        writer.writerows(rounded(block).tolist())
+
+
+@contextlib.contextmanager
+def _no_interrupt():
+    """Hold off SIGINT (Ctrl-C) for the block; it is delivered right after."""
+    main = threading.current_thread() is threading.main_thread()
+    if main and hasattr(signal, "pthread_sigmask"):
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            yield
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    else:
+        yield
+
+
+def plot_text(text):
+    """``text`` shown literally in a matplotlib title or label: ``$`` would start mathtext,
+    and a stray one makes savefig fail."""
+    return str(text).replace("$", r"\$")
+
+
+class RunFiles:
+    """The files of one run in folder ``out``, committed together.
+
+    Use as a context manager: ``path(name)`` gives the temporary path to write ``name`` to;
+    when the block ends without an exception, every file is renamed to its final name; on any
+    exception (Ctrl-C included) the temporary files are removed and the folder keeps what it
+    had.
+    """
+
+    def __init__(self, out):
+        self.out = Path(out)
+        self._pending = {}
+
+    def __enter__(self):
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise QuadcogError(f"{self.out}: cannot create the output folder ({e.strerror})") \
+                from None
+        return self
+
+    def path(self, name):
+        """Where to write the file ``name``: a hidden temporary name in the same folder, with
+        the same suffix (so that writers that go by the suffix, like savefig, still work)."""
+        name = Path(name).name
+        tmp = self.out / f".{Path(name).stem}.partial-{os.getpid()}{Path(name).suffix}"
+        self._pending[name] = tmp
+        return tmp
+
+    def __exit__(self, kind, value, tb):
+        if kind is None:
+            with _no_interrupt():
+                for name, tmp in self._pending.items():
+                    os.replace(tmp, self.out / name)
+        else:
+            for tmp in self._pending.values():
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
+        return False

@@ -1,0 +1,31 @@
+"""Column names of a run's table (trajectory.csv / trajectory.parquet), each with its unit.
+
+A column name is ``<quantity>_<unit>``: the unit after the last word of the quantity, with
+``_`` for a space, ``s2`` for s^2 (``ref_ax_m_s2`` is an acceleration in m/s^2). Angles are in
+radians here (the plots show degrees and say so). Defined once; the writers, the readers
+(``quadcog animate``) and the README use these names.
+"""
+from quadcog.model.conventions import INPUT_NAMES, STATE_NAMES
+
+# unit of each state entry, in the order of STATE_NAMES
+STATE_UNITS = ("m", "m", "m", "rad", "rad", "rad", "m_s", "m_s", "m_s", "rad_s", "rad_s", "rad_s")
+INPUT_UNITS = ("N", "N_m", "N_m", "N_m")
+# the 14 reference entries (quadcog.trajectories.analytic: p, v, a, j, yaw, yaw rate)
+REFERENCE = (("x", "m"), ("y", "m"), ("z", "m"), ("vx", "m_s"), ("vy", "m_s"), ("vz", "m_s"),
+             ("ax", "m_s2"), ("ay", "m_s2"), ("az", "m_s2"), ("jx", "m_s3"), ("jy", "m_s3"),
+             ("jz", "m_s3"), ("yaw", "rad"), ("yaw_rate", "rad_s"))
+
+
+def trajectory_columns():
+    """The column names of a run's table, in order: time, state (12), input (4), reference
+    (14), r_hat (3), r_G (3): 37 names."""
+    return (("t_s",)
+            + tuple(f"{n}_{u}" for n, u in zip(STATE_NAMES, STATE_UNITS))
+            + tuple(f"{n}_{u}" for n, u in zip(INPUT_NAMES, INPUT_UNITS))
+            + tuple(f"ref_{n}_{u}" for n, u in REFERENCE)
+            + tuple(f"r_hat_{a}_m" for a in "xyz") + tuple(f"r_G_{a}_m" for a in "xyz"))
+
+
+# Column slices, so a reader says which block it means.
+T, X, U = slice(0, 1), slice(1, 13), slice(13, 17)
+REF, R_HAT, R_G = slice(17, 31), slice(31, 34), slice(34, 37)

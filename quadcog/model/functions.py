@@ -1,0 +1,206 @@
+"""The generated functions as fast numpy callables: ``quadcog.load()``."""
+from collections import namedtuple
+from pathlib import Path
+import threading
+import warnings
+
+import casadi as ca
+import numpy as np
+
+from quadcog.codegen.compiler import compile_library, find_compiler
+from quadcog.codegen.compiled import external
+from quadcog.errors import InputError, QuadcogWarning
+from quadcog.codegen.fastcall import FastCall
+from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
+from quadcog.model.parameters import check_parameters
+from quadcog.paths import generated_dir
+from quadcog.validate import vector
+
+Linearization = namedtuple("Linearization", "A B")
+_warned_no_compiler = False
+_cache = {}
+_cache_lock = threading.Lock()
+
+
+def _as_vector(name, value, n):
+    return vector(value, name, n)
+
+
+class Model:
+    """The derived model: one method per generated function.
+
+    Methods take numpy arrays (vectors of shape (n,)) and return new arrays, matrices as
+    2-D arrays; every argument is checked (shape, finiteness, admissible ``p``). Pass
+    ``out=`` (arrays of the output shapes) to reuse memory, or use ``fast(name)`` for the
+    unchecked allocation-free path. ``backend`` is "c" (the generated C, compiled on the first
+    call of a method or of ``fast``) or "casadi-vm" (CasADi's virtual machine, when there is
+    no C compiler). ``casadi_function`` never compiles: simulations build their own code.
+    """
+
+    def __init__(self, library, folder):
+        self.folder = folder                # the generated/ folder this model was loaded from
+        self._library = library             # the shared, lazily compiled functions
+        self._symbolic = {}                 # name -> casadi.Function (SX), for expressions
+        self.backend = library.backend
+        self._calls = {}
+        self._last_p = None
+
+    @property
+    def functions(self):
+        """{name: (inputs ((argument, length), ...), outputs ((name, shape), ...))}: the
+        generated functions of this folder, as its manifest declares them."""
+        return self._library.contract
+
+    def _known(self, name):
+        if name not in self._library.contract:
+            raise InputError(f"unknown function {name!r}; expected one of "
+                             f"{tuple(self._library.contract)}")
+
+    def call(self, name, *args, out=None):
+        """Evaluate the generated function ``name`` on numpy arguments, in the order and with
+        the lengths of ``functions[name]``; one array per output (a tuple when several)."""
+        self._known(name)
+        if len(args) != len(self._library.contract[name][0]):
+            raise InputError(f"{name} takes {len(self._library.contract[name][0])} arguments "
+                             f"{tuple(a for a, _ in self._library.contract[name][0])}, got "
+                             f"{len(args)}")
+        return self._call(name, args, out)
+
+    def casadi_function(self, name):
+        """The generated CasADi Function ``name`` (SX), callable on SX/MX symbols."""
+        self._known(name)
+        if name not in self._symbolic:
+            self._symbolic[name] = load_casadi_function(name, self.folder)
+        return self._symbolic[name]
+
+    def fast(self, name):
+        """A new FastCall (preallocated buffers) of the compiled function ``name``."""
+        self._known(name)
+        return FastCall(self._library.functions()[name])
+
+    def _call(self, name, args, out):
+        spec_in, spec_out = self._library.contract[name]
+        call = self._calls.get(name)
+        if call is None:
+            call = self._calls[name] = self.fast(name)
+        for buf, (arg_name, n), value in zip(call.inputs, spec_in, args):
+            if arg_name == "p":
+                self._check_p(value)
+            buf[:] = _as_vector(arg_name, value, n)
+        call()
+        if out is None:
+            results = [o.copy() for o in call.outputs]
+        else:
+            outs = out if len(spec_out) > 1 else (out,)
+            for dst, src, (oname, shape) in zip(outs, call.outputs, spec_out):
+                if np.shape(dst) != shape:
+                    raise InputError(f"out for {oname} must have shape {shape}, "
+                                     f"got {np.shape(dst)}")
+                dst[...] = src
+            results = list(outs)
+        if len(results) == 1:
+            return results[0]
+        return Linearization(*results) if name == "linearization" else tuple(results)
+
+    def _check_p(self, p):
+        p = np.asarray(p, dtype=float)
+        key = p.tobytes()
+        if key != self._last_p:       # admissibility once per distinct p, not per call
+            check_parameters(p)
+            self._last_p = key
+
+    def dynamics(self, x, U, p, out=None):
+        """x_dot (12,) of the state x (12,) under inputs U (4,: N, N m, N m, N m) and p (14,)."""
+        return self._call("dynamics", (x, U, p), out)
+
+    def mass_matrix(self, p, out=None):
+        """M (6, 6), the mass and inertia matrix about O, for parameters p (14,)."""
+        return self._call("mass_matrix", (p,), out)
+
+    def inverse_mass_matrix(self, p, out=None):
+        """M^{-1} (6, 6) for parameters p (14,), by block elimination (no 6x6 solve)."""
+        return self._call("inverse_mass_matrix", (p,), out)
+
+    def coriolis(self, x, p, out=None):
+        """C(nu) (6, 6), skew-symmetric, at state x (12,), parameters p (14,)."""
+        return self._call("coriolis", (x, p), out)
+
+    def damping(self, p, out=None):
+        """D (6, 6) = diag(c_x, c_y, c_z, c_phi, c_theta, c_psi) for p (14,)."""
+        return self._call("damping", (p,), out)
+
+    def gravity(self, x, p, out=None):
+        """g_G (6,) = -[f_G; r_G x f_G] in N and N m at state x (12,), parameters p (14,)."""
+        return self._call("gravity", (x, p), out)
+
+    def regressor(self, x, vartheta, p, out=None):
+        """Phi (6, 3) = d/dr_G [M vartheta + C nu + g_G]; vartheta (6,) a generalized
+        acceleration (m/s^2, rad/s^2), x (12,), p (14,). Phi does not depend on r_G."""
+        return self._call("regressor", (x, vartheta, p), out)
+
+    def decoupling(self, x, p, out=None):
+        """alpha (4, 4) = L_g L_f h for y = [z, phi, theta, psi], at x (12,), p (14,)."""
+        return self._call("decoupling", (x, p), out)
+
+    def drift(self, x, p, out=None):
+        """b (4,) = L_f^2 h, so that y_ddot = alpha U + b; x (12,), p (14,)."""
+        return self._call("drift", (x, p), out)
+
+    def truth_dynamics(self, x, U, p, I_products, wrench, out=None):
+        """x_dot (12,) of the truth model: full inertia about O (diagonal from p, off-diagonal
+        entries I_products = [Ixy, Ixz, Iyz], kg m^2) and an external wrench (6,) =
+        [force at O in ground axes (N), moment in body axes (N m)]."""
+        return self._call("truth_dynamics", (x, U, p, I_products, wrench), out)
+
+    def linearization(self, x, U, p, out=None):
+        """Linearization(A (12, 12), B (12, 4)) of the dynamics at x (12,), U (4,), p (14,)."""
+        return self._call("linearization", (x, U, p), out)
+
+
+class _Library:
+    """The numeric functions of one generated folder, made on first use: the generated C
+    compiled into the cache, or CasADi's virtual machine without a compiler."""
+
+    def __init__(self, folder):
+        global _warned_no_compiler
+        self.folder = folder
+        self.contract = read_contract(folder).functions
+        self.cc = find_compiler()
+        self.backend = "c" if self.cc else "casadi-vm"
+        if self.cc is None and not _warned_no_compiler:
+            warnings.warn("no C compiler found ($CC or `cc`): quadcog falls back to CasADi's "
+                          "virtual machine, which is about 100x slower per call",
+                          QuadcogWarning, stacklevel=4)
+            _warned_no_compiler = True
+        self._functions = None
+        self._lock = threading.Lock()
+
+    def functions(self):
+        """name -> casadi.Function (external C or VM), built once."""
+        with self._lock:
+            if self._functions is None:
+                if self.cc is None:
+                    self._functions = {n: load_casadi_function(n, self.folder)
+                                       for n in self.contract}
+                else:
+                    verify(self.folder, only={C_SOURCE})
+                    lib = compile_library((self.folder / C_SOURCE).read_bytes(), "quadcog_gen",
+                                          self.cc)
+                    self._functions = {n: external(n, lib) for n in self.contract}
+        return self._functions
+
+
+def load(folder=None):
+    """The Model of generated/ (or ``folder``): every file checked against the manifest now;
+    the generated C is compiled (once, into the cache) when a method first needs it.
+
+    Raises GeneratedFilesError naming the file when generated/ is missing, corrupted or
+    incomplete, and what to do about it.
+    """
+    folder = generated_dir() if folder is None else folder
+    folder = Path(folder).resolve()
+    with _cache_lock:
+        if folder not in _cache:
+            verify(folder)
+            _cache[folder] = _Library(folder)
+    return Model(_cache[folder], folder)

@@ -1,0 +1,43 @@
+"""Seeded random admissible parameter sets, states and inputs (for Monte Carlo and checks)."""
+import numpy as np
+
+from quadcog.model.conventions import IDX
+from quadcog.model.admissibility import is_admissible
+
+
+def random_parameters(rng):
+    """An admissible parameter set p (14,): m in [0.3, 2] kg, g in [9, 10.5] m/s^2, I_O entries
+    in [0.003, 0.05] kg m^2, drag in [0, 0.5], r_G in [-0.1, 0.1]^3 m, resampled until it is
+    admissible with the margin of ``quadcog.model.admissibility``. ``rng``: numpy Generator."""
+    while True:
+        p = np.empty(14)
+        p[IDX["m"]] = rng.uniform(0.3, 2.0)
+        p[IDX["g"]] = rng.uniform(9.0, 10.5)
+        p[IDX["Ixx"]:IDX["Izz"] + 1] = rng.uniform(0.003, 0.05, 3)
+        p[IDX["c_x"]:IDX["c_psi"] + 1] = rng.uniform(0.0, 0.5, 6)
+        p[IDX["x_G"]:] = rng.uniform(-0.1, 0.1, 3)
+        if is_admissible(p):
+            return p
+
+
+def random_state(rng):
+    """A state x (12,): position in [-5, 5] m, roll and pitch in [-1.2, 1.2] rad (away from the
+    Euler singularity), yaw in [-pi, pi], velocities and rates in [-3, 3] (m/s, rad/s)."""
+    x = np.empty(12)
+    x[0:3] = rng.uniform(-5, 5, 3)
+    x[3:5] = rng.uniform(-1.2, 1.2, 2)
+    x[5] = rng.uniform(-np.pi, np.pi)
+    x[6:12] = rng.uniform(-3, 3, 6)
+    return x
+
+
+def random_input(rng):
+    """An input U (4,): thrust in [0, 20] N, moments in [-1, 1] N m."""
+    return np.concatenate([[rng.uniform(0, 20)], rng.uniform(-1, 1, 3)])
+
+
+def random_points(n, seed=20110828):
+    """n seeded (x (12,), U (4,), p (14,), vartheta (6,)) tuples; vartheta in [-5, 5]."""
+    rng = np.random.default_rng(seed)
+    return [(random_state(rng), random_input(rng), random_parameters(rng),
+             rng.uniform(-5, 5, 6)) for _ in range(n)]

@@ -1,0 +1,3 @@
+"""Layer 9, scenario files: the shipped ``*.toml`` files and their lookup (``files``), the
+dotted-key grammar of ``--set`` and sweep files (``keys``), the schema and validation
+(``scenario``)."""

@@ -1,0 +1,115 @@
+"""One closed-loop step as a CasADi expression, and its compiled chunks.
+
+Each step k: the controller runs once at t_k (a 1/dt digital controller), its input is held
+for the step, the truth plant takes one RK4 step, the controller state takes an Euler step.
+The state is X = [x (12); f (rotor thrusts, 0 or 4); c (controller state)]. Everything that
+changes with time comes from the Schedule's named per-step inputs (``STEP_INPUTS``).
+"""
+import itertools
+
+import casadi as ca
+
+from quadcog.codegen.compiled import cached_compile
+from quadcog.sim.divergence import divergence_code
+from quadcog.sim.plant import rk4_step_expression
+from quadcog.sim.schedule import STEP_INPUTS, truth_parameters
+
+CHUNK = 1000          # steps per compiled call
+
+
+def _step_symbols():
+    return {name: ca.SX.sym(name, rows) for name, rows in STEP_INPUTS}
+
+
+def closed_loop_step(controller, actuation, limits):
+    """CasADi Function step(X, P, t, dt, ref, cog, cog_scale, wrench, tail) -> (X_next,
+    U_applied, code) for a Controller, the truth's Actuation and the divergence Limits; P is
+    the vehicle's parameter vector (14,), the per-step inputs are those of ``STEP_INPUTS``;
+    code is the divergence code of the sample at the start of the step (X and the controller's
+    input U there, with ref)."""
+    nc, nf = controller.n_state, actuation.n_rotor_states
+    X, P = ca.SX.sym("X", 12 + nf + nc), ca.SX.sym("P", 14)
+    s = _step_symbols()
+    x, f, c = X[:12], X[12:12 + nf], X[12 + nf:]
+    U, c_dot = controller.function()(s["t"], x, s["ref"], c)
+    x_next, f_next, U_app = rk4_step_expression(
+        controller.model, x, f, U, truth_parameters(P, s["cog_scale"], s["cog"]), s["wrench"],
+        s["dt"], actuation)
+    X_next = ca.vertcat(x_next, f_next,
+                        controller.project(c + s["dt"] * c_dot) if nc else ca.SX(0, 1))
+    X_next, U_app = ca.cse([X_next, U_app])    # the RK4 stages share parameter-only terms
+    code = divergence_code(x, ca.norm_2(x[:3] - s["ref"][:3]), limits,
+                           ca.sum1(ca.fabs(ca.vertcat(f, c, U))))
+    names = [name for name, _ in STEP_INPUTS]
+    return ca.Function("closed_loop_step", [X, P] + [s[n] for n in names],
+                       [X_next, U_app, code], ["X", "P"] + names,
+                       ["X_next", "U_applied", "code"])
+
+
+def chunk_function(controller, actuation, limits, n=CHUNK):
+    """Compiled Function (X0, P, per-step inputs with n columns each) -> (X (nX x n),
+    U (4 x n), code (1 x n)): n closed-loop steps, X after each, code of the sample before
+    each (``divergence_code``). P is shared by all steps."""
+    def build():
+        step = closed_loop_step(controller, actuation, limits)
+        acc = step.mapaccum("closed_loop_steps", n)
+        X0, P = ca.MX.sym("X0", step.size1_in(0)), ca.MX.sym("P", 14)
+        per_step = [ca.MX.sym(name, rows, n) for name, rows in STEP_INPUTS]
+        Xs, Us, codes = acc(X0, ca.repmat(P, 1, n), *per_step)
+        return ca.Function("closed_loop_chunk", [X0, P] + per_step, [Xs, Us, codes],
+                           ["X0", "P"] + [name for name, _ in STEP_INPUTS], ["X", "U", "code"])
+    return cached_compile(("chunk", controller.cache_key(), actuation, limits, n), build)
+
+
+# accumulators of a monitored step, after X: sums over the counted samples
+ACCUMULATORS = ("sum_sq", "max", "sum_sq_tail", "count", "count_tail", "last", "code",
+                "diverged_at")
+
+
+def monitored_step(controller, actuation, limits):
+    """Step with metric accumulators, for batches that keep no trajectory.
+
+    State Z = [X; accumulators (``ACCUMULATORS``)]: the position error e of the sample at the
+    start of each real step (dt > 0) is added to the sums unless that sample has diverged
+    (``divergence_code``); then the code and the time are kept and the state is frozen."""
+    step = closed_loop_step(controller, actuation, limits)
+    nX = step.size1_in(0)
+    Z, P = ca.SX.sym("Z", nX + len(ACCUMULATORS)), ca.SX.sym("P", 14)
+    s = _step_symbols()
+    X, a = Z[:nX], dict(zip(ACCUMULATORS, ca.vertsplit(Z[nX:])))
+    X_next, _, code = step(X, P, *[s[name] for name, _ in STEP_INPUTS])
+    e = ca.norm_2(X[:3] - s["ref"][:3])
+    real = s["dt"] > 0
+    counted = ca.vertcat(
+        a["sum_sq"] + real * e ** 2, ca.if_else(real, ca.fmax(a["max"], e), a["max"]),
+        a["sum_sq_tail"] + real * s["tail"] * e ** 2, a["count"] + real,
+        a["count_tail"] + real * s["tail"], ca.if_else(real, e, a["last"]), 0, -1)
+    stopped = ca.vertcat(X, ca.vertcat(*[a[k] for k in ACCUMULATORS[:6]]), code, s["t"])
+    running = ca.if_else(code > 0, stopped, ca.vertcat(X_next, counted))
+    Z_next = ca.if_else(a["code"] > 0, Z, running)
+    return ca.Function("monitored_step", [Z, P] + [s[name] for name, _ in STEP_INPUTS],
+                       [Z_next])
+
+
+def monitored_chunk_function(controller, actuation, limits, n=CHUNK):
+    """Compiled Function (Z, P, per-step inputs (n columns)) -> Z after n monitored steps."""
+    def build():
+        step = monitored_step(controller, actuation, limits)
+        acc = step.mapaccum("monitored_chunk", n)
+        Z, P = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("P", 14)
+        per_step = [ca.MX.sym(name, rows, n) for name, rows in STEP_INPUTS]
+        return ca.Function("monitored_last", [Z, P] + per_step,
+                           [acc(Z, ca.repmat(P, 1, n), *per_step)[:, -1]])
+    return cached_compile(("batch", controller.cache_key(), actuation, limits, n), build)
+
+
+def packed(step):
+    """The SX Function ``step(Z, Q, *per_step)`` as ``step(Z, Q, row) -> Z_next``, with row
+    the per-step inputs stacked in their order (for the vector kernel, ``quadcog.codegen.vector_kernel``,
+    which takes one row per step; ``Schedule.rows`` writes them in the same order)."""
+    Z, Q = ca.SX.sym("Z", step.size1_in(0)), ca.SX.sym("Q", step.size1_in(1))
+    sizes = [step.size1_in(i) for i in range(2, step.n_in())]
+    row = ca.SX.sym("row", sum(sizes))
+    parts = ca.vertsplit(row, [0] + list(itertools.accumulate(sizes)))
+    return ca.Function(step.name() + "_packed", [Z, Q, row], [step(Z, Q, *parts)],
+                       ["Z", "Q", "row"], ["Z_next"])

@@ -1,0 +1,158 @@
+"""Realistic sensing: the controller sees a noisy state estimate, biased gyroscopes, and its
+input one control period late.
+
+``Sensed(controller, sensing, dt)`` is a Controller that wraps another one. It adds to the
+state the controller sees seeded Gaussian noise on position, velocity, attitude and body rates
+and a constant gyroscope bias on the rates, and (``delay``) holds the computed input for one
+period: the input applied during step k is the one computed from the measurement of step k-1.
+Everything is part of the CasADi law, so the compiled closed loop and the Python loop carry it
+unchanged. It is a simulation of the sensors, not flight code: the C export takes the wrapped
+controller itself (the noise depends on the time t, which the exported step does not take).
+
+The noise is a counter-based pseudo-random sequence of the time t and the seed (a sine hash
+per channel turned Gaussian by Box-Muller), so a run is reproducible without a random state
+and the same in every execution path.
+
+Default accuracies (``Sensing()``), one standard deviation per axis:
+
+- position 1 mm: motion capture, e.g. Merriaux et al., "A Study of Vicon System Positioning
+  Performance", Sensors 17(7), 1591 (2017), report sub-millimetre static and about 2 mm
+  dynamic errors;
+- velocity 1 cm/s (body axes): the derivative of that position at 100 Hz, smoothed;
+- attitude 0.2 deg: an attitude estimator fusing the IMU with motion capture;
+- body rates 0.005 deg/s/sqrt(Hz) x sqrt(1/(2 dt)): the rate-noise spectral density of the
+  InvenSense MPU-6000 gyroscope (product specification PS-MPU-6000A-00 rev. 3.4, table 6.1),
+  about 0.11 deg/s at 1 kHz;
+- gyroscope bias 0.1 deg/s per axis, drawn once per seed: the residual after the estimator's
+  bias calibration (this project's assumption; the MPU-6000's uncalibrated zero-rate offset is
+  +-20 deg/s).
+
+No law here needs an accelerometer: the composite law's filtered identity replaces the
+acceleration by the derivative of the filtered momentum.
+"""
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from quadcog.controllers.base import Controller
+from quadcog.errors import InputError
+
+DEG = np.pi / 180.0
+GYRO_NOISE_DENSITY = 0.005 * DEG          # rad/s/sqrt(Hz), MPU-6000
+
+
+@dataclass(frozen=True)
+class Sensing:
+    """What the controller's measurements suffer (SI units; see the module docstring).
+
+    noise : add the Gaussian noise below to the state the controller sees.
+    delay : apply each computed input one control period later.
+    seed : integer seed of the noise and of the gyroscope bias.
+    position, velocity, attitude : standard deviations (m, m/s, rad).
+    gyro_density : rate-noise spectral density (rad/s/sqrt(Hz)); the per-sample standard
+        deviation is gyro_density * sqrt(1 / (2 dt)).
+    gyro_bias : standard deviation of the constant gyroscope bias per axis (rad/s).
+    """
+    noise: bool = True
+    delay: bool = True
+    seed: int = 1
+    position: float = 0.001
+    velocity: float = 0.01
+    attitude: float = 0.2 * DEG
+    gyro_density: float = GYRO_NOISE_DENSITY
+    gyro_bias: float = 0.1 * DEG
+
+    def __post_init__(self):
+        for name in ("noise", "delay"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InputError(f"Sensing.{name} must be True or False, got "
+                                 f"{getattr(self, name)!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
+            raise InputError(f"Sensing.seed must be an integer, got {self.seed!r}")
+        for name in ("position", "velocity", "attitude", "gyro_density", "gyro_bias"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) \
+                    or v < 0:
+                raise InputError(f"Sensing.{name} must be a number >= 0, got {v!r}")
+
+    def sigmas(self, dt):
+        """Per-sample standard deviations of the 12 state entries."""
+        gyro = self.gyro_density * np.sqrt(1.0 / (2.0 * dt))
+        return np.repeat([self.position, self.attitude, self.velocity, gyro], 3)
+
+    def bias(self):
+        """The constant gyroscope bias (3,) of this seed (rad/s)."""
+        return np.random.default_rng(self.seed).normal(scale=self.gyro_bias, size=3)
+
+
+def _uniform(t, channel, seed):
+    """A pseudo-random number in (0, 1) from t (SX): fract(sin(a t + b) * 43758.5453)."""
+    a = 12989.8 + 78.233 * channel + 0.618 * seed
+    b = 1.7 * channel + 3.1 * seed
+    v = ca.sin(a * t + b) * 43758.5453
+    return ca.fmin(ca.fmax(v - ca.floor(v), 1e-12), 1 - 1e-12)
+
+
+def gaussian(t, channel, seed):
+    """A standard normal sample per (t, channel, seed) (SX), by Box-Muller."""
+    u1, u2 = _uniform(t, 2 * channel, seed), _uniform(t, 2 * channel + 1, seed)
+    return ca.sqrt(-2 * ca.log(u1)) * ca.cos(2 * np.pi * u2)
+
+
+class Sensed(Controller):
+    """``controller`` flown with ``sensing`` (a Sensing) at control period ``dt`` (s).
+
+    The state is the inner controller's state followed, with ``delay``, by the input computed
+    in the previous period (4). ``estimates_cog`` and the projection pass through."""
+
+    def __init__(self, controller, sensing, dt):
+        if not isinstance(controller, Controller):
+            raise InputError(f"controller must be a quadcog Controller, got {controller!r}")
+        if not isinstance(sensing, Sensing):
+            raise InputError(f"sensing must be a quadcog Sensing, got {sensing!r}")
+        dt = float(dt)
+        if not (np.isfinite(dt) and dt > 0):
+            raise InputError(f"dt must be a positive number of seconds, got {dt!r}")
+        super().__init__(controller.vehicle, controller.model)
+        self.inner, self.sensing, self.dt = controller, sensing, dt
+        self.name = f"{controller.name}_sensed"
+        self.estimates_cog = getattr(controller, "estimates_cog", False)
+        self.n_inner = controller.n_state
+        self.n_state = self.n_inner + (4 if sensing.delay else 0)
+        self._sigma = sensing.sigmas(dt)
+        self._bias = np.r_[np.zeros(9), sensing.bias()]
+
+    def for_vehicle(self, vehicle):
+        if vehicle == self.vehicle:
+            return self
+        return Sensed(self.inner.for_vehicle(vehicle), self.sensing, self.dt)
+
+    def initial_state(self):
+        c = self.inner.initial_state()
+        if self.sensing.delay:
+            c = np.r_[c, self.vehicle.hover_input()]
+        return c
+
+    def measured(self, t, x):
+        """The state the controller sees (SX)."""
+        if not self.sensing.noise:
+            return x
+        noise = ca.vertcat(*[gaussian(t, i, self.sensing.seed) for i in range(12)])
+        return x + ca.DM(self._sigma) * noise + ca.DM(self._bias)
+
+    def expression(self, t, x, ref, c):
+        inner_c = c[:self.n_inner]
+        U, c_dot = self.inner.function()(t, self.measured(t, x), ref, inner_c)
+        if not self.sensing.delay:
+            return U, c_dot
+        held = c[self.n_inner:]
+        # the Euler update c + dt c_dot stores exactly the new input for the next period
+        return held, ca.vertcat(c_dot, (U - held) / self.dt)
+
+    def project(self, c):
+        return ca.vertcat(self.inner.project(c[:self.n_inner]), c[self.n_inner:])
+
+    def project_numpy(self, c):
+        self.inner.project_numpy(c[:self.n_inner])
+        return c

@@ -1,0 +1,147 @@
+"""Many flights of one controller at once, differing in their truth parameters and in the size
+of their CoG changes (not in their times): the engine of sweeps.
+
+Flight b's CoG is ``r_G(t) = r_G(P[b]) + sum_j s_j(t) D[b, 3j:3j+3]``, where s_j is the shape
+(0 -> 1, step or ramp) of CoG change j, shared by all flights. The closed-loop step is the
+monitored step of ``quadcog.sim.closed_loop`` (the same divergence rule and metric accumulators as
+``simulate_batch``); this module feeds it the per-flight CoG and runs it either through the
+vectorized C kernel of ``quadcog.codegen.vector_kernel`` (flights in the vector lanes) or, without a C
+compiler, through CasADi's map.
+"""
+import time
+
+import casadi as ca
+import numpy as np
+
+from quadcog import config
+from quadcog.sim.batch import batch_metrics, run_kernel
+from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, monitored_step, packed
+from quadcog.codegen.compiled import cached_compile
+from quadcog.sim.plant import Actuation, initial_rotor_thrusts
+from quadcog.sim.schedule import STEP_INPUTS, Schedule, cog_at
+from quadcog.sim.flight import check_time, run_options, start_at_reference
+from quadcog.sim.timeline import CogChange, CogProfile
+from quadcog.trajectories.analytic import as_trajectory
+
+
+def sweep_step(controller, actuation, limits, n_changes):
+    """SX Function (Z, Q, per-step inputs (``STEP_INPUTS``), shapes) -> Z_next: the monitored
+    step with the flight's CoG.
+
+    Q = [P (14); D (3 n_changes)] per flight; shapes = [s_1 .. s_J] at the step. Padding steps
+    have dt = 0 and change nothing (the monitored step counts only dt > 0)."""
+    step = monitored_step(controller, actuation, limits)
+    nZ = step.size1_in(0)
+    Z, Q = ca.SX.sym("Z", nZ), ca.SX.sym("Q", 14 + 3 * n_changes)
+    per_step = {name: ca.SX.sym(name, rows) for name, rows in STEP_INPUTS}
+    shapes = ca.SX.sym("shapes", n_changes)
+    # the flight's CoG profile enters where a single flight's does (the schedule's cog input),
+    # so r_G(t) is formed in one place (``quadcog.sim.schedule.cog_at``)
+    cog = ca.SX.zeros(3)
+    for j in range(n_changes):
+        cog = cog + shapes[j] * Q[14 + 3 * j:17 + 3 * j]
+    inputs = dict(per_step, cog=cog, cog_scale=1.0)
+    Z_next = step(Z, Q[:14], *[inputs[name] for name, _ in STEP_INPUTS])
+    names = [name for name, _ in STEP_INPUTS]
+    return ca.Function("sweep_step", [Z, Q] + [per_step[n] for n in names] + [shapes],
+                       [Z_next], ["Z", "Q"] + names + ["shapes"], ["Z_next"])
+
+
+def cog_shapes(times, cog_times):
+    """(N, J) shapes s_j (0 -> 1, a step or a ramp) of the CoG changes (t, ramp) at ``times``."""
+    shapes = [CogProfile([CogChange(t, (1.0, 0.0, 0.0), ramp)]).sample(times)[:, 0]
+              for t, ramp in cog_times]
+    return np.ascontiguousarray(np.column_stack(shapes) if shapes else
+                                np.zeros((len(times), 0)))
+
+
+def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=None,
+              cog_times=(), disturbances=(), truth=None, limits=None, x0=None, threads=1,
+              kernel="auto"):
+    """Fly ``controller`` (designed for its model already) with each truth vehicle and CoG
+    increments D (B, 3 J).
+
+    Parameters
+    ----------
+    controller : quadcog Controller
+    vehicles : sequence of B Vehicles
+        The truth vehicles; they may differ in their 14 parameters, not in their rotors (the
+        caller checks that).
+    D : (B, 3 J) array
+        Size of each of the J CoG changes per flight (m), see the module docstring.
+    trajectory, duration, dt, disturbances, truth, limits
+        As for ``quadcog.simulate``.
+    cog_times : sequence of (t, ramp)
+        Start (s) and ramp (s, 0 for a step) of each CoG change, shared by all flights.
+    x0 : (12,) array or None
+        Initial state (default: at the reference).
+    threads : int
+        Threads that share the flights.
+    kernel : "auto", "vector" or "casadi"
+        The vectorized C kernel ("auto" when a C compiler is there) or CasADi's map.
+
+    Returns
+    -------
+    quadcog.BatchResult
+    """
+    options, limits = run_options(truth, limits, None)
+    dt = config.get("simulate.dt", dt)
+    duration, dt = check_time(duration, dt)
+    schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
+                              disturbances=disturbances)
+    actuation = Actuation.of(vehicles[0], options)
+    P = np.array([v.parameters() for v in vehicles])
+    B, J = P.shape[0], len(cog_times)
+    D = np.asarray(D, dtype=float).reshape(B, 3 * J)
+    shapes = cog_shapes(schedule.t, cog_times)
+    nc, nf = controller.n_state, actuation.n_rotor_states
+    nX = 12 + nf + nc
+    if x0 is None:
+        x0 = start_at_reference(schedule.ref[0])
+    Z = np.zeros((B, nX + len(ACCUMULATORS)))
+    Z[:, :12] = x0
+    for b, v in enumerate(vehicles):
+        r0 = cog_at(v.r_G, 1.0, shapes[0] @ D[b].reshape(J, 3) if J else 0.0)
+        Z[b, 12:12 + nf] = initial_rotor_thrusts(v.with_cog(r0), actuation)
+    Z[:, 12 + nf:nX] = controller.initial_state()
+    Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
+    Q = np.hstack([P, D])
+    t0 = time.perf_counter()
+    run = None
+    if kernel in ("auto", "vector"):
+        from quadcog.codegen.vector_kernel import kernel_for
+        run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
+                         lambda: packed(sweep_step(controller, actuation, limits, J)),
+                         required=kernel == "vector")
+    if run is not None:
+        Z = run_kernel(run, Z, Q, schedule, shapes, threads=threads)
+    else:
+        Z = _run_casadi(controller, actuation, limits, J, Z, Q, schedule, shapes, threads)
+    seconds = time.perf_counter() - t0
+    # the CoG is in P, so the schedule's own CoG (zero) is what batch_metrics sees: it only
+    # needs the reference, the tail and the times
+    return batch_metrics(Z, nX, schedule, limits, seconds)
+
+
+def _run_casadi(controller, actuation, limits, J, Z, Q, schedule, shapes, threads):
+    def build():
+        step = sweep_step(controller, actuation, limits, J)
+        acc = step.mapaccum("sweep_chunk", CHUNK)
+        z, q = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("Q", step.size1_in(1))
+        per_step = [ca.MX.sym(name, rows, CHUNK) for name, rows in STEP_INPUTS]
+        sh = ca.MX.sym("shapes", J, CHUNK)
+        return ca.Function("sweep_last", [z, q] + per_step + [sh],
+                           [acc(z, ca.repmat(q, 1, CHUNK), *per_step, sh)[:, -1]])
+
+    last = cached_compile(("sweep_batch", controller.cache_key(), actuation, limits, J, CHUNK),
+                          build)
+    B = Z.shape[0]
+    shared = list(range(2, 3 + len(STEP_INPUTS)))     # per-step inputs and shapes
+    mapped = last.map("batch", "thread" if threads > 1 else "serial", B, shared, [])
+    padded = schedule.padded(CHUNK)
+    n_pad = padded.n_steps - schedule.n_steps
+    shapes = np.vstack([shapes, np.repeat(shapes[-1:], n_pad, axis=0)]) if n_pad else shapes
+    Zt, Qt = Z.T, Q.T
+    for k in range(0, schedule.n_steps, CHUNK):
+        Zt = np.array(mapped(Zt, Qt, *padded.matrices(k, k + CHUNK), shapes[k:k + CHUNK].T))
+    return Zt.T

@@ -1,0 +1,2 @@
+"""Layer 12, studies built on everything below: the paper's figures and claims (``paper``),
+beyond the paper (``beyond``), the analysis (``analysis``) and the tour (``tour``)."""

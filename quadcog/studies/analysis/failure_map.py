@@ -1,0 +1,227 @@
+"""Where each controller fails: tail RMS position error after a CoG step at hover, over a grid
+of CoG offsets (x_G, y_G) in the rotor plane: the shipped sweep file ``failure-map``."""
+import time
+
+import numpy as np
+
+from quadcog.controllers import (AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization,
+                                 make_controller)
+from quadcog.controllers.adaptive import admissible_estimate_radius
+from quadcog.errors import ParameterError
+from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
+from quadcog import config
+from quadcog.sim.flight import RK4_LIMIT
+from quadcog.vehicles.vehicle import HUMMINGBIRD, default_parameters
+from quadcog.trajectories.analytic import Hover
+
+THRESHOLD = 0.5          # m: tail RMS above this (or a diverged run) counts as a failure
+LABELS = {"pd": "cascade PD", "fl": "feedback linearization", "adaptive": "adaptive FL"}
+
+
+def default_controllers():
+    """{short name: controller} of the three controllers at their default settings."""
+    return {"pd": CascadePD(), "fl": FeedbackLinearization(),
+            "adaptive": AdaptiveFeedbackLinearization()}
+
+
+def admissibility(x_G, y_G, z_G=0.0, base=None):
+    """(admissible (ny, nx) bool, lambda_min (ny, nx) in kg m^2) over the grid x_G (nx,),
+    y_G (ny,) (m): whether quadcog.check_parameters accepts the base vehicle (default: the
+    default vehicle) with r_G = (x_G, y_G, z_G), and the smallest eigenvalue of the inertia about
+    the CoG (<= 0 where it does not)."""
+    base = default_parameters() if base is None else base
+    adm = np.zeros((len(y_G), len(x_G)), dtype=bool)
+    lam = np.zeros_like(adm, dtype=float)
+    for i, yg in enumerate(y_G):
+        for j, xg in enumerate(x_G):
+            p = with_cog(base, (xg, yg, z_G))
+            lam[i, j] = np.linalg.eigvalsh(inertia_about_cog(p))[0]
+            try:
+                check_parameters(p)
+                adm[i, j] = True
+            except ParameterError:
+                pass
+    return adm, lam
+
+
+def rk4_stiffness(controller, params, dt=None):
+    """|lambda|_max dt of the closed-loop Jacobian at level hover (1 m, r_hat = 0) for each
+    truth parameter row of params (B, 14), the CoG already moved: above quadcog.simulate's
+    RK4_LIMIT (2.5) a fixed RK4 step of dt (s) is itself unstable, so a 'diverged' result there
+    says more about the integrator than about the controller. dt defaults to
+    ``config.defaults["simulate.dt"]``. Returns (B,)."""
+    dt = config.get("simulate.dt", dt)
+    ref = Hover()(0.0)
+    x0 = np.zeros(12)
+    x0[2] = ref[2]
+    J = controller.closed_loop_jacobian()
+    Js = np.array(J.map(params.shape[0])(x0, ref, params.T)).reshape(12, params.shape[0], 12)
+    return np.array([np.max(np.abs(np.linalg.eigvals(Js[:, b, :]))) for b in
+                     range(params.shape[0])]) * dt
+
+
+def failure_map(grid=41, half_width=HUMMINGBIRD.arm_length, duration=20.0, t_step=1.0,
+                controllers=("pd", "fl", "adaptive"), threshold=THRESHOLD, progress=None):
+    """Tail RMS position error (m; the tail is the last ``config.defaults["metrics.tail_fraction"]``
+    of each run) after a CoG step at hover: the shipped sweep ``failure-map``
+    (``quadcog/sweeps/failure-map.toml``, also ``quadcog sweep failure-map --out DIR``) with
+    its grid, duration, step time, controllers and threshold set from the arguments.
+
+    grid: points per axis; the offsets are x_G, y_G = linspace(-half_width, half_width, grid)
+    (m), z_G = 0. duration: s per flight (fixed RK4, dt = 1 ms); the CoG steps from 0 to
+    (x_G, y_G, 0) at t_step (s). controllers: short names ("pd", "fl", "adaptive").
+    Inadmissible offsets (quadcog.check_parameters raises ParameterError) are not simulated.
+    threshold: tail RMS (m) above which a run counts as failed (diverged runs always do).
+    progress: callable(fraction) for the whole map, or None.
+    Returns a dict: x_G (grid,), y_G (grid,) (m); admissible (grid, grid) bool and lambda_min
+    (grid, grid) (kg m^2), indexed [i_y, i_x]; per controller name a dict with tail_rms
+    (grid, grid) (m; NaN where inadmissible, inf where diverged), diverged, failed (bool),
+    diverged_at (s, NaN if not), survive_fraction (of the admissible offsets), rk4_stiff (number
+    of admissible points with |lambda|_max dt > RK4_LIMIT), seconds; and the totals.
+    """
+    from quadcog.sweeps.runner import sweep
+    from quadcog.sweeps.spec import from_dict, read_sweep_file
+    t0 = time.perf_counter()
+    data, path = read_sweep_file("failure-map")
+    data["set"].update({"duration": float(duration), "cog[0].t": float(t_step)})
+    data["threshold"] = float(threshold)
+    dims = {d["key"]: d for d in data["dimension"]}
+    dims["controller"]["values"] = list(controllers)
+    for key in ("cog[0].r[0]", "cog[0].r[1]"):
+        dims[key]["range"] = {"start": -float(half_width), "stop": float(half_width),
+                              "num": int(grid)}
+    spec = from_dict(data, str(path), path.parent)
+    total = len(spec.flights)
+    done = [0]
+
+    def report(n_new):
+        done[0] += n_new
+        progress(done[0] / total)
+    result = sweep(spec, None, progress=report if progress else False)
+    cols = result.columns
+    xs = np.linspace(-half_width, half_width, grid)
+    ys = xs.copy()
+    _, lam = admissibility(xs, ys)
+    shape = (len(controllers), grid, grid)           # rows: controller, y_G, x_G
+    adm = cols["admissible"].reshape(shape)[0]
+    params = np.array([HUMMINGBIRD.with_cog((x, y, 0.0)).parameters()
+                       for x, y in zip(cols["cog[0].r[0]"].reshape(shape)[0][adm],
+                                       cols["cog[0].r[1]"].reshape(shape)[0][adm])])
+    out = {"x_G": xs, "y_G": ys, "admissible": adm, "lambda_min": lam,
+           "n_points": int(adm.size), "n_admissible": int(adm.sum()), "duration": duration,
+           "t_step": t_step, "threshold": threshold,
+           "tail_fraction": config.defaults["metrics.tail_fraction"], "controllers": {}}
+    for k, name in enumerate(controllers):
+        tail = cols["rms_position_error_tail"].reshape(shape)[k]
+        div = cols["diverged"].reshape(shape)[k]
+        failed = cols["failed"].reshape(shape)[k]
+        stiff = int(np.sum(rk4_stiffness(make_controller(name), params) > RK4_LIMIT)) \
+            if len(params) else 0
+        out["controllers"][name] = {
+            "label": LABELS.get(name, name), "tail_rms": tail, "diverged": div,
+            "diverged_at": cols["diverged_at"].reshape(shape)[k], "failed": failed,
+            "survive_fraction": float(np.sum(adm & ~failed) / max(adm.sum(), 1)),
+            "n_diverged": int(div.sum()), "n_failed": int(failed.sum()),
+            "rk4_stiff": stiff, "seconds": result.seconds / len(controllers)}
+    out["seconds"] = time.perf_counter() - t0
+    return out
+
+
+def adaptive_failures_vs_projection(fm, name="adaptive"):
+    """Where controller ``name`` failed, against the default projection radius of the adaptive
+    controller (the estimate cannot leave that ball). Returns a dict: radius (m), n_failed,
+    n_beyond (failed offsets with |r_G| > radius), largest and smallest failed |r_G| (m);
+    or None when nothing failed."""
+    c = fm["controllers"].get(name)
+    if c is None or not np.any(c["failed"]):
+        return None
+    radius = admissible_estimate_radius(HUMMINGBIRD)
+    X, Y = np.meshgrid(fm["x_G"], fm["y_G"])
+    r = np.hypot(X, Y)[c["failed"]]
+    return {"radius": radius, "n_failed": int(r.size), "n_beyond": int(np.sum(r > radius)),
+            "min_failed_radius": float(r.min()), "max_failed_radius": float(r.max())}
+
+
+def save_failure_map(fm, npz_path, json_path):
+    """Write the raw grid of ``failure_map`` to an .npz (arrays) and a .json (lists; inf/NaN
+    as the strings "inf"/"nan")."""
+    import json
+    arrays = {"x_G": fm["x_G"], "y_G": fm["y_G"], "admissible": fm["admissible"],
+              "lambda_min": fm["lambda_min"]}
+    for name, c in fm["controllers"].items():
+        for key in ("tail_rms", "diverged", "diverged_at", "failed"):
+            arrays[f"{name}_{key}"] = c[key]
+    np.savez_compressed(npz_path, **arrays)
+    from quadcog.studies.analysis.analysis_files import jsonable
+    with open(json_path, "w") as fh:
+        json.dump(jsonable({k: v for k, v in fm.items()}), fh)
+        fh.write("\n")
+
+
+def plot_failure_map(fm, path):
+    """Three heat maps side by side (log colour scale of the tail RMS, m), inadmissible offsets
+    grey, diverged runs red, failure boundary (tail RMS = threshold or diverged) and admissible
+    boundary as contours; saved to ``path`` (PNG)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap, LogNorm
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+    xs, ys, adm = fm["x_G"] * 100, fm["y_G"] * 100, fm["admissible"]
+    ctls = fm["controllers"]
+    finite = np.concatenate([c["tail_rms"][np.isfinite(c["tail_rms"])] for c in ctls.values()])
+    finite = finite[finite > 0]          # r_G = 0 gives exactly 0: drawn in the lowest colour
+    vmin = max(float(finite.min()), 1e-4) if finite.size else 1e-3
+    vmax = max(float(finite.max()), vmin * 10) if finite.size else 10.0
+    norm = LogNorm(vmin=vmin, vmax=vmax)
+    n = len(ctls)
+    fig = plt.figure(figsize=(5.0 * n + 1.4, 5.6))
+    gs = fig.add_gridspec(1, n + 1, width_ratios=[1] * n + [0.05], left=0.05, right=0.93,
+                          bottom=0.2, top=0.84, wspace=0.28)
+    axes = np.array([[fig.add_subplot(gs[0, k]) for k in range(n)]])
+    cax = fig.add_subplot(gs[0, n])
+    # fine grid for the admissible boundary (min eigenvalue of I_G = 0)
+    fx = np.linspace(xs[0], xs[-1], 301) / 100
+    base = default_parameters()
+    lam = np.array([[np.linalg.eigvalsh(inertia_about_cog(with_cog(base, (a, b, 0))))[0]
+                     for a in fx] for b in fx])
+    mesh = None
+    for ax, (name, c) in zip(axes[0], ctls.items()):
+        tail = c["tail_rms"]
+        ax.set_facecolor("0.8")
+        grey = np.ma.masked_where(adm, np.ones_like(tail))
+        ax.pcolormesh(xs, ys, grey, cmap=ListedColormap(["0.8"]), shading="nearest")
+        ok = np.ma.masked_where(~adm | c["diverged"], np.maximum(tail, vmin))
+        mesh = ax.pcolormesh(xs, ys, ok, cmap="viridis", norm=norm, shading="nearest")
+        red = np.ma.masked_where(~c["diverged"], np.ones_like(tail))
+        ax.pcolormesh(xs, ys, red, cmap=ListedColormap(["red"]), shading="nearest")
+        fail_field = np.where(c["diverged"], 1e6, np.where(adm, tail, 1.0))
+        fail_field = np.ma.masked_where(~adm, np.log10(np.maximum(fail_field, 1e-12)))
+        if np.any(c["failed"]) and np.any(adm & ~c["failed"]):
+            ax.contour(xs, ys, fail_field, levels=[np.log10(fm["threshold"])], colors="white",
+                       linestyles="solid",
+                       linewidths=2.2)
+        ax.contour(fx * 100, fx * 100, lam, levels=[0.0], colors="black", linestyles="--",
+                   linewidths=1.5)
+        ax.plot(0, 0, "w+", ms=10)
+        ax.set_aspect("equal")
+        ax.set_xlabel(r"$x_G$ (cm)")
+        ax.set_ylabel(r"$y_G$ (cm)")
+        ax.set_title(f"{c['label']}\nsurvives {100 * c['survive_fraction']:.0f} % of the "
+                     f"admissible offsets")
+    handles = [Patch(color="0.8", label="inadmissible ($I_G$ not positive definite)"),
+               Patch(color="red", label="diverged"),
+               Line2D([], [], color="white", lw=2.2,
+                      label=f"failure boundary (tail RMS = {fm['threshold']:g} m)"),
+               Line2D([], [], color="black", ls="--", lw=1.5, label="admissible boundary")]
+    leg = fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=9, frameon=True)
+    leg.get_frame().set_facecolor("0.6")
+    cb = fig.colorbar(mesh, cax=cax)
+    cb.set_label(f"tail RMS position error, last "
+                 f"{100 * config.defaults['metrics.tail_fraction']:g} % of "
+                 f"{fm['duration']:g} s (m)")
+    fig.suptitle(f"CoG step at hover at t = {fm['t_step']:g} s to ($x_G$, $y_G$, 0): "
+                 f"{len(xs)} x {len(ys)} grid, arm = {xs[-1]:.0f} cm", y=0.99)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -1,0 +1,239 @@
+"""Reference trajectories: position, velocity, acceleration, yaw and yaw rate.
+
+A trajectory maps time t (s) to the 14-vector ``[p (3, m), v (3, m/s), a (3, m/s^2),
+j (3, m/s^3), yaw (rad), yaw_rate (rad/s)]``; ``sample(t)`` does it for an array of times and
+returns (N, 14). The jerk lets the controllers feed forward the rate of the attitude they command.
+"""
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from quadcog import validate
+from quadcog.model.admissibility import LARGEST
+from quadcog.errors import InputError, QuadcogError
+
+REF_SIZE = 14
+POS, VEL, ACC, JERK = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+YAW, YAW_RATE = 12, 13
+# A reference row beyond this (SI units) is refused: far above any flyable reference (a
+# finite-differenced waypoint step reaches ~5e8 m/s^3, which quadcog.trajectories.feasibility reports),
+# and low enough that the closed loop's products stay finite (a radius of 1e300 m does not).
+REFERENCE_LIMIT = 1e12
+REF_NAMES = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz", "yaw",
+             "yaw_rate")
+
+
+def _vec3(name, value):
+    return validate.array(value, name, (3,), what="3 finite numbers (m)")
+
+
+def _positive(name, value):
+    return validate.positive(value, name)
+
+
+def _angle(name, value):
+    return validate.real(value, name, unit="rad")
+
+
+def _rate(name, period):
+    """2 pi / period (rad/s), refused when it overflows (a period of 5e-324 s)."""
+    w = 2 * np.pi / period
+    if not w <= LARGEST:
+        raise InputError(f"{name}: expected a period of at least {2 * np.pi / LARGEST:.3g} s "
+                         f"(at most {LARGEST:g} rad/s), got {validate.plain(period)}")
+    return w
+
+
+def _describe(trajectory):
+    """'Circle(center=[0.0, 0.0, 1.0], radius=1e+300, ...)' with plain numbers."""
+    if dataclasses.is_dataclass(trajectory):
+        fields = ", ".join(f"{f.name}={validate.plain(getattr(trajectory, f.name))}"
+                           for f in dataclasses.fields(trajectory))
+        return f"{type(trajectory).__name__}({fields})"
+    return repr(trajectory)
+
+
+def check_reference(ref, t, trajectory):
+    """``ref`` (N, 14) if every entry is finite and within +-REFERENCE_LIMIT, else InputError
+    naming the trajectory, the first bad time and entry."""
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(ref) <= REFERENCE_LIMIT)
+    if bad.any():
+        k, i = np.unravel_index(int(np.argmax(bad)), bad.shape)
+        raise InputError(f"trajectory {_describe(trajectory)}: {REF_NAMES[i]} at t = "
+                         f"{validate.plain(t[k])} s is {validate.plain(ref[k, i])}; expected "
+                         f"finite values within +-{REFERENCE_LIMIT:g} (SI units)")
+    return ref
+
+
+class Trajectory:
+    """Base class: subclasses implement ``_pvaj(t)`` for an array t -> four (N, 3) arrays."""
+
+    yaw = 0.0
+
+    def sample(self, t):
+        """(N, 14) reference rows at the times ``t`` (s); InputError when a row is not finite
+        or beyond REFERENCE_LIMIT (a radius of 1e300 m)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        with np.errstate(over="ignore", invalid="ignore"):
+            p, v, a, j = self._pvaj(t)
+            yaw = np.full((t.size, 1), float(self.yaw))
+            ref = np.hstack([p, v, a, j, yaw, np.zeros((t.size, 1))])
+        return check_reference(ref, t, self)
+
+    def __call__(self, t):
+        """The 14-vector reference at time t (s)."""
+        return self.sample([t])[0]
+
+
+@dataclass
+class Hover(Trajectory):
+    """Hold ``position`` (m) at heading ``yaw`` (rad)."""
+    position: tuple = (0.0, 0.0, 1.0)
+    yaw: float = 0.0
+
+    def __post_init__(self):
+        self.position = _vec3("hover position", self.position)
+        self.yaw = _angle("hover yaw", self.yaw)
+
+    def _pvaj(self, t):
+        p = np.tile(self.position, (t.size, 1))
+        return p, np.zeros_like(p), np.zeros_like(p), np.zeros_like(p)
+
+
+@dataclass
+class Circle(Trajectory):
+    """Horizontal circle of ``radius`` (m) about ``center`` (m), one lap per ``period`` (s),
+    counter-clockwise, starting at center + [radius, 0, 0]."""
+    center: tuple = (0.0, 0.0, 1.0)
+    radius: float = 1.0
+    period: float = 10.0
+    yaw: float = 0.0
+
+    def __post_init__(self):
+        self.center = _vec3("circle center", self.center)
+        self.radius = _positive("circle radius", self.radius)
+        self.period = _positive("circle period", self.period)
+        self.yaw = _angle("circle yaw", self.yaw)
+        _rate("circle period", self.period)
+
+    def _pvaj(self, t):
+        w = 2 * np.pi / self.period
+        c, s, z = np.cos(w * t), np.sin(w * t), np.zeros_like(t)
+        r = self.radius
+        p = self.center + np.stack([r * c, r * s, z], 1)
+        v = np.stack([-r * w * s, r * w * c, z], 1)
+        a = np.stack([-r * w ** 2 * c, -r * w ** 2 * s, z], 1)
+        j = np.stack([r * w ** 3 * s, -r * w ** 3 * c, z], 1)
+        return p, v, a, j
+
+
+@dataclass
+class Figure8(Trajectory):
+    """Lemniscate of Gerono in the horizontal plane: x = size sin(w t),
+    y = size sin(2 w t) / 2 about ``center``, one figure per ``period`` (s)."""
+    center: tuple = (0.0, 0.0, 1.0)
+    size: float = 1.0
+    period: float = 12.0
+    yaw: float = 0.0
+
+    def __post_init__(self):
+        self.center = _vec3("figure8 center", self.center)
+        self.size = _positive("figure8 size", self.size)
+        self.period = _positive("figure8 period", self.period)
+        self.yaw = _angle("figure8 yaw", self.yaw)
+        _rate("figure8 period", self.period)
+
+    def _pvaj(self, t):
+        w, a_, z = 2 * np.pi / self.period, self.size, np.zeros_like(t)
+        p = self.center + np.stack([a_ * np.sin(w * t), a_ / 2 * np.sin(2 * w * t), z], 1)
+        v = np.stack([a_ * w * np.cos(w * t), a_ * w * np.cos(2 * w * t), z], 1)
+        acc = np.stack([-a_ * w ** 2 * np.sin(w * t), -2 * a_ * w ** 2 * np.sin(2 * w * t), z], 1)
+        j = np.stack([-a_ * w ** 3 * np.cos(w * t), -4 * a_ * w ** 3 * np.cos(2 * w * t), z], 1)
+        return p, v, acc, j
+
+
+@dataclass
+class Helix(Circle):
+    """A circle that climbs at ``climb_rate`` (m/s)."""
+    climb_rate: float = 0.1
+
+    def __post_init__(self):
+        super().__post_init__()
+        self.climb_rate = validate.real(self.climb_rate, "helix climb_rate", unit="m/s")
+
+    def _pvaj(self, t):
+        p, v, a, j = super()._pvaj(t)
+        p[:, 2] += self.climb_rate * t
+        v[:, 2] += self.climb_rate
+        return p, v, a, j
+
+
+class FromCallable(Trajectory):
+    """Wrap a user function ``f(t)`` returning a position (3,), a tuple
+    (position, velocity, acceleration[, jerk]), or the full 14-vector. Missing derivatives
+    are taken by central differences with step ``h`` (s); yaw is 0."""
+
+    def __init__(self, f, h=1e-3):
+        self.f, self.h = f, h
+
+    def _eval(self, t):
+        name = getattr(self.f, "__name__", type(self.f).__name__)
+        where = f"trajectory callable {name}(t = {validate.plain(t)})"
+        try:
+            out = self.f(float(t))
+        except QuadcogError:
+            raise
+        except Exception as e:          # the user's function failed: say where, keep the cause
+            raise InputError(f"{where} raised {type(e).__name__}: {e}") from e
+        shape = "a position (3,), a tuple (p, v, a[, j]) of 3-vectors or a 14-vector"
+        if isinstance(out, tuple):
+            if not 1 <= len(out) <= 4:
+                validate.fail(where, shape, out)
+            parts = [validate.array(o, f"{where}[{k}]", (3,), what=shape)
+                     for k, o in enumerate(out)]
+            return parts + [None] * (4 - len(parts))
+        out = validate.array(out, where, what=shape).reshape(-1)
+        if out.size == REF_SIZE:
+            return out
+        if out.size != 3:
+            raise InputError(f"{where}: expected {shape}, got shape {out.shape}")
+        return [out, None, None, None]
+
+    def sample(self, t):
+        rows = []
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        for tk in t:
+            got = self._eval(tk)
+            if not isinstance(got, list):
+                rows.append(got)
+                continue
+            p, v, a, j = got
+            h = self.h
+            pos = lambda s: np.asarray(self._eval(s)[0])
+            with np.errstate(over="ignore", invalid="ignore"):
+                if v is None:
+                    v = (pos(tk + h) - pos(tk - h)) / (2 * h)
+                if a is None:
+                    a = (pos(tk + h) - 2 * p + pos(tk - h)) / h ** 2
+                if j is None:
+                    j = (pos(tk + 2 * h) - 2 * pos(tk + h) + 2 * pos(tk - h)
+                         - pos(tk - 2 * h)) / (2 * h ** 3)
+            rows.append(np.concatenate([p, v, a, j, [0.0, 0.0]]))
+        return check_reference(np.array(rows).reshape(t.size, REF_SIZE), t, self)
+
+    def __repr__(self):
+        return f"FromCallable({getattr(self.f, '__name__', type(self.f).__name__)})"
+
+
+def as_trajectory(trajectory):
+    """Accept a Trajectory, a name ('hover', 'circle', 'figure8', 'helix') or a callable."""
+    if isinstance(trajectory, Trajectory):
+        return trajectory
+    if isinstance(trajectory, str):
+        kinds = {"hover": Hover, "circle": Circle, "figure8": Figure8, "helix": Helix}
+        return kinds[validate.choice(trajectory, "trajectory", tuple(kinds))]()
+    if callable(trajectory):
+        return FromCallable(trajectory)
+    validate.fail("trajectory", "a Trajectory, a name or a callable", trajectory)

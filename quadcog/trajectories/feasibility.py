@@ -1,0 +1,105 @@
+"""Can the vehicle follow a reference? Acceleration and jerk against what its rotors allow.
+
+A reference asks for the thrust vector ``f = m (a + g e_z)`` (ground axes): its size must stay
+within the rotors' total thrust, it must point up (rotors only push) and tilt no further than
+the divergence limit ``limits.max_tilt_deg``. The jerk turns that vector: its direction rotates
+at ``|j_perp| / |a + g e_z|`` (rad/s, ``j_perp`` the part of the jerk across the thrust), a body
+rate the vehicle must reach. The largest rate allowed is the one its rotors build up at full
+differential thrust within 45 deg of rotation, ``omega_max = sqrt(2 alpha_max pi / 4)`` with
+``alpha_max`` the smaller of the roll and pitch angular accelerations the mixer can give
+(moment / inertia about O). These are necessary conditions, not sufficient ones: a reference
+within them may still be hard to track, but one outside them cannot be followed exactly.
+"""
+from dataclasses import asdict, dataclass
+import itertools
+import math
+
+import numpy as np
+
+from quadcog import config
+from quadcog.errors import QuadcogWarning
+from quadcog.trajectories.analytic import ACC, JERK
+
+
+class ReferenceWarning(QuadcogWarning):
+    """A reference asks for more acceleration or jerk than the vehicle can give."""
+
+
+@dataclass
+class ReferenceLimits:
+    """What a vehicle can follow: thrust per mass (m/s^2), tilt (rad), thrust-direction rate
+    (rad/s)."""
+    max_specific_thrust: float
+    max_tilt: float
+    max_rate: float
+
+
+@dataclass
+class ReferenceCheck:
+    """The worst demands of a reference against a vehicle's ReferenceLimits."""
+    feasible: bool
+    max_acceleration: float          # m/s^2, largest |a| of the reference
+    max_jerk: float                  # m/s^3, largest |j|
+    max_specific_thrust: float       # m/s^2, largest |a + g e_z| asked for
+    min_vertical_thrust: float       # m/s^2, smallest (a + g e_z)_z (must be > 0: push only)
+    max_tilt_deg: float              # largest tilt of the thrust vector asked for
+    max_rate: float                  # rad/s, largest thrust-direction rate asked for
+    limits: ReferenceLimits
+    first_violation_t: float | None  # s
+    reason: str | None
+
+    def as_dict(self):
+        """Plain values, for metrics.json."""
+        return asdict(self)
+
+
+def reference_limits(vehicle, max_tilt=None):
+    """ReferenceLimits of a quadcog.Vehicle (max_tilt in rad; default the divergence limit
+    ``config.defaults["limits.max_tilt_deg"]``)."""
+    if max_tilt is None:
+        max_tilt = math.radians(config.defaults["limits.max_tilt_deg"])
+    mixer = vehicle.mixer()                     # U = mixer @ f
+    lo, hi = vehicle.min_rotor_thrust, vehicle.max_rotor_thrust
+    corners = np.array(list(itertools.product((lo, hi), repeat=mixer.shape[1])))
+    U = corners @ mixer.T                       # every corner of the rotor-thrust box
+    alpha = min(U[:, 1].max() / vehicle.Ixx, U[:, 2].max() / vehicle.Iyy)
+    return ReferenceLimits(max_specific_thrust=float(U[:, 0].max() / vehicle.m),
+                           max_tilt=float(max_tilt),
+                           max_rate=float(math.sqrt(2 * alpha * math.pi / 4)))
+
+
+def check_reference(t, ref, vehicle, max_tilt=None):
+    """ReferenceCheck of reference rows ``ref`` (N, 14) at times ``t`` (N,) for ``vehicle``."""
+    limits = reference_limits(vehicle, max_tilt)
+    a, j = ref[:, ACC], ref[:, JERK]
+    f = a + np.array([0.0, 0.0, vehicle.g])                     # specific thrust vector
+    size = np.linalg.norm(f, axis=1)
+    safe = np.maximum(size, 1e-12)
+    tilt = np.arccos(np.clip(f[:, 2] / safe, -1.0, 1.0))
+    along = np.sum(j * f, axis=1) / safe
+    j_perp = np.linalg.norm(j - along[:, None] * f / safe[:, None], axis=1)
+    rate = j_perp / safe
+    bad = {"thrust": size > limits.max_specific_thrust,
+           "push": f[:, 2] <= 0,
+           "tilt": tilt > limits.max_tilt,
+           "jerk": rate > limits.max_rate}
+    words = {"thrust": f"|a + g e_z| up to {size.max():.3g} m/s^2 > "
+                       f"{limits.max_specific_thrust:.3g} (rotors' total thrust / m)",
+             "push": f"the thrust would have to pull down ((a + g e_z)_z = {f[:, 2].min():.3g} "
+                     f"m/s^2)",
+             "tilt": f"tilt of the thrust up to {math.degrees(tilt.max()):.3g} deg > "
+                     f"{math.degrees(limits.max_tilt):.3g} deg",
+             "jerk": f"jerk {np.linalg.norm(j, axis=1).max():.3g} m/s^3 turns the thrust at "
+                     f"up to {rate.max():.3g} rad/s > {limits.max_rate:.3g} rad/s"}
+    any_bad = np.zeros(len(t), bool)
+    for b in bad.values():
+        any_bad |= b
+    first = float(t[np.argmax(any_bad)]) if any_bad.any() else None
+    reason = "; ".join(words[k] for k, b in bad.items() if b.any()) or None
+    return ReferenceCheck(
+        feasible=not any_bad.any(),
+        max_acceleration=float(np.linalg.norm(a, axis=1).max()),
+        max_jerk=float(np.linalg.norm(j, axis=1).max()),
+        max_specific_thrust=float(size.max()), min_vertical_thrust=float(f[:, 2].min()),
+        max_tilt_deg=float(np.degrees(tilt.max())), max_rate=float(rate.max()),
+        limits=limits, first_violation_t=first, reason=reason)

@@ -1,0 +1,135 @@
+"""A minimum-snap trajectory through waypoints, with exact derivatives.
+
+Each axis is a piecewise polynomial of degree 7, one piece per segment between waypoints. With
+the segment times fixed, the curve that passes through the waypoints, starts and ends at rest
+(velocity, acceleration and jerk zero) and minimizes the integral of the squared snap is the
+septic spline whose pieces join with continuous derivatives up to the 6th (the Euler-Lagrange
+equation of the snap integral is p^(8) = 0 on each piece, and the free interior derivatives
+make the jumps of the 4th..6th derivatives vanish). That is a square linear system of 8 rows per
+segment, solved once; position, velocity, acceleration and jerk are the polynomial and its
+exact derivatives.
+
+Time allocation (when ``times`` is not given): each segment gets the time a rest-to-rest
+trapezoidal speed profile along its straight line needs with speed at most ``max_speed`` and
+acceleration at most ``max_acceleration``: ``T = d / v + v / a`` when the segment is long
+enough to reach the speed (``d >= v^2 / a``), else ``T = 2 sqrt(d / a)``; at least
+``min_segment_time``. The smooth curve then stays near those limits (not exactly within them:
+``quadcog.trajectories.feasibility.check_reference`` checks a reference against what the vehicle can follow).
+"""
+import numpy as np
+
+from quadcog.errors import InputError
+from quadcog.trajectories.analytic import Trajectory
+
+DEGREE = 7                   # minimum snap: 2 r - 1 with r = 4
+N_COEF = DEGREE + 1
+
+
+def _derivative_row(tau, order):
+    """Row of d^order/dtau^order [1, tau, ..., tau^7] at tau."""
+    row = np.zeros(N_COEF)
+    for k in range(order, N_COEF):
+        row[k] = np.prod(np.arange(k - order + 1, k + 1)) * tau ** (k - order)
+    return row
+
+
+def allocate_times(points, max_speed=1.0, max_acceleration=1.0, min_segment_time=0.5):
+    """Segment durations (s) for ``points`` (n+1, 3) by the rest-to-rest trapezoidal rule of
+    the module docstring."""
+    d = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    v, a = float(max_speed), float(max_acceleration)
+    full = d >= v * v / a
+    T = np.where(full, d / v + v / a, 2 * np.sqrt(d / a))
+    return np.maximum(T, min_segment_time)
+
+
+class MinimumSnap(Trajectory):
+    """Minimum-snap trajectory through ``waypoints`` (n+1, 3) m.
+
+    Parameters
+    ----------
+    waypoints : (n+1, 3) array_like
+        Positions in m, n >= 1 segments.
+    times : (n+1,) array_like, optional
+        Arrival times in s, increasing, starting at 0 (or any start). Default: allocated by
+        ``allocate_times`` from ``max_speed`` and ``max_acceleration``, starting at 0.
+    max_speed : float
+        m/s, for the time allocation.
+    max_acceleration : float
+        m/s^2, for the time allocation.
+    yaw : float
+        Heading held along the path (rad).
+
+    Before the first time the reference rests at the first waypoint; after the last, at the
+    last one.
+    """
+
+    def __init__(self, waypoints, times=None, max_speed=1.0, max_acceleration=1.0, yaw=0.0):
+        pts = np.asarray(waypoints, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2 or not np.isfinite(pts).all():
+            raise InputError(f"waypoints: expected at least 2 rows of 3 finite numbers (m), got "
+                             f"{np.asarray(waypoints).tolist()!r}")
+        for name, value in (("max_speed", max_speed), ("max_acceleration", max_acceleration)):
+            if not (np.isfinite(value) and value > 0):
+                raise InputError(f"{name}: expected a positive number, got {value!r}")
+        if times is None:
+            times = np.r_[0.0, np.cumsum(allocate_times(pts, max_speed, max_acceleration))]
+        times = np.asarray(times, dtype=float)
+        if times.shape != (len(pts),) or not np.isfinite(times).all() or np.any(
+                np.diff(times) <= 0):
+            raise InputError(f"times: expected {len(pts)} increasing finite numbers (s), one "
+                             f"per waypoint, got {np.asarray(times).tolist()!r}")
+        self.waypoints, self.times, self.yaw = pts, times, float(yaw)
+        self.coefficients = self._solve()          # (n, 8, 3), in tau = t - t_i
+
+    @property
+    def duration(self):
+        """Time of the last waypoint minus the first (s)."""
+        return float(self.times[-1] - self.times[0])
+
+    def _solve(self):
+        n = len(self.waypoints) - 1
+        T = np.diff(self.times)
+        M = np.zeros((N_COEF * n, N_COEF * n))
+        rhs = np.zeros((N_COEF * n, 3))
+        row = 0
+
+        def put(seg, tau, order, value=None, sign=1.0):
+            M[row, N_COEF * seg:N_COEF * (seg + 1)] += sign * _derivative_row(tau, order)
+            if value is not None:
+                rhs[row] = value
+
+        for i in range(n):                       # each piece passes through both its ends
+            put(i, 0.0, 0, self.waypoints[i]); row += 1
+            put(i, T[i], 0, self.waypoints[i + 1]); row += 1
+        for order in (1, 2, 3):                  # at rest at both ends
+            put(0, 0.0, order, 0.0); row += 1
+            put(n - 1, T[-1], order, 0.0); row += 1
+        for i in range(n - 1):                   # interior joins: derivatives 1..6 continuous
+            for order in range(1, 7):
+                put(i, T[i], order)
+                put(i + 1, 0.0, order, 0.0, sign=-1.0)
+                row += 1
+        coef = np.linalg.solve(M, rhs)
+        return coef.reshape(n, N_COEF, 3)
+
+    def _pvaj(self, t):
+        t = np.clip(t, self.times[0], self.times[-1])
+        seg = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2)
+        tau = t - self.times[seg]
+        c = self.coefficients[seg]                    # (N, 8, 3)
+        out = []
+        for order in range(4):
+            k = np.arange(order, N_COEF)
+            factor = np.array([np.prod(np.arange(j - order + 1, j + 1)) for j in k])
+            powers = tau[:, None] ** (k - order)[None, :]           # (N, len(k))
+            out.append(np.einsum("nk,nkd->nd", powers * factor, c[:, order:, :]))
+        return out[0], out[1], out[2], out[3]
+
+    def sample(self, t):
+        """(N, 14) reference rows; at rest before the first and after the last waypoint."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        ref = super().sample(t)
+        resting = (t < self.times[0]) | (t > self.times[-1])
+        ref[resting, 3:12] = 0.0
+        return ref

@@ -1,0 +1,262 @@
+"""The vehicle: everything physical about a quadrotor in one typed, documented, frozen object.
+
+A ``Vehicle`` holds the rigid body (mass, inertia about O, linear drag, gravity, the CoG offset
+``r_G``) and the rotors (positions in the rotor plane, spin directions, thrust and moment
+constants, thrust limits, motor time constant). It gives the 14-entry parameter vector of the
+generated functions (``parameters()``) and the mixer ``U = mixer() @ f`` from rotor thrusts
+``f`` (N) to ``U = [U1 (N), U2, U3, U4 (N m, about O)]`` and back (``rotor_thrusts(U)``).
+
+Two vehicles ship: ``HUMMINGBIRD`` (AscTec Hummingbird, "+" layout, the default) and
+``CRAZYFLIE`` (Bitcraze Crazyflie 2.0, "X" layout). Any planar layout of four rotors is data:
+``Vehicle(..., rotor_positions=x_layout(0.225), rotor_directions=(1, -1, 1, -1), ...)``.
+
+Frames: body x forward, z up (thrust along +z at O), so a rotor at (x_i, y_i) with thrust f_i
+adds ``y_i f_i`` to the roll moment U2 and ``-x_i f_i`` to the pitch moment U3. A rotor's drag
+(reaction) moment on the body is ``d_i k f_i`` about body z, with ``d_i = rotor_directions[i]``:
++1 for a rotor turning clockwise seen from above (its reaction turns the body
+counter-clockwise), -1 for counter-clockwise.
+"""
+from dataclasses import asdict, dataclass, fields, replace
+
+import numpy as np
+
+from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
+from quadcog.errors import InputError, ParameterError
+from quadcog.model.parameters import check_parameters
+from quadcog.validate import real
+
+N_ROTORS = 4
+
+
+def plus_layout(arm):
+    """Rotor positions (m) of a "+" frame with arm length ``arm``: rotor 1 on +x (front),
+    2 on +y (left), 3 on -x, 4 on -y."""
+    a = float(arm)
+    return ((a, 0.0), (0.0, a), (-a, 0.0), (0.0, -a))
+
+
+def x_layout(arm):
+    """Rotor positions (m) of an "X" frame with arm length ``arm`` (centre to rotor): rotor 1
+    front-right (+x, -y), 2 back-right, 3 back-left, 4 front-left."""
+    h = float(arm) / np.sqrt(2.0)
+    return ((h, -h), (-h, -h), (-h, h), (h, h))
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """A quadrotor: rigid body and rotors. Units SI; all numbers are plain floats.
+
+    Parameters
+    ----------
+    m : mass (kg), > 0.
+    g : gravitational acceleration (m/s^2), > 0.
+    Ixx, Iyy, Izz : inertia about O (kg m^2), > 0; with ``r_G = 0`` the inertia about the CoG.
+        The model holds it constant as the CoG moves (the truth model's ``parallel_axis``
+        option adds the change).
+    c_x, c_y, c_z : linear drag of the body velocities (N s/m), >= 0.
+    c_phi, c_theta, c_psi : linear drag of the body rates (N m s/rad), >= 0.
+    rotor_positions : four (x, y) pairs (m) in the body frame, in the rotor plane through O
+        (``plus_layout(arm)``, ``x_layout(arm)`` or any).
+    rotor_directions : four signs d_i (+1 or -1): rotor i's drag moment on the body is
+        ``d_i * moment_constant * f_i`` about body z (+1: the rotor turns clockwise seen from
+        above).
+    thrust_constant : rotor thrust per squared rotor speed (N / (rad/s)^2), > 0; converts
+        thrust limits to and from rotor speeds.
+    moment_constant : rotor drag moment per unit thrust (m), > 0.
+    max_rotor_thrust : largest thrust of one rotor (N), > min_rotor_thrust.
+    min_rotor_thrust : smallest thrust of one rotor (N), >= 0 (rotors only push).
+    motor_time_constant : first-order time constant from commanded to actual rotor thrust (s),
+        >= 0; 0 means instant. Used by the truth model's ``motor_lag`` option.
+    x_G, y_G, z_G : CoG offset r_G from O in the body frame (m). The inertia about the CoG,
+        ``I_O - m (|r_G|^2 I - r_G r_G^T)``, must stay positive definite.
+    name : a label.
+
+    Raises ParameterError (or InputError for wrong types) naming the field and the value.
+    """
+    m: float
+    g: float
+    Ixx: float
+    Iyy: float
+    Izz: float
+    c_x: float
+    c_y: float
+    c_z: float
+    c_phi: float
+    c_theta: float
+    c_psi: float
+    rotor_positions: tuple
+    rotor_directions: tuple
+    thrust_constant: float
+    moment_constant: float
+    max_rotor_thrust: float
+    min_rotor_thrust: float = 0.0
+    motor_time_constant: float = 0.0
+    x_G: float = 0.0
+    y_G: float = 0.0
+    z_G: float = 0.0
+    name: str = "vehicle"
+
+    def __post_init__(self):
+        where = lambda f: f"vehicle {self.name!r}: {f}"
+        for f in fields(self):
+            if f.name in ("rotor_positions", "rotor_directions", "name"):
+                continue
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+                raise InputError(where(f"{f.name} must be a number, got {v!r}"))
+            if not np.isfinite(v):
+                raise ParameterError(where(f"{f.name} = {v} is not finite"))
+            object.__setattr__(self, f.name, float(v))
+        try:
+            pos = np.asarray(self.rotor_positions, dtype=float)
+        except (TypeError, ValueError):
+            pos = None
+        if pos is None or pos.shape != (N_ROTORS, 2) or not np.isfinite(pos).all():
+            raise InputError(where(f"rotor_positions must be {N_ROTORS} pairs (x, y) of finite "
+                                   f"numbers (m), got {self.rotor_positions!r}"))
+        object.__setattr__(self, "rotor_positions", tuple(tuple(map(float, r)) for r in pos))
+        dirs = tuple(self.rotor_directions) if np.ndim(self.rotor_directions) == 1 else None
+        if dirs is None or len(dirs) != N_ROTORS or any(
+                isinstance(d, bool) or d not in (1, -1) for d in dirs):
+            raise InputError(where(f"rotor_directions must be {N_ROTORS} numbers, each +1 or -1, "
+                                   f"got {self.rotor_directions!r}"))
+        object.__setattr__(self, "rotor_directions", tuple(int(d) for d in dirs))
+        for name in ("thrust_constant", "moment_constant", "max_rotor_thrust"):
+            if getattr(self, name) <= 0:
+                raise ParameterError(where(f"{name} = {getattr(self, name)} must be > 0"))
+        if self.min_rotor_thrust < 0:
+            raise ParameterError(where(f"min_rotor_thrust = {self.min_rotor_thrust} N must be "
+                                       ">= 0 (a rotor only pushes)"))
+        if self.min_rotor_thrust >= self.max_rotor_thrust:
+            raise ParameterError(where(
+                f"min_rotor_thrust = {self.min_rotor_thrust} N must be below max_rotor_thrust = "
+                f"{self.max_rotor_thrust} N"))
+        if self.motor_time_constant < 0:
+            raise ParameterError(where(f"motor_time_constant = {self.motor_time_constant} s must "
+                                       "be >= 0 (0: instant)"))
+        cond = np.linalg.cond(self.mixer())
+        if not cond < 1e12:
+            raise ParameterError(where(
+                f"the mixer of rotor_positions {self.rotor_positions} and rotor_directions "
+                f"{self.rotor_directions} is singular (condition number {cond:.3g}): the rotors "
+                "cannot produce every [U1, U2, U3, U4]"))
+        check_parameters(self.parameters(), where("parameters"))
+
+    # -- what the generated functions and the plant need --------------------------------
+    def parameters(self):
+        """The (14,) parameter vector of the generated functions, ordered
+        ``[m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x_G, y_G, z_G]``."""
+        return np.array([getattr(self, n) for n in PARAM_NAMES], dtype=float)
+
+    @property
+    def r_G(self):
+        """The CoG offset [x_G, y_G, z_G] (m), a new (3,) array."""
+        return np.array([self.x_G, self.y_G, self.z_G])
+
+    @property
+    def arm_length(self):
+        """The largest distance of a rotor from O (m)."""
+        return float(np.max(np.hypot(*np.asarray(self.rotor_positions).T)))
+
+    def mixer(self):
+        """(4, 4) matrix B with ``U = B @ f`` for rotor thrusts f (N): rows
+        [1 ...], [y_i ...], [-x_i ...], [d_i k ...] (thrust, roll, pitch, yaw about O)."""
+        pos = np.asarray(self.rotor_positions, dtype=float)
+        return np.vstack([np.ones(N_ROTORS), pos[:, 1], -pos[:, 0],
+                          self.moment_constant * np.asarray(self.rotor_directions, float)])
+
+    def rotor_thrusts(self, U):
+        """The rotor thrusts f (4,) (N) that produce ``U`` (4,) = [U1, U2, U3, U4]: the inverse
+        of the mixer. Limits are not applied (see ``min_rotor_thrust``, ``max_rotor_thrust``)."""
+        U = np.asarray(U, dtype=float)
+        if U.shape[:1] != (4,):
+            raise InputError(f"U must have 4 rows [U1, U2, U3, U4], got shape {U.shape}")
+        return np.linalg.solve(self.mixer(), U)
+
+    def rotor_speeds(self, f):
+        """Rotor speeds (rad/s) of rotor thrusts f (N >= 0): sqrt(f / thrust_constant)."""
+        return np.sqrt(np.maximum(np.asarray(f, dtype=float), 0.0) / self.thrust_constant)
+
+    def hover_input(self):
+        """U (4,) that holds a level hover with this vehicle's CoG: [m g, m g y_G, -m g x_G, 0]
+        (``quadcog.model.conventions.hover_trim``)."""
+        return hover_trim(self.parameters())
+
+    # -- variants ------------------------------------------------------------------------
+    def replace(self, **changes):
+        """A copy with fields replaced by name (validated); unknown names raise InputError."""
+        unknown = set(changes) - set(FIELD_NAMES)
+        if unknown:
+            raise InputError(f"unknown vehicle field(s) {sorted(unknown)}; expected some of "
+                             f"{FIELD_NAMES}")
+        return replace(self, **changes)
+
+    def with_cog(self, r_G):
+        """A copy with the CoG offset ``r_G`` (3,) (m)."""
+        r = np.asarray(r_G, dtype=float).reshape(-1)
+        if r.shape != (3,):
+            raise InputError(f"r_G must be 3 numbers (m), got {r_G!r}")
+        return replace(self, x_G=float(r[0]), y_G=float(r[1]), z_G=float(r[2]))
+
+    def with_parameters(self, p):
+        """A copy whose 14 parameters (``parameters()`` order) are ``p``; rotors unchanged."""
+        p = check_parameters(p, "p")
+        return replace(self, **{n: float(p[IDX[n]]) for n in PARAM_NAMES})
+
+    def as_dict(self):
+        """Every field as plain Python values (for JSON and scenario files)."""
+        d = asdict(self)
+        d["rotor_positions"] = [list(r) for r in self.rotor_positions]
+        d["rotor_directions"] = list(self.rotor_directions)
+        return d
+
+
+FIELD_NAMES = tuple(f.name for f in fields(Vehicle))
+
+# AscTec Hummingbird as modelled in the ETH RotorS simulator (rotors_description/urdf/
+# hummingbird.xacro: mass, inertia, arm, motor_constant, moment_constant, max_rot_velocity,
+# time_constant_up; Furrer et al., "RotorS - A Modular Gazebo MAV Simulator Framework", 2016).
+# Rotor 1 front (+x) and 3 back turn clockwise there. The drag coefficients are this
+# project's own choice (neither the paper nor RotorS gives linear drag): small, so that the
+# zero dynamics decay slowly (c_x / m = 0.15 1/s).
+_HB_THRUST_CONSTANT = 8.54858e-6      # N / (rad/s)^2
+_HB_MAX_ROTOR_SPEED = 838.0           # rad/s
+HUMMINGBIRD = Vehicle(
+    name="AscTec Hummingbird", m=0.68, g=9.81, Ixx=0.007, Iyy=0.007, Izz=0.012,
+    c_x=0.1, c_y=0.1, c_z=0.1, c_phi=0.001, c_theta=0.001, c_psi=0.001,
+    rotor_positions=plus_layout(0.17), rotor_directions=(1, -1, 1, -1),
+    thrust_constant=_HB_THRUST_CONSTANT, moment_constant=0.016,
+    max_rotor_thrust=_HB_THRUST_CONSTANT * _HB_MAX_ROTOR_SPEED ** 2,    # 6.00 N
+    motor_time_constant=0.0125)
+
+# Bitcraze Crazyflie 2.0, "X" layout. Mass and the diagonal of the inertia from J. Foerster,
+# "System Identification of the Crazyflie 2.0 Nano Quadrocopter", BSc thesis, ETH Zurich
+# IDSC, 2015 (its products of inertia, at most 1.8e-6 kg m^2, are left out: the model's I_O
+# is diagonal). Arm 0.046 m, thrust constant 1.28192e-8 N/(rad/s)^2, moment constant
+# 5.964552e-3 m, rotor speed at most 2618 rad/s, motor time constant 0.0125 s (spin-up) and
+# the rotor directions as in the RotorS crazyflie2 model (rotors_description/urdf/
+# crazyflie2.xacro; Silano et al., "CrazyS", 2018, from Foerster's identification). The drag
+# coefficients are this project's choice: the Hummingbird's drag per mass and per inertia.
+_CF_THRUST_CONSTANT = 1.28192e-8
+_CF_MAX_ROTOR_SPEED = 2618.0
+CRAZYFLIE = Vehicle(
+    name="Crazyflie 2.0", m=0.027, g=9.81, Ixx=16.571710e-6, Iyy=16.655602e-6,
+    Izz=29.261652e-6, c_x=0.004, c_y=0.004, c_z=0.004, c_phi=2.4e-6, c_theta=2.4e-6,
+    c_psi=2.4e-6, rotor_positions=x_layout(0.046), rotor_directions=(-1, 1, -1, 1),
+    thrust_constant=_CF_THRUST_CONSTANT, moment_constant=5.964552e-3,
+    max_rotor_thrust=_CF_THRUST_CONSTANT * _CF_MAX_ROTOR_SPEED ** 2,    # 0.0879 N
+    motor_time_constant=0.0125)
+
+PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE}
+
+
+def default_parameters(**overrides):
+    """The default vehicle's (``HUMMINGBIRD``) parameter vector (14,), entries replaced by name.
+
+    Example: ``default_parameters(x_G=0.03, m=0.8)``. Unknown names raise InputError.
+    """
+    unknown = set(overrides) - set(PARAM_NAMES)
+    if unknown:
+        raise InputError(f"unknown parameter {sorted(unknown)[0]!r}; expected one of {PARAM_NAMES}")
+    return HUMMINGBIRD.replace(**{k: real(v, k, error=ParameterError)
+                                  for k, v in overrides.items()}).parameters()

@@ -1,0 +1,2 @@
+"""Layer 6, what people look at: flight figures (``plots``), the animation (``animation``) and
+progress bars (``progress``). Draws arrays and Vehicles; knows nothing of the simulation."""

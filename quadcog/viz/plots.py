@@ -1,0 +1,132 @@
+"""The flight figure: position, position error, attitude, inputs and (when it moves) the CoG.
+
+Every panel says its unit; legends sit above their panel, outside the data; disturbance pulses
+are shaded on every panel. ``flight_title`` is the one naming scheme for runs, used by
+``SimulationResult.plot``, ``quadcog run`` and ``quadcog paper``.
+"""
+from pathlib import Path
+
+import numpy as np
+
+from quadcog.files import plot_text
+
+# how a controller (its ``name`` attribute) is called in titles
+CONTROLLER_LABELS = {"cascade_pd": "cascade PD", "feedback_linearization": "feedback linearization",
+                     "adaptive_feedback_linearization": "adaptive FL"}
+# a CoG (or estimate) that changes by less than this over the run is "not moving": no panel
+COG_STILL = 1e-6           # m
+
+
+def controller_label(name):
+    """'adaptive_feedback_linearization' -> 'adaptive FL'; unknown names with spaces."""
+    return CONTROLLER_LABELS.get(name, str(name).replace("_", " "))
+
+
+def flight_title(controller, name=None):
+    """The title of a run: '<scenario name>: <controller>' ('fig6: adaptive FL'), or only the
+    controller when the run has no scenario name."""
+    label = controller_label(controller)
+    return f"{name}: {label}" if name else label
+
+
+def status_text(metrics):
+    """'tail RMS error 3.78 cm' or 'diverged at 1.350 s (tilt)'."""
+    if metrics.diverged:
+        return f"diverged at {metrics.diverged_at:.3f} s ({metrics.diverged_reason})"
+    return f"tail RMS error {100 * metrics.rms_position_error_tail:.2f} cm"
+
+
+def cog_moves(result):
+    """True when the true CoG r_G or the estimate r_hat changes during the run."""
+    return any(np.ptp(a, axis=0).max() > COG_STILL for a in (result.r_G, result.r_hat)
+               if len(a))
+
+
+def _intervals(disturbances):
+    return [(float(d.t), float(d.t) + float(d.duration)) for d in disturbances or ()]
+
+
+def plot_flight(result, path=None, name=None, title=None, disturbances=None):
+    """The flight figure of a SimulationResult; saved to ``path`` (PNG) if given.
+
+    Parameters
+    ----------
+    result : SimulationResult
+    path : str or Path, optional
+        Where to save the figure (dpi 100); the figure is then closed.
+    name : str, optional
+        The scenario's name, for the title (``flight_title``); default
+        ``result.info.get("scenario")``.
+    title : str, optional
+        Replaces the title's first part entirely.
+    disturbances : list of Disturbance, optional
+        Pulses to shade; default ``result.info.get("disturbances")``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib
+    if path is not None:
+        matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    name = name if name is not None else result.info.get("scenario")
+    if disturbances is None:
+        disturbances = result.info.get("disturbances", ())
+    t, x, ref = result.t, result.x, result.ref
+    show_cog = cog_moves(result)
+    layout = [["P", "A"], ["E", "C" if show_cog else "E"], ["T", "M"]]
+    with plt.rc_context({"font.size": 11, "legend.fontsize": 9}):
+        fig, ax = plt.subplot_mosaic(layout, figsize=(12, 9), sharex=True)
+        for i, (axis, col) in enumerate(zip("xyz", ("C0", "C1", "C2"))):
+            ax["P"].plot(t, x[:, i], color=col, label=axis)
+            ax["P"].plot(t, ref[:, i], color=col, ls="--", lw=1)
+        ax["P"].plot([], [], color="0.3", ls="--", lw=1, label="reference")
+        ax["P"].set_ylabel("position (m)")
+        err = x[:, :3] - ref[:, :3]
+        for i, (axis, col) in enumerate(zip("xyz", ("C0", "C1", "C2"))):
+            ax["E"].plot(t, 100 * err[:, i], color=col, lw=1, label=f"{axis} - {axis}_ref")
+        ax["E"].plot(t, 100 * np.linalg.norm(err, axis=1), color="k", lw=1.5, label="|error|")
+        ax["E"].set_ylabel("position error (cm)")
+        for i, (angle, col) in enumerate(zip(("phi", "theta", "psi"), ("C0", "C1", "C2"))):
+            ax["A"].plot(t, np.degrees(x[:, 3 + i]), color=col, label=angle)
+        ax["A"].set_ylabel("attitude (deg)")
+        ax["T"].plot(t, result.U[:, 0], color="C3", label="U1 (thrust)")
+        ax["T"].set_ylabel("thrust U1 (N)")
+        for i, col in zip(range(1, 4), ("C0", "C1", "C2")):
+            ax["M"].plot(t, result.U[:, i], color=col, label=f"U{i + 1}")
+        ax["M"].set_ylabel("moments (N m)")
+        if show_cog:
+            for i, (axis, col) in enumerate(zip(("x_G", "y_G", "z_G"), ("C0", "C1", "C2"))):
+                estimating = np.any(result.r_hat)
+                ax["C"].plot(t, 100 * result.r_G[:, i], color=col, ls="--" if estimating else "-",
+                             lw=1.2, label=None if estimating else axis)
+                if estimating:
+                    ax["C"].plot(t, 100 * result.r_hat[:, i], color=col,
+                                 label=f"{axis} estimate")
+            if np.any(result.r_hat):
+                ax["C"].plot([], [], color="0.3", ls="--", lw=1.2, label="true")
+            ax["C"].set_ylabel("CoG offset (cm)")
+        spans = _intervals(disturbances)
+        for key, a in ax.items():
+            for k, (t0, t1) in enumerate(spans):
+                a.axvspan(t0, t1, color="0.5", alpha=0.2, lw=0,
+                          label="disturbance" if (k == 0 and key == "E") else None)
+            a.grid(alpha=0.3)
+            # above the panel, outside the data: a legend never hides a curve
+            handles, labels = a.get_legend_handles_labels()
+            if handles:
+                a.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=len(handles),
+                         frameon=False, borderaxespad=0.2, handlelength=1.5,
+                         columnspacing=1.0)
+        for key in ("T", "M"):
+            ax[key].set_xlabel("time (s)")
+        # plot_text: a '$' in a scenario name must not start mathtext (savefig would fail)
+        fig.suptitle(plot_text(f"{title or flight_title(result.controller, name)}, "
+                               f"{status_text(result.metrics)}"))
+        fig.tight_layout()
+        if path is not None:
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
+            fig.savefig(path, dpi=100)
+            plt.close(fig)
+    return fig
