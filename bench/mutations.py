@@ -80,7 +80,7 @@ MUTATIONS = [
              "[-Ixz, -Iyz, sym.Izz]])",
              "sign of the products of inertia in the derived truth model (tensor vs. product "
              "convention)"),
-    Mutation("products_of_inertia_admissibility", "quadcog/model/admissibility.py",
+    Mutation("products_of_inertia_admissibility", "quadcog/model/parameters.py",
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) + np.outer(r, r)))",
              "sign of the products r r^T in the admissibility check's I_G"),
@@ -102,7 +102,7 @@ MUTATIONS = [
              "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1] + diag,",
              "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1],",
              "parallel-axis term m (|r|^2 - r_i^2) dropped from the truth model's diagonal I_O"),
-    Mutation("parallel_axis_dropped_admissibility", "quadcog/model/admissibility.py",
+    Mutation("parallel_axis_dropped_admissibility", "quadcog/model/parameters.py",
              "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"
              "                - p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
              "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"

@@ -22,8 +22,8 @@ sys.path.insert(0, str(ROOT))
 
 import quadcog  # noqa: E402
 from quadcog import AdaptiveFeedbackLinearization, CogProfile, simulate, simulate_batch
-from quadcog.sim.closed_loop import closed_loop_step
 from quadcog.codegen.compiled import compile_function
+from quadcog.sim.closed_loop import closed_loop_step
 from quadcog.sim.plant import Actuation, TruthOptions
 
 rows = []
@@ -41,9 +41,10 @@ def per_call(fn, number, repeat=7):
 
 def bench_single_call():
     print("one dynamics call")
-    from derive.model import derive_model
     import sympy as sp
+
     from derive import symbols as sym
+    from derive.model import derive_model
     d = derive_model()
     xdot = d.substituted(d.xdot)
     lam = sp.lambdify([list(sym.state), list(sym.U), list(sym.params)], xdot, "numpy", cse=True)
@@ -180,6 +181,7 @@ def bench_batch(n_flights):
     """The vector kernel against the CasADi map it replaces, the single-flight path, and its
     memory per flight. Returns (ns per flight-step with 1 thread, flight-steps/s, 2 threads)."""
     import tracemalloc
+
     import quadcog.sim.batch as qb
     print(f"{n_flights} adaptive flights of 20 s at 1 kHz (CoG step at 1 s), batch")
     ctl = AdaptiveFeedbackLinearization()
@@ -248,10 +250,10 @@ def bench_vector_limits(ns_per_flight_step):
     """What bounds the vector kernel: per-lane rates of arithmetic, division and
     transcendental operations measured through the same kernel (random DAGs), weighted by
     the op counts of the batch step."""
-    from quadcog.sim.closed_loop import monitored_step, packed
     from quadcog.codegen.vector_kernel import VectorKernel
-    from quadcog.sim.plant import Actuation
+    from quadcog.sim.closed_loop import monitored_step, packed
     from quadcog.sim.divergence import Limits
+    from quadcog.sim.plant import Actuation
     print("vector kernel against its op-count limit")
     counts, times = [], []
     B, n = 1024, 2000          # n: enough steps for the 10 ms resolution of CPU times
@@ -295,7 +297,6 @@ def bench_rotorpy_batched(n_flights, seconds, quadcog_rate):
     """RotorPy's batched simulator (PyTorch on the CPU, float64, the Hummingbird, SE(3)
     control, RK4 at 1 ms), as many steps as fit; extrapolated to 20 s."""
     try:
-        import torch
         from rotorpy.controllers.quadrotor_control import BatchedSE3Control
         from rotorpy.sensors.imu import BatchedImu
         from rotorpy.simulate import simulate_batch as rotorpy_batch
@@ -305,6 +306,7 @@ def bench_rotorpy_batched(n_flights, seconds, quadcog_rate):
         from rotorpy.vehicles.multirotor import BatchedMultirotor, BatchedMultirotorParams
         from rotorpy.wind.default_winds import BatchedNoWind
         from rotorpy.world import World
+        import torch
     except ImportError as e:
         record("peer: rotorpy batched", "n/a", "", "", "", f"not installed ({e.name}): pip "
                "install '.[peer]' torch==2.13.0 (a CPU build)")

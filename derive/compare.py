@@ -2,7 +2,6 @@
 import difflib
 from pathlib import Path
 
-
 # Sub-folders of generated/ that another generator owns (`make embedded` writes embedded/):
 # derive neither compares, lists in the manifest, nor removes them.
 FOREIGN = ("embedded",)

@@ -205,7 +205,7 @@ def _display(pairs, end="."):
             rows.append(f"{name} &= {lines[0]}"
                         + "".join(f"\\\\\n  &\\qquad {line}" for line in lines[1:]))
             k += 1
-    return f"\\begin{{align*}}\n" + ",\\\\\n".join(rows) + f"{end}\n\\end{{align*}}"
+    return "\\begin{align*}\n" + ",\\\\\n".join(rows) + f"{end}\n\\end{{align*}}"
 
 
 def _row(vector):

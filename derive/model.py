@@ -8,8 +8,12 @@ from derive import symbols as sym
 from derive.kinematics import kinematics
 from derive.lie import OutputDerivatives, output_derivatives
 from derive.linearization import linearization
-from derive.newton_euler import (RigidBody, inverse_inertia_definition, rigid_body,
-                                 solve_accelerations)
+from derive.newton_euler import (
+    RigidBody,
+    inverse_inertia_definition,
+    rigid_body,
+    solve_accelerations,
+)
 from derive.regressor import regressor
 from derive.vector_field import dynamics, vector_field
 

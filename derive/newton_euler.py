@@ -9,8 +9,25 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from derive.symbols import (I_G_inv, Ixx, Iyy, Izz, c_phi, c_psi, c_theta, c_x, c_y, c_z, g, m, nu,
-                            nu1, nu2, r_G, skew)
+from derive.symbols import (
+    I_G_inv,
+    Ixx,
+    Iyy,
+    Izz,
+    c_phi,
+    c_psi,
+    c_theta,
+    c_x,
+    c_y,
+    c_z,
+    g,
+    m,
+    nu,
+    nu1,
+    nu2,
+    r_G,
+    skew,
+)
 
 NU_DOT = sp.Matrix(sp.symbols("udot vdot wdot pdot qdot rdot", real=True))
 

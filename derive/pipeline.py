@@ -6,9 +6,9 @@ import time
 
 from derive.compare import FOREIGN
 from derive.export import build_functions, write_c, write_casadi
+from derive.latex import render
 from derive.manifest import write_manifest
 from derive.model import derive_model
-from derive.latex import render
 
 
 def _log(stage, seconds, echo):

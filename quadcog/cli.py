@@ -160,7 +160,7 @@ def add_export(sub):
                        description="Write one controller's law as a self-contained C99 module "
                                    "(.h and .c) in float32 or double.")
     p.add_argument("--controller", required=True,
-                   help="pd, fl, adaptive (any name of quadcog.controllers.BY_NAME)")
+                   help="pd, fl, adaptive (any name of quadcog.controllers.CONTROLLERS)")
     p.add_argument("--precision", default="float32", choices=("float32", "double"))
     p.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
     p.set_defaults(func=cmd_export)

@@ -15,7 +15,7 @@ Keys:
 - ``limits.max_tilt_deg``: ... or when |phi| or |theta| exceeds this (deg).
 - ``metrics.tail_fraction``: the tail metrics cover this last fraction of the run.
 - ``simulate.max_steps``: runs of more steps (duration / dt) are refused before anything is
-  allocated (about 0.5 KiB per step; ``quadcog.validate.step_count``).
+  allocated (``quadcog.validate.BYTES_PER_STEP`` per step; ``quadcog.validate.step_count``).
 """
 
 _FACTORY = {

@@ -27,3 +27,32 @@ class QuadcogWarning(UserWarning):
 
 class EulerSingularityError(QuadcogError):
     """|theta| reached pi/2, where the ZYX Euler-angle kinematics are singular."""
+
+
+class TargetError(QuadcogError):
+    """The cross toolchain or QEMU is missing or a target run failed."""
+
+
+class ExportError(QuadcogError):
+    """A controller cannot be exported: the message names the controller and the reason."""
+
+
+class ScenarioError(InputError):
+    """A scenario file is malformed: the message names the file, the key and what was expected."""
+
+
+class OverrideError(InputError):
+    """A ``--set`` argument is malformed (no ``=``, empty key, a path through a non-table)."""
+
+
+class ReferenceWarning(QuadcogWarning):
+    """A reference asks for more acceleration or jerk than the vehicle can give."""
+
+
+class KernelError(QuadcogError):
+    """The vector kernel cannot be built here (no compiler, no libmvec, an operation without
+    a C form in quadcog.codegen.sx_to_c)."""
+
+
+class SweepError(InputError):
+    """A sweep file is malformed: the message names the file, the key and what was expected."""

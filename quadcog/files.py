@@ -130,3 +130,10 @@ class RunFiles:
                 with contextlib.suppress(OSError):
                     tmp.unlink()
         return False
+
+
+def atomic_write(path, text):
+    """Write ``text`` to ``path`` through a temporary file and a rename (all or nothing)."""
+    tmp = Path(str(path) + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)

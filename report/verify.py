@@ -17,7 +17,6 @@ import casadi as ca
 import numpy as np
 
 import quadcog
-
 from report.identities import SEED, run
 
 ROOT = Path(__file__).resolve().parent.parent

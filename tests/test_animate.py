@@ -3,8 +3,8 @@ import numpy as np
 from PIL import Image
 import pytest
 
-from quadcog.viz.animation import frame_times
 from quadcog.cli import main
+from quadcog.viz.animation import frame_times
 
 
 def test_frame_times_rate_and_cap():

@@ -5,8 +5,16 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog import (AdaptiveFeedbackLinearization, CascadePD, Circle, CogProfile, Disturbance,
-                     FeedbackLinearization, FromCallable, Hover)
+from quadcog import (
+    AdaptiveFeedbackLinearization,
+    CascadePD,
+    Circle,
+    CogProfile,
+    Disturbance,
+    FeedbackLinearization,
+    FromCallable,
+    Hover,
+)
 
 NAN = float("nan")
 

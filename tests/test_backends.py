@@ -1,11 +1,12 @@
 """The CasADi functions (virtual machine), the compiled C and SymPy lambdify agree."""
+from conftest import assert_close
 import numpy as np
 import pytest
 import sympy as sp
 
-from conftest import assert_close
 from derive import symbols as sym
-from derive.contract import FUNCTIONS as SPECS, VECTORS
+from derive.contract import FUNCTIONS as SPECS
+from derive.contract import VECTORS
 from quadcog.model.conventions import FUNCTIONS
 
 RTOL = 1e-12

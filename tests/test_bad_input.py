@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import sympy as sp
 
-import quadcog
 from derive import pipeline
 from derive.__main__ import main as derive_main
 from derive.manifest import sha256
 from derive.to_casadi import UnsupportedAtomError
+import quadcog
 from quadcog.model.generated_files import read_manifest
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -2,8 +2,8 @@
 law meeting the fig6-real targets (noise, delay, rotor limits and lag, parallel axis on)."""
 import numpy as np
 
-from quadcog.studies.beyond import convergence_time, measure, variant
 from quadcog.scenarios.scenario import load_scenario
+from quadcog.studies.beyond import convergence_time, measure, variant
 
 
 def test_convergence_time_against_a_hand_made_estimate():

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog import Disturbance, HUMMINGBIRD, simulate
+from quadcog import HUMMINGBIRD, Disturbance, simulate
 from quadcog.controllers import CompositeAdaptive, FeedbackLinearizationIntegral
 from quadcog.controllers.allocation import prioritized_input
 from quadcog.controllers.composite import unpack_covariance

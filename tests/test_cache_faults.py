@@ -1,7 +1,6 @@
 """The compile cache under faults: damaged or planted libraries are rebuilt, never loaded;
 unusable cache folders give a warning and a working fallback; interrupted builds leave no
 build folders behind."""
-import ctypes
 import os
 from pathlib import Path
 import shutil

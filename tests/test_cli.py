@@ -88,7 +88,9 @@ def test_set_overrides_reach_the_flight(tmp_path):
     ("nope=1", ["'nope'", "unknown"]),
     ("controller=xyz", ["'controller'", "'pd', 'fl', 'adaptive'", "'xyz'"]),
     ("duration", ["KEY=VALUE"]),
-    ("cog.5.t=1", ["cog.5", "entry"]),
+    ("cog[5].t=1", ["cog[5]", "entry"]),
+    # the spelling of earlier releases: the message shows the accepted one
+    ("cog.0.t=1", ["cog.0.t", "cog[0].t", "brackets"]),
 ])
 def test_bad_set_is_one_line_naming_the_key(setting, words, tmp_path, capsys):
     assert main(["run", "fig6", "--set", setting, "--quiet", "--out", str(tmp_path)]) == 2

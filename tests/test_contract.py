@@ -9,9 +9,8 @@ import shutil
 import subprocess
 import sys
 
-import pytest
-
 from conftest import background_dir, background_job, background_result
+import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 SKIP = shutil.ignore_patterns("__pycache__")

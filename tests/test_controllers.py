@@ -1,14 +1,18 @@
 """The three controllers: design checks, convergence, and the adaptive law against a
 hand computation of -Gamma Phi^T B^T P e_s in numpy."""
+from conftest import assert_close
 import numpy as np
 import pytest
 
 import quadcog
+from quadcog import (
+    AdaptiveFeedbackLinearization,
+    CascadePD,
+    CogProfile,
+    FeedbackLinearization,
+    simulate,
+)
 from quadcog.model.conventions import B_U
-from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile, FeedbackLinearization,
-                     simulate)
-from conftest import assert_close
-
 
 
 @pytest.fixture(scope="module")

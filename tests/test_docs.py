@@ -40,7 +40,8 @@ def _project_files():
     import os
     from pathlib import Path
     root = Path(__file__).resolve().parent.parent
-    skip = {".git", ".venv", "out", "build", "dist", "__pycache__", ".pytest_cache"}
+    skip = {".git", ".venv", "out", "build", "dist", "__pycache__", ".pytest_cache", ".ruff_cache",
+            ".mypy_cache"}
     paths = []
     for folder, dirs, files in os.walk(root):        # not into the skipped folders at all
         top = Path(folder) == root
@@ -65,8 +66,8 @@ def test_nothing_points_outside_the_repository():
 
 def test_model_doc_references_resolve():
     """Every `docs/model.md sec. N[.M]` cited anywhere names a section that exists."""
-    import re
     from pathlib import Path
+    import re
     doc = (Path(__file__).resolve().parent.parent / "docs" / "model.md").read_text()
     sections = set(re.findall(r"^#{2,3} (\d+(?:\.\d+)?)\.? ", doc, flags=re.M))
     assert {"1", "1.3", "2.1", "2.2", "2.3", "2.4", "3.2", "4.1", "4.2", "6"} <= sections

@@ -16,9 +16,9 @@ from quadcog.cli import main as cli
 from quadcog.controllers import make_controller
 from quadcog.controllers.base import Controller
 from quadcog.embedded import ExportError, export_controller
-from quadcog.embedded.make_embedded import CONTROLLERS
 from quadcog.embedded.emit import literal
 from quadcog.embedded.host import HostStep, build_host_library, fly
+from quadcog.embedded.make_embedded import CONTROLLERS
 from quadcog.scenarios.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -14,12 +14,13 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 import tempfile
 
+from conftest import background_job, background_result
 import numpy as np
 import pytest
 
 from quadcog.controllers import make_controller
-from quadcog.embedded import make_embedded as build, target
-from conftest import background_job, background_result
+from quadcog.embedded import make_embedded as build
+from quadcog.embedded import target
 
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(
     bool(target.missing_tools()),

@@ -3,10 +3,10 @@ kernel, one after the other with the namespace reset in between (a kernel start 
 imports cost more than the notebooks)."""
 from pathlib import Path
 
-import nbformat
-import pytest
 from nbclient import NotebookClient
+import nbformat
 from nbformat.v4 import new_code_cell
+import pytest
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 NOTEBOOKS = ("first_flight.ipynb", "cog_step.ipynb")

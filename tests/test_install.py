@@ -21,9 +21,8 @@ import tarfile
 import tomllib
 import zipfile
 
-import pytest
-
 from conftest import background_dir, background_job, background_result
+import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 SKIP = shutil.ignore_patterns(".git", ".venv", "out", "build", "dist", "*.egg-info",

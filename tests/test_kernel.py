@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import quadcog
+from quadcog.codegen.vector_kernel import emit_c, vector_flags
 import quadcog.sim.batch as batch_module
 from quadcog.sim.batch import batch_kernel
 from quadcog.sim.closed_loop import monitored_step, packed
-from quadcog.codegen.vector_kernel import emit_c, vector_flags
-from quadcog.sim.plant import Actuation
 from quadcog.sim.divergence import Limits
+from quadcog.sim.plant import Actuation
 
 SHAPE = 0.3                      # s: the CoG steps at this time
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",

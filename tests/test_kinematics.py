@@ -1,9 +1,9 @@
 """Kinematics: S(nu2) = R^T R_dot when eta2_dot = Q nu2; R orthonormal; eta1_dot = R nu1."""
+from conftest import assert_close
 import numpy as np
 import pytest
 import sympy as sp
 
-from conftest import assert_close
 from derive import symbols as sym
 from quadcog.model.conventions import rotation_matrix
 

@@ -1,7 +1,6 @@
 """Damaged manifests: every way of switching a check off, or of breaking the manifest's shape,
 ends in a GeneratedFilesError that names the file and what to do."""
 import json
-from pathlib import Path
 import shutil
 
 import pytest

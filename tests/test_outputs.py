@@ -14,9 +14,9 @@ import tracemalloc
 import numpy as np
 import pytest
 
-import quadcog.viz.plots
 from quadcog.files import RunFiles, plot_text, strict_json, write_csv
 from quadcog.scenarios.scenario import load_scenario, output_files, parse, write_outputs
+import quadcog.viz.plots
 
 OUTPUT_FILES = output_files()
 

@@ -57,8 +57,8 @@ def test_outputs_written(summary):
 def test_readme_table_matches_a_fresh_run(summary):
     """Each number of the README's paper table is the fresh run's within its printed rounding
     (tail RMS 0.1 mm, max 1 mm, divergence time 10 ms), and the verdicts are the same."""
-    import re
     from pathlib import Path
+    import re
     rows, out = summary
     readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
     block = re.search(r"<!-- BEGIN paper -->\n(.*?)\n<!-- END paper -->", readme, re.S).group(1)

@@ -3,14 +3,20 @@ parallel-axis theorem, the direction of gravity and drag in the plant, the yaw r
 rotors, numerical differentiation of the reference positions, and tracking that needs the
 reference jerk fed forward."""
 import casadi as ca
+from conftest import assert_close
 import numpy as np
 import pytest
 
-import quadcog
-from quadcog import (HUMMINGBIRD, Circle, FeedbackLinearization, Figure8, Helix, TruthOptions,
-                     simulate)
+from quadcog import (
+    HUMMINGBIRD,
+    Circle,
+    FeedbackLinearization,
+    Figure8,
+    Helix,
+    TruthOptions,
+    simulate,
+)
 from quadcog.sim.plant import truth_arguments
-from conftest import assert_close
 
 
 def _skew(r):

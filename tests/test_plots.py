@@ -10,7 +10,6 @@ import pytest  # noqa: E402
 from quadcog import AdaptiveFeedbackLinearization, CascadePD, CogProfile, Disturbance, simulate
 from quadcog.viz.plots import flight_title, plot_flight
 
-
 PULSE = [Disturbance(t=0.3, duration=0.1, force=(0.5, 0, 0))]
 
 

@@ -6,14 +6,15 @@ import datetime
 import tempfile
 import tomllib
 
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.configuration import set_hypothesis_home_dir
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
-from hypothesis.configuration import set_hypothesis_home_dir
 
 import quadcog
-from quadcog.scenarios.files import scenario_names, scenario_path
 from quadcog.errors import QuadcogError
+from quadcog.scenarios.files import scenario_names, scenario_path
 from quadcog.scenarios.scenario import parse
 
 # hypothesis caches under .hypothesis/ even without a database: keep the checkout clean

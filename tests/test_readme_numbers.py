@@ -1,7 +1,7 @@
 """The README's measured tables are copies of files that commands wrote (bench/publish.py);
 the paper table is compared with a fresh run in tests/test_paper.py."""
-from pathlib import Path
 import importlib.util
+from pathlib import Path
 import sys
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -1,8 +1,8 @@
 """docs/model.md sec. 3.1: M(r) v + C(nu, r) nu + g(eta, r) - (same at r = 0) = Phi(nu, eta, v) r."""
+from conftest import assert_close
 import numpy as np
 
 import quadcog
-from conftest import assert_close
 
 
 def _lhs(model, x, v, p):

@@ -15,7 +15,8 @@ import zlib
 
 import pytest
 
-from report import pdf as build_report, identities, verify
+from report import identities, verify
+from report import pdf as build_report
 
 ROOT = Path(__file__).resolve().parent.parent
 REPORT = ROOT / "generated" / "report.tex"

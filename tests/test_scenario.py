@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from quadcog.cli import main
-from quadcog.studies.paper import CLAIMS, scenario_path
 from quadcog.scenarios.scenario import ScenarioError, load_scenario, parse, run_file
+from quadcog.studies.paper import CLAIMS, scenario_path
 
 ROOT = Path(__file__).resolve().parent.parent
 BASE = {"name": "t", "controller": "fl", "duration": 1.0}
@@ -114,7 +114,7 @@ def test_run_command_error_names_file(tmp_path):
 def test_unreadable_inputs(tmp_path):
     folder = tmp_path / "dir.toml"
     folder.mkdir()
-    with pytest.raises(ScenarioError, match="is a folder, not a scenario file"):
+    with pytest.raises(ScenarioError, match="is a folder, not a TOML file"):
         load_scenario(folder)
     latin = tmp_path / "latin.toml"
     latin.write_bytes(b'name = "\xff"\n')

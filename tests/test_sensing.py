@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog.sim.sensing import Sensed, Sensing, gaussian
 from quadcog.scenarios.scenario import load_scenario
+from quadcog.sim.sensing import Sensed, Sensing, gaussian
 
 
 def test_noise_is_standard_normal_and_seeded():

@@ -1,13 +1,22 @@
 """The simulator: the two execution paths agree, batches agree with single flights, user
 controllers run, divergence is detected and named, bad input is refused."""
+from conftest import assert_close
 import numpy as np
 import pytest
 
 import quadcog
-from quadcog import (AdaptiveFeedbackLinearization, CascadePD, CogProfile, Disturbance,
-                     FeedbackLinearization, Limits, TruthOptions, simulate, simulate_batch)
+from quadcog import (
+    AdaptiveFeedbackLinearization,
+    CascadePD,
+    CogProfile,
+    Disturbance,
+    FeedbackLinearization,
+    Limits,
+    TruthOptions,
+    simulate,
+    simulate_batch,
+)
 from quadcog.vehicles.vehicle import HUMMINGBIRD
-from conftest import assert_close
 
 COG = CogProfile([(0.3, (0.03, -0.02, 0.005), 0.0), (1.0, (0.05, 0.01, 0.0), 0.5)])
 PULSE = [Disturbance(t=0.6, duration=0.2, force=(0.5, -0.3, 0.2), moment=(0.01, 0.0, -0.005))]

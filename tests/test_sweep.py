@@ -10,8 +10,8 @@ import time
 import numpy as np
 import pytest
 
-from quadcog.scenarios.scenario import parse
 from quadcog import sweep
+from quadcog.scenarios.scenario import parse
 from quadcog.sweeps import SweepError, load_sweep
 
 pa = pytest.importorskip("pyarrow")
@@ -159,7 +159,7 @@ BAD = [
     ("inadmissible grid", '[[dimension]]\nkey = "cog[0].r[0]"\nvalues = [0.0, 0.12]\n',
      "cog[0].r[0]", "inadmissible"),
     ("no such array entry", '[[dimension]]\nkey = "cog[3].ramp"\nvalues = [0.1]\n',
-     "cog[3].ramp", "no entry [3]"),
+     "cog[3].ramp", "no entry 'cog[3]'"),
     ("wrong type", '[[dimension]]\nkey = "controller"\nvalues = ["pid"]\n', "controller",
      "expected one of"),
 ]

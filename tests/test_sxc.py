@@ -14,8 +14,9 @@ import pytest
 
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import find_compiler
-from quadcog.embedded.emit import C_TYPE, ExportError, body
-from quadcog.codegen.vector_kernel import KernelError, VectorKernel, emit_c, vector_flags
+from quadcog.codegen.vector_kernel import VectorKernel, emit_c, vector_flags
+from quadcog.embedded.emit import C_TYPE, body
+from quadcog.errors import ExportError, KernelError
 
 CC = find_compiler()
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler")

@@ -1,11 +1,11 @@
-"""The shared checks of quadcog.validate and the admissibility margin of quadcog.model.admissibility."""
+"""The shared checks of quadcog.validate and the admissibility margin of quadcog.model.parameters."""
 import numpy as np
 import pytest
 
 import quadcog
 from quadcog import validate as v
-from quadcog.model.admissibility import MARGIN, admissible_radius, inertia_ratio, is_admissible
-from quadcog.model.conventions import IDX, PARAM_NAMES
+from quadcog.model.conventions import IDX
+from quadcog.model.parameters import MARGIN, admissible_radius, inertia_ratio, is_admissible
 
 BASE = quadcog.HUMMINGBIRD.parameters()
 

@@ -1,13 +1,13 @@
 """The Vehicle and the truth model's rotors, against numbers derived here by hand: the mixer of
 the "+" and "X" frames (moments as r x F plus the rotor drag moments), its inverse, the thrust
 floor and saturation, the first-order motor lag, and what the controller believes."""
+from conftest import assert_close
 import numpy as np
 import pytest
 
 import quadcog
 from quadcog import CRAZYFLIE, HUMMINGBIRD, FeedbackLinearization, TruthOptions, Vehicle, simulate
 from quadcog.scenarios.scenario import ScenarioError, parse
-from conftest import assert_close
 
 F = np.array([1.0, 2.0, 3.0, 4.5])         # distinct rotor thrusts (N): every sign shows
 

@@ -10,7 +10,6 @@ import pytest
 import quadcog
 from quadcog.errors import InputError
 from quadcog.trajectories.feasibility import check_reference, reference_limits
-from quadcog.trajectories.analytic import FromCallable
 from quadcog.trajectories.waypoints import MinimumSnap, allocate_times
 
 POINTS = [[0, 0, 1], [1, 0, 1], [1, 1, 1.5], [0, 1, 1], [0.3, 0.2, 1.2]]
@@ -135,7 +134,7 @@ def test_reference_limits_of_the_hummingbird():
 def test_a_step_in_a_user_reference_warns_and_is_in_the_metrics():
     """The issue's case: a waypoint step finite-differenced into ~1e6 m/s^2 and ~5e8 m/s^3."""
     step = lambda t: [0.0, 0.0, 1.0] if t < 0.5 else [1.0, 0.0, 1.0]
-    with pytest.warns(quadcog.trajectories.feasibility.ReferenceWarning, match="jerk") as w:
+    with pytest.warns(quadcog.errors.ReferenceWarning, match="jerk") as w:
         res = quadcog.simulate(quadcog.FeedbackLinearization(), step, duration=1.0)
     when = float(re.search(r"from t = ([0-9.]+) s", str(w[0].message)).group(1))
     assert 0.49 <= when <= 0.5                       # the finite-difference stencil sees it early
@@ -147,7 +146,7 @@ def test_a_step_in_a_user_reference_warns_and_is_in_the_metrics():
 
 def test_a_feasible_reference_is_quiet(path):
     with warnings.catch_warnings():
-        warnings.simplefilter("error", quadcog.trajectories.feasibility.ReferenceWarning)
+        warnings.simplefilter("error", quadcog.errors.ReferenceWarning)
         res = quadcog.simulate(quadcog.FeedbackLinearization(), path, duration=2.0)
     assert res.metrics.reference["feasible"]
     chk = check_reference(res.t, res.ref, quadcog.HUMMINGBIRD)

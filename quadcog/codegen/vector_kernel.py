@@ -26,18 +26,13 @@ import numpy as np
 
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
-from quadcog.errors import CompileError, QuadcogError, QuadcogWarning
+from quadcog.errors import CompileError, KernelError, QuadcogWarning
 
 LANES = 16         # flights per block: four AVX2 vectors of doubles per operation
 
 # functions libmvec provides in vector form (glibc >= 2.35 for tan, atan2, erf, hypot, ...)
 _VECTOR_MATH = ("sin", "cos", "tan", "exp", "log", "pow", "atan2", "atan", "asin", "acos",
                 "tanh", "sinh", "cosh", "erf", "hypot")
-
-
-class KernelError(QuadcogError):
-    """The vector kernel cannot be built here (no compiler, no libmvec, an operation without
-    a C form in quadcog.codegen.sx_to_c)."""
 
 
 def _literal(v):

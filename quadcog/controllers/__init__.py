@@ -1,20 +1,17 @@
-"""The paper's three controllers and two beyond it (feedback linearization with integral action,
-the composite adaptive law), each a CasADi law, a compiled call and a Python object."""
+"""Layer 5, controllers: the paper's three (cascade PD, feedback linearization, the adaptive
+law) and two beyond it (feedback linearization with integral action, the composite adaptive
+law), each a CasADi law, a compiled call and a Python object. ``registry`` is the one table of
+them by short name; ``template`` states the interface a controller of your own implements."""
 from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization
 from quadcog.controllers.base import Controller
 from quadcog.controllers.cascade_pd import CascadePD
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.fl_integral import FeedbackLinearizationIntegral
+from quadcog.controllers.registry import CONTROLLERS, make_controller
 
-BY_NAME = {"pd": CascadePD, "fl": FeedbackLinearization, "adaptive": AdaptiveFeedbackLinearization,
-           "fl_integral": FeedbackLinearizationIntegral, "composite": CompositeAdaptive}
+BY_NAME = CONTROLLERS          # the name of earlier releases
 
-
-def make_controller(kind, **params):
-    """A controller by short name ('pd', 'fl', 'adaptive', 'fl_integral', 'composite') with
-    keyword parameters."""
-    from quadcog.errors import InputError
-    if kind not in BY_NAME:
-        raise InputError(f"unknown controller {kind!r}; expected one of {tuple(BY_NAME)}")
-    return BY_NAME[kind](**params)
+__all__ = ["AdaptiveFeedbackLinearization", "BY_NAME", "CONTROLLERS", "CascadePD",
+           "CompositeAdaptive", "Controller", "FeedbackLinearization",
+           "FeedbackLinearizationIntegral", "make_controller"]

@@ -7,15 +7,21 @@ r_hat_dot = -Gamma Phi^T B^T P e_s with A^T P + P A = -Q (M_hat in place of M).
 An optional projection keeps r_hat inside a ball (the radial part of the update is removed on
 the sphere, and each discrete update is scaled back onto it); without it this is the paper's law.
 """
+from typing import Any
+
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
-from quadcog.model.conventions import B_U
 from quadcog import validate
-from quadcog.model.admissibility import LARGEST
-from quadcog.errors import InputError
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.shaping import kinematics
+from quadcog.errors import InputError
+from quadcog.kinds import NumberOrNone, NumberOrVec3
+from quadcog.model.conventions import B_U, NU
+from quadcog.model.functions import Model
+from quadcog.model.parameters import LARGEST
+from quadcog.vehicles.vehicle import Vehicle
 
 
 def admissible_estimate_radius(vehicle, margin=0.95):
@@ -44,8 +50,9 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
     n_state = 3
     estimates_cog = True          # c starts with r_hat (results report it as the estimate)
 
-    def __init__(self, vehicle=None, model=None, *, gamma=0.01, Q=None,
-                 projection_radius="default", **kwargs):
+    def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
+                 gamma: NumberOrVec3 = 0.01, Q: npt.ArrayLike | None = None,
+                 projection_radius: NumberOrNone = "default", **kwargs: Any) -> None:
         super().__init__(vehicle, model, **kwargs)
         what = "a positive number or 3 positive numbers (the diagonal of Gamma)"
         if isinstance(gamma, (list, tuple, np.ndarray)):
@@ -68,7 +75,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         self.projection_radius = projection_radius
         self.A_error = np.block([[np.zeros((4, 4)), np.eye(4)],
                                  [-np.diag(self.kp), -np.diag(self.kd)]])
-        from scipy.linalg import solve_continuous_lyapunov   # here: slow to import
+        from scipy.linalg import solve_continuous_lyapunov  # here: slow to import
         self.P = solve_continuous_lyapunov(self.A_error.T, -Q)
 
     def initial_state(self):
@@ -82,13 +89,13 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         e, e_dot, y_ddot_d = self.output_errors(x, ref, p_hat)
         v = self.commanded_acceleration(e, e_dot, y_ddot_d)
         U = ca.solve(f("decoupling")(x, p_hat), v - f("drift")(x, p_hat))
-        nu = x[6:12]
+        nu = x[NU]
         M_inv = f("inverse_mass_matrix")(p_hat)
         n_hat = f("coriolis")(x, p_hat) @ nu + f("damping")(p_hat) @ nu + f("gravity")(x, p_hat)
         nu_dot_star = M_inv @ (ca.DM(B_U) @ U - n_hat)
         Phi = f("regressor")(x, nu_dot_star, p_hat)
         _, y_dot = kinematics(self.model, x, p_hat)
-        H = ca.jacobian(y_dot, x)[:, 6:12]
+        H = ca.jacobian(y_dot, x)[:, NU]
         B = ca.vertcat(ca.SX.zeros(4, 6), H @ M_inv)
         return U, ca.vertcat(e, e_dot), Phi, B
 

@@ -9,8 +9,8 @@ Vehicle's mixer: with f = mixer^-1 U split into the parts of U1, of (U2, U3) and
 
     f = f_T + s_rp f_rp + s_y f_y,   s_rp, s_y in [0, 1] as large as the limits allow,
 
-so the delivered input is U itself when it is feasible, else [U1, s_rp U2, s_rp U3, s_y U4]: the roll-pitch moment keeps its
-direction, and yaw is the first to yield. The law then knows exactly what the rotors deliver
+so the delivered input is U itself when it is feasible, else [U1, s_rp U2, s_rp U3, s_y U4]: the
+roll-pitch moment keeps its direction, and yaw is the first to yield. The law then knows exactly what the rotors deliver
 (no clipping happens downstream while the thrust itself is feasible).
 """
 import casadi as ca

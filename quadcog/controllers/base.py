@@ -16,8 +16,8 @@ import casadi as ca
 import numpy as np
 
 from quadcog.codegen.compiled import compile_function
-from quadcog.errors import InputError
 from quadcog.codegen.fastcall import FastCall
+from quadcog.errors import InputError
 from quadcog.model.functions import load
 from quadcog.model.parameters import with_cog
 from quadcog.trajectories.analytic import REF_SIZE

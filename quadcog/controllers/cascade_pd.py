@@ -10,14 +10,22 @@ so all 12 closed-loop eigenvalues are exactly the chosen poles.
 import casadi as ca
 import numpy as np
 
-from quadcog.model.conventions import IDX
 from quadcog import validate
+from quadcog.controllers.base import Controller
+from quadcog.controllers.shaping import (
+    drag_over_mass,
+    kinematics,
+    tilt_limit,
+    wrap_angle,
+    yaw_rotation_T,
+)
 from quadcog.errors import InputError
+from quadcog.kinds import Number, Poles
+from quadcog.model.conventions import IDX, N_STATE
+from quadcog.model.functions import Model
 from quadcog.model.parameters import with_cog
 from quadcog.trajectories.analytic import ACC, POS, VEL, YAW, YAW_RATE
-from quadcog.controllers.base import Controller
-from quadcog.controllers.shaping import (drag_over_mass, kinematics, tilt_limit, wrap_angle,
-                                         yaw_rotation_T)
+from quadcog.vehicles.vehicle import Vehicle
 
 # (states, input) of each decoupled loop of the hover linearization (yaw 0, r_G = 0).
 LOOPS = {"z": ([2, 8], 0), "psi": ([5, 11], 3),
@@ -33,9 +41,10 @@ class CascadePD(Controller):
 
     name = "cascade_pd"
 
-    def __init__(self, vehicle=None, model=None, *, poles_z=(-3.0, -4.0),
-                 poles_psi=(-4.0, -5.0), poles_x=(-2.0, -2.5, -10.0, -12.0),
-                 poles_y=(-2.0, -2.5, -10.0, -12.0), max_tilt=0.6):
+    def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
+                 poles_z: Poles = (-3.0, -4.0), poles_psi: Poles = (-4.0, -5.0),
+                 poles_x: Poles = (-2.0, -2.5, -10.0, -12.0),
+                 poles_y: Poles = (-2.0, -2.5, -10.0, -12.0), max_tilt: Number = 0.6) -> None:
         super().__init__(vehicle, model)
         self.poles = {"z": poles_z, "psi": poles_psi, "x": poles_x, "y": poles_y}
         self.max_tilt = tilt_limit(max_tilt)
@@ -43,9 +52,9 @@ class CascadePD(Controller):
         # only as the hover moment it needs, fed forward
         self.hover_input = self.vehicle.hover_input()
         p = with_cog(self.nominal, np.zeros(3))
-        A, B = self.model.linearization(np.zeros(12), [self.hover_input[0], 0, 0, 0], p)
+        A, B = self.model.linearization(np.zeros(N_STATE), [self.hover_input[0], 0, 0, 0], p)
         self.A, self.B = A, B
-        from scipy.signal import place_poles      # here: scipy.signal takes a second to import
+        from scipy.signal import place_poles  # here: scipy.signal takes a second to import
         self.gains = {}
         K = np.zeros((4, 12))
         for loop, (states, inp) in LOOPS.items():

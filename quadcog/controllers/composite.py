@@ -42,13 +42,18 @@ entries of P (xx, xy, xz, yy, yz, zz), a clock (s since the start, it stops coun
 ``warm_up``) and, with ``motor_lag``, the four rotor thrusts the
 controller believes its rotors deliver (``motor_lag``). ``STATE_SLICES`` names them.
 """
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
-from quadcog.model.conventions import B_U
 from quadcog import validate
 from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization
 from quadcog.controllers.allocation import prioritized_input
+from quadcog.kinds import Flag, Number, NumberOrVec3
+from quadcog.model.conventions import B_U, NU
+from quadcog.model.functions import Model
+from quadcog.vehicles.vehicle import Vehicle
 
 _P_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
@@ -101,9 +106,12 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
 
     name = "composite_adaptive"
 
-    def __init__(self, vehicle=None, model=None, *, gamma=0.01, filter_rate=20.0,
-                 ls_gain=200.0, forgetting=8.0, covariance_bound=1.0, force_weight=1.0,
-                 allocation=True, motor_lag=False, warm_up=None, **kwargs):
+    def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
+                 gamma: NumberOrVec3 = 0.01, filter_rate: Number = 20.0,
+                 ls_gain: Number = 200.0, forgetting: Number = 8.0,
+                 covariance_bound: Number = 1.0, force_weight: Number = 1.0,
+                 allocation: Flag = True, motor_lag: Flag = False,
+                 warm_up: Number | None = None, **kwargs: Any) -> None:
         super().__init__(vehicle, model, gamma=gamma, **kwargs)
         self.filter_rate = _positive("filter_rate", filter_rate)
         self.ls_gain = _positive("ls_gain", ls_gain)
@@ -150,7 +158,7 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         f = self.model.casadi_function
         lam = self.filter_rate
         p0 = self.nominal_with_cog(ca.SX.zeros(3))
-        nu = x[6:12]
+        nu = x[NU]
         M0 = f("mass_matrix")(p0)
         n0 = f("coriolis")(x, p0) @ nu + f("damping")(p0) @ nu + f("gravity")(x, p0)
         Phi0 = f("regressor")(x, ca.SX.zeros(6), p0)

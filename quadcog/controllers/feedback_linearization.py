@@ -4,11 +4,20 @@ y = [z, phi, theta, psi], and an outer position loop that commands phi and theta
 import casadi as ca
 import numpy as np
 
-from quadcog.model.conventions import IDX
-from quadcog.trajectories.analytic import ACC, JERK, POS, VEL, YAW, YAW_RATE
 from quadcog.controllers.base import Controller
-from quadcog.controllers.shaping import (desired_tilt, drag_over_mass, kinematics,
-                                         second_order_gains, tilt_limit, wrap_angle)
+from quadcog.controllers.shaping import (
+    desired_tilt,
+    drag_over_mass,
+    kinematics,
+    second_order_gains,
+    tilt_limit,
+    wrap_angle,
+)
+from quadcog.kinds import Number, Poles
+from quadcog.model.conventions import IDX
+from quadcog.model.functions import Model
+from quadcog.trajectories.analytic import ACC, JERK, POS, VEL, YAW, YAW_RATE
+from quadcog.vehicles.vehicle import Vehicle
 
 
 class FeedbackLinearization(Controller):
@@ -21,9 +30,10 @@ class FeedbackLinearization(Controller):
 
     name = "feedback_linearization"
 
-    def __init__(self, vehicle=None, model=None, *, poles_z=(-3.0, -4.0),
-                 poles_attitude=(-10.0, -12.0), poles_psi=(-4.0, -5.0),
-                 poles_position=(-1.5, -2.0), max_tilt=0.6):
+    def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
+                 poles_z: Poles = (-3.0, -4.0), poles_attitude: Poles = (-10.0, -12.0),
+                 poles_psi: Poles = (-4.0, -5.0), poles_position: Poles = (-1.5, -2.0),
+                 max_tilt: Number = 0.6) -> None:
         super().__init__(vehicle, model)
         kz = second_order_gains(poles_z, "poles_z")
         ka = second_order_gains(poles_attitude, "poles_attitude")

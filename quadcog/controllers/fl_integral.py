@@ -12,11 +12,16 @@ cannot wind up without bound while the rotors saturate.
 
 Controller state c (3): the integrals of the phi, theta and psi errors (rad s).
 """
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
 from quadcog import validate
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
+from quadcog.kinds import Number
+from quadcog.model.functions import Model
+from quadcog.vehicles.vehicle import Vehicle
 
 ATTITUDE_ROWS = slice(1, 4)          # phi, theta, psi in y = [z, phi, theta, psi]
 
@@ -36,8 +41,9 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
     name = "feedback_linearization_integral"
     n_state = 3
 
-    def __init__(self, vehicle=None, model=None, *, integral_pole=-4.0, integral_limit=1.0,
-                 **kwargs):
+    def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
+                 integral_pole: Number = -4.0, integral_limit: Number = 1.0,
+                 **kwargs: Any) -> None:
         super().__init__(vehicle, model, **kwargs)
         a = validate.real(integral_pole, "integral_pole", hi=0.0, hi_open=True, unit="1/s")
         limit = validate.positive(integral_limit, "integral_limit", "rad s")

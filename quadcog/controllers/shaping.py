@@ -3,8 +3,8 @@ and the exact output derivative y_dot = H(eta) nu taken from the generated dynam
 import casadi as ca
 import numpy as np
 
-from quadcog.model.conventions import IDX, OUTPUT_ROWS
 from quadcog import validate
+from quadcog.model.conventions import IDX, OUTPUT_ROWS
 
 
 def second_order_gains(poles, what):

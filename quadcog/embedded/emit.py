@@ -13,12 +13,7 @@ import casadi as ca
 import numpy as np
 
 from quadcog.codegen import sx_to_c as sxc
-from quadcog.errors import QuadcogError
-
-
-class ExportError(QuadcogError):
-    """A controller cannot be exported: the message names the controller and the reason."""
-
+from quadcog.errors import ExportError
 
 PRECISIONS = ("double", "float32")
 C_TYPE = {"double": "double", "float32": "float"}

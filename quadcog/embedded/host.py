@@ -7,15 +7,16 @@ import subprocess
 
 import numpy as np
 
-from quadcog.codegen.compiler import find_compiler
 from quadcog.codegen.compiled import compile_function
-from quadcog.errors import CompileError
+from quadcog.codegen.compiler import find_compiler
 from quadcog.codegen.fastcall import FastCall
-from quadcog.model.functions import load
+from quadcog.errors import CompileError
 from quadcog.model.conventions import R_G
+from quadcog.model.functions import load
 from quadcog.sim.plant import Actuation, initial_rotor_thrusts, plant_step_function
 from quadcog.sim.result import position_metrics
 from quadcog.sim.timeline import wrench_table
+from quadcog.trajectories.analytic import REF_SIZE
 
 # What the issue promises the code compiles with, on the host and on the target.
 STRICT_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wdouble-promotion",
@@ -54,7 +55,7 @@ class HostStep:
         self.lib = ctypes.CDLL(str(library))
         self.dtype = NP_TYPE[precision]
         self.nc = nc
-        self.x, self.ref = np.zeros(12, self.dtype), np.zeros(14, self.dtype)
+        self.x, self.ref = np.zeros(12, self.dtype), np.zeros(REF_SIZE, self.dtype)
         self.c, self.U = np.zeros(max(nc, 1), self.dtype), np.zeros(4, self.dtype)
         self.dt_type = C_TYPE[precision]
         self._step = getattr(self.lib, f"quadcog_{name}_step")
@@ -99,7 +100,7 @@ def fly(step, reference_result, scenario):
     C = np.empty((n, step.nc))
     X[0] = reference_result.x[0]
     C[0] = step.init()[:step.nc]
-    pf[:] = initial_rotor_thrusts(vehicle.with_parameters(P[0]), actuation)
+    pf[:] = initial_rotor_thrusts(P[0], actuation)
     dt = step.dt_type(scenario.dt)
     pdt[0] = scenario.dt
     sx, sref, sU, sc, call, nc = step.x, step.ref, step.U, step.c, step.call, step.nc

@@ -5,15 +5,15 @@ import difflib
 from pathlib import Path
 import tempfile
 
-from quadcog.controllers import BY_NAME, make_controller
-from quadcog.paths import generated_dir
+from quadcog.controllers.registry import CONTROLLERS, make_controller
+from quadcog.embedded import target
 from quadcog.embedded.emit import PRECISIONS
 from quadcog.embedded.export import render
 from quadcog.embedded.host import build_host_library
-from quadcog.embedded import target
+from quadcog.paths import generated_dir
 
-# The paper's three laws; controllers added to BY_NAME later export the same way.
-CONTROLLERS = tuple(BY_NAME)
+# The paper's three laws; controllers added to CONTROLLERS later export the same way.
+CONTROLLERS = tuple(CONTROLLERS)
 RECORDING = ("fig6", 900, 2900)      # scenario, first and end step: 2 s around the CoG step
 
 

@@ -15,8 +15,8 @@ import subprocess
 import numpy as np
 
 from quadcog.codegen.compiler import find_compiler
-from quadcog.errors import CompileError, QuadcogError
 from quadcog.embedded.host import STRICT_FLAGS, compile_checked
+from quadcog.errors import CompileError, TargetError
 
 TARGET_DIR = Path(__file__).parent / "target"
 ARM_GCC = "arm-none-eabi-gcc"
@@ -51,10 +51,6 @@ def relative_difference(a, b, per_column=True):
     axis = 0 if per_column else None
     scale = np.maximum(np.max(np.abs(b), axis=axis), np.finfo(float).tiny)
     return float(np.max(np.max(np.abs(a - b), axis=axis) / scale))
-
-
-class TargetError(QuadcogError):
-    """The cross toolchain or QEMU is missing or a target run failed."""
 
 
 def missing_tools():

@@ -7,9 +7,9 @@ read from there (the copy that ships with the package) when quadcog is imported.
 """
 import numpy as np
 
-from quadcog.model.generated_files import read_contract
+from quadcog.model.generated_files import imported_contract
 
-CONTRACT = read_contract()
+CONTRACT = imported_contract()
 STATE_NAMES = CONTRACT.vectors["x"]
 INPUT_NAMES = CONTRACT.vectors["U"]
 PARAM_NAMES = CONTRACT.vectors["p"]
@@ -19,6 +19,9 @@ OUTPUT_NAMES = CONTRACT.outputs
 FUNCTIONS = CONTRACT.functions
 
 N_STATE, N_INPUT, N_PARAM = len(STATE_NAMES), len(INPUT_NAMES), len(PARAM_NAMES)
+# x = [eta; nu]: the pose (position, Euler angles) and the body velocities (linear, angular)
+ETA = slice(0, STATE_NAMES.index("u"))
+NU = slice(STATE_NAMES.index("u"), N_STATE)
 
 # Index helpers, so code says which entry it means.
 IDX = {name: i for i, name in enumerate(PARAM_NAMES)}

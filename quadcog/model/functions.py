@@ -4,13 +4,12 @@ from pathlib import Path
 import threading
 import warnings
 
-import casadi as ca
 import numpy as np
 
-from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.compiled import external
-from quadcog.errors import InputError, QuadcogWarning
+from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.fastcall import FastCall
+from quadcog.errors import InputError, QuadcogWarning
 from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
 from quadcog.model.parameters import check_parameters
 from quadcog.paths import generated_dir

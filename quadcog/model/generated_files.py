@@ -82,6 +82,17 @@ def read_contract(folder=None):
                                   f"{_fix(folder)}") from None
 
 
+_IMPORTED: list = []
+
+
+def imported_contract():
+    """The Contract of ``generated_dir()`` read once, when quadcog is imported: the vectors
+    and signatures this runtime works with (``quadcog.model.conventions`` holds it)."""
+    if not _IMPORTED:
+        _IMPORTED.append(read_contract())
+    return _IMPORTED[0]
+
+
 # Subfolders the manifest covers (besides the top-level files); others, such as embedded/,
 # are written and checked by their own exporters.
 COVERED = ("c", "casadi")
@@ -112,7 +123,7 @@ def verify(folder=None, only=None):
     folder = Path(folder or generated_dir())
     manifest = read_manifest(folder)
     listed = manifest["files"]
-    from quadcog.model.conventions import CONTRACT
+    CONTRACT = imported_contract()
     theirs = read_contract(folder)
     if theirs.vectors != CONTRACT.vectors or theirs.outputs != CONTRACT.outputs:
         raise GeneratedFilesError(

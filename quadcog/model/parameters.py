@@ -1,12 +1,71 @@
 """Parameter vectors p (the 14 entries of the generated functions, order: docs/model.md sec.
-1.2) and their admissibility check (sec. 1.4). The vehicle they come from is
-``quadcog.vehicles.vehicle.Vehicle``."""
+1.2) and which of them the model accepts (sec. 1.4), in one place. The vehicle they come from
+is ``quadcog.vehicles.vehicle.Vehicle``.
+
+Which parameter sets the model accepts (docs/model.md sec. 1.4), with a margin that has a
+meaning: the inertia about the CoG must keep at least ``MARGIN`` of the inertia about O in
+every direction,
+
+    u^T I_G u >= MARGIN * u^T I_O u   for every unit vector u,
+
+i.e. the smallest eigenvalue of ``I_O^-1/2 I_G I_O^-1/2`` (the *inertia ratio*, 1 for a CoG at
+O, 0 on the rim where M turns singular) is at least ``MARGIN``. Below it, M^-1 (formed by block
+elimination through I_G^-1) loses digits as 1 / ratio does, and at the rim itself the
+generated dynamics return NaN. Each parameter must also lie within a sane scale (SMALLEST,
+LARGEST below), so that the model's products and inverses stay finite. Every runtime check of
+parameters uses this module.
+"""
 import numpy as np
 
-from quadcog.model.admissibility import LARGEST, MARGIN, SMALLEST, inertia_about_cog, inertia_ratio
-from quadcog.model.conventions import IDX, N_PARAM, PARAM_NAMES, R_G
 from quadcog.errors import ParameterError
+from quadcog.model.conventions import IDX, N_PARAM, PARAM_NAMES, R_G
 from quadcog.validate import vector
+
+# The scale of every parameter in SI units: m, g, Ixx, Iyy, Izz in [SMALLEST, LARGEST], drag
+# coefficients in [0, LARGEST]. Far wider than any vehicle (a Crazyflie's Ixx is 1.4e-5 kg m^2),
+# and narrow enough that the model's products and inverses (1 / Izz, c v, m g r_G) stay finite.
+SMALLEST, LARGEST = 1e-9, 1e6
+
+# 1 %: I_G^-1 is then at most 100x I_O^-1, and the admissible radius of the default vehicle
+# shrinks by only 0.5 % (from 10.15 cm to 10.09 cm).
+MARGIN = 0.01
+
+
+def inertia_about_cog(p):
+    """I_G = I_O - m (|r_G|^2 I - r_G r_G^T), 3x3 in kg m^2, of the parameter vector p (14,)."""
+    p = np.asarray(p, dtype=float)
+    r = p[R_G]
+    with np.errstate(over="ignore", invalid="ignore"):
+        return (np.diag(p[IDX["Ixx"]:IDX["Izz"] + 1])
+                - p[IDX["m"]] * (r @ r * np.eye(3) - np.outer(r, r)))
+
+
+def inertia_ratio(p):
+    """Smallest eigenvalue of I_O^-1/2 I_G I_O^-1/2 (dimensionless): the least fraction of the
+    inertia about O that the inertia about the CoG keeps over all directions. NaN when the
+    numbers overflow; requires Ixx, Iyy, Izz > 0."""
+    p = np.asarray(p, dtype=float)
+    scale = 1.0 / np.sqrt(p[IDX["Ixx"]:IDX["Izz"] + 1])
+    with np.errstate(over="ignore", invalid="ignore"):
+        S = scale[:, None] * inertia_about_cog(p) * scale[None, :]
+    if not np.isfinite(S).all():
+        return float("nan")
+    return float(np.linalg.eigvalsh(0.5 * (S + S.T))[0])
+
+
+def admissible_radius(p):
+    """sqrt((1 - MARGIN) min(Ixx, Iyy, Izz) / m) (m): every CoG offset shorter than this is
+    admissible for the inertia and mass of p (14,), whatever its direction (since
+    m (|r|^2 I - r r^T) <= m |r|^2 I)."""
+    p = np.asarray(p, dtype=float)
+    return float(np.sqrt((1 - MARGIN) * np.min(p[IDX["Ixx"]:IDX["Izz"] + 1]) / p[IDX["m"]]))
+
+
+def is_admissible(p):
+    """True when the inertia ratio of p (14,) is at least MARGIN (mass and inertia assumed
+    positive and finite: quadcog.model.parameters.check_parameters checks those first)."""
+    ratio = inertia_ratio(p)
+    return bool(np.isfinite(ratio) and ratio >= MARGIN)
 
 
 def with_cog(p, r_G):
@@ -18,7 +77,7 @@ def with_cog(p, r_G):
 
 def check_parameters(p, name="p"):
     """Raise ParameterError unless ``p`` is an admissible (14,) parameter vector (docs/model.md
-    sec. 1.4; the margin is ``quadcog.model.admissibility.MARGIN``); returns it as a float array."""
+    sec. 1.4; the margin is ``quadcog.model.parameters.MARGIN``); returns it as a float array."""
     p = vector(p, name, N_PARAM, finite=False, error=ParameterError)
     bad = np.flatnonzero(~np.isfinite(p))
     if bad.size:

@@ -1,16 +1,16 @@
 """Seeded random admissible parameter sets, states and inputs (for Monte Carlo and checks)."""
 import numpy as np
 
-from quadcog.model.conventions import IDX
-from quadcog.model.admissibility import is_admissible
+from quadcog.model.conventions import IDX, N_PARAM, N_STATE, NU
+from quadcog.model.parameters import is_admissible
 
 
 def random_parameters(rng):
     """An admissible parameter set p (14,): m in [0.3, 2] kg, g in [9, 10.5] m/s^2, I_O entries
     in [0.003, 0.05] kg m^2, drag in [0, 0.5], r_G in [-0.1, 0.1]^3 m, resampled until it is
-    admissible with the margin of ``quadcog.model.admissibility``. ``rng``: numpy Generator."""
+    admissible with the margin of ``quadcog.model.parameters``. ``rng``: numpy Generator."""
     while True:
-        p = np.empty(14)
+        p = np.empty(N_PARAM)
         p[IDX["m"]] = rng.uniform(0.3, 2.0)
         p[IDX["g"]] = rng.uniform(9.0, 10.5)
         p[IDX["Ixx"]:IDX["Izz"] + 1] = rng.uniform(0.003, 0.05, 3)
@@ -23,11 +23,11 @@ def random_parameters(rng):
 def random_state(rng):
     """A state x (12,): position in [-5, 5] m, roll and pitch in [-1.2, 1.2] rad (away from the
     Euler singularity), yaw in [-pi, pi], velocities and rates in [-3, 3] (m/s, rad/s)."""
-    x = np.empty(12)
+    x = np.empty(N_STATE)
     x[0:3] = rng.uniform(-5, 5, 3)
     x[3:5] = rng.uniform(-1.2, 1.2, 2)
     x[5] = rng.uniform(-np.pi, np.pi)
-    x[6:12] = rng.uniform(-3, 3, 6)
+    x[NU] = rng.uniform(-3, 3, 6)
     return x
 
 

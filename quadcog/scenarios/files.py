@@ -1,39 +1,70 @@
-"""The scenarios that ship inside the package (``quadcog/scenarios/*.toml``), addressable by
-name: ``quadcog run fig6 --out DIR``, ``quadcog scenarios``. ``scenario_path`` is the one
-lookup from a name or a path to a scenario file; everything that accepts a scenario uses it."""
+"""The files that ship inside the package, addressable by name, and the one TOML reader.
+
+Scenarios (``quadcog/scenarios/*.toml``: ``quadcog run fig6``, ``quadcog scenarios``) and sweep
+files (``quadcog/sweeps/*.toml``: ``quadcog sweep failure-map``) are found by ``find_file``,
+the one lookup from a name or a path to a file; ``read_toml`` is the one reader, whose errors
+name the file and say what is wrong with it.
+"""
 from importlib import resources
 from pathlib import Path
 import tomllib
+from typing import Any
+
+from quadcog.errors import InputError, ScenarioError, SweepError
+
+__all__ = ["SUFFIX", "SHIPPED", "shipped_folder", "shipped_names", "find_file", "read_toml",
+           "scenario_names", "scenario_path", "shipped_scenarios"]
 
 SUFFIX = ".toml"
+# kind of file -> (folder inside the package, the error class of its messages)
+SHIPPED: dict[str, tuple[str, type[InputError]]] = {
+    "scenario": ("scenarios", ScenarioError),
+    "sweep": ("sweeps", SweepError),
+}
 
 
-def _folder():
-    return Path(str(resources.files("quadcog") / "scenarios"))
+def shipped_folder(kind: str) -> Path:
+    """The folder of the shipped files of a kind.
+
+    Parameters
+    ----------
+    kind : str
+        'scenario' or 'sweep'.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder inside the installed package.
+    """
+    return Path(str(resources.files("quadcog") / SHIPPED[kind][0]))
 
 
-def scenario_names():
-    """Names of the shipped scenarios (their file names without ``.toml``), sorted."""
-    return tuple(sorted(p.stem for p in _folder().glob(f"*{SUFFIX}")))
+def shipped_names(kind: str) -> tuple[str, ...]:
+    """The names of the shipped files of a kind (file names without ``.toml``).
+
+    Parameters
+    ----------
+    kind : str
+        'scenario' or 'sweep'.
+
+    Returns
+    -------
+    tuple of str
+        Sorted.
+    """
+    return tuple(sorted(p.stem for p in shipped_folder(kind).glob(f"*{SUFFIX}")))
 
 
-def shipped_scenarios():
-    """{name: description} of the shipped scenarios, in name order."""
-    out = {}
-    for name in scenario_names():
-        data = tomllib.loads((_folder() / f"{name}{SUFFIX}").read_text(encoding="utf-8"))
-        out[name] = str(data.get("description", ""))
-    return out
-
-
-def scenario_path(spec):
-    """The scenario file that ``spec`` (a str or a path) stands for.
+def find_file(spec: str | Path, kind: str) -> Path:
+    """The file that ``spec`` stands for: a path, or the name of a shipped file.
 
     Parameters
     ----------
     spec : str or os.PathLike
-        A path to a scenario file, or the name of a shipped scenario (``"fig6"`` or
+        A path to a file, or the name of a shipped file of ``kind`` (``"fig6"`` or
         ``"fig6.toml"``, no folder part). An existing file wins over a shipped name.
+    kind : str
+        'scenario' or 'sweep'.
 
     Returns
     -------
@@ -43,7 +74,7 @@ def scenario_path(spec):
 
     Raises
     ------
-    quadcog.scenarios.scenario.ScenarioError
+    quadcog.errors.ScenarioError or quadcog.errors.SweepError
         When ``spec`` is neither an existing path nor a shipped name; the message lists the
         shipped names.
     """
@@ -52,11 +83,89 @@ def scenario_path(spec):
         return path
     if path.name == str(spec):                       # a bare name, no folder part
         name = path.name[:-len(SUFFIX)] if path.name.endswith(SUFFIX) else path.name
-        if name in scenario_names():
-            return _folder() / f"{name}{SUFFIX}"
+        if name in shipped_names(kind):
+            return shipped_folder(kind) / f"{name}{SUFFIX}"
     if path.exists():
         return path
-    from quadcog.scenarios.scenario import ScenarioError
-    raise ScenarioError(f"{spec}: no such scenario file, and no shipped scenario of that name "
-                        f"(shipped: {', '.join(scenario_names())}; `quadcog scenarios` lists "
-                        f"them)")
+    error = SHIPPED[kind][1]
+    raise error(f"{spec}: no such {kind} file, and no shipped {kind} of that name "
+                f"(shipped: {', '.join(shipped_names(kind))}; `quadcog {kind}s` lists them)")
+
+
+def read_toml(path: Path, error: type[InputError] = ScenarioError) -> dict[str, Any]:
+    """A TOML file as a dict, with every failure a typed error naming the file.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+    error : type of quadcog.InputError
+        The class raised (ScenarioError, SweepError).
+
+    Returns
+    -------
+    dict
+        The parsed file. A byte order mark (as some editors write) is not part of the TOML.
+
+    Raises
+    ------
+    error
+        When the path is a folder or missing, not UTF-8, not valid TOML, nested too deeply
+        to read, or cannot be read.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise error(f"{path}: is a folder, not a TOML file")
+    if not path.is_file():
+        raise error(f"{path}: no such file")
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8-sig"))
+    except tomllib.TOMLDecodeError as e:
+        raise error(f"{path}: not valid TOML ({e})") from None
+    except RecursionError:
+        raise error(f"{path}: arrays or tables nested too deeply to read (expected the flat "
+                    f"layout of a scenario or sweep file)") from None
+    except UnicodeDecodeError as e:
+        raise error(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
+    except OSError as e:
+        raise error(f"{path}: cannot be read ({e.strerror})") from None
+
+
+def scenario_names() -> tuple[str, ...]:
+    """Names of the shipped scenarios.
+
+    Returns
+    -------
+    tuple of str
+        Their file names without ``.toml``, sorted.
+    """
+    return shipped_names("scenario")
+
+
+def shipped_scenarios() -> dict[str, str]:
+    """The shipped scenarios with their descriptions.
+
+    Returns
+    -------
+    dict of str to str
+        {name: description}, in name order.
+    """
+    return {name: str(read_toml(shipped_folder("scenario") / f"{name}{SUFFIX}")
+                      .get("description", ""))
+            for name in scenario_names()}
+
+
+def scenario_path(spec: str | Path) -> Path:
+    """The scenario file that ``spec`` stands for (``find_file(spec, "scenario")``).
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+        A path to a scenario file, or the name of a shipped scenario.
+
+    Returns
+    -------
+    pathlib.Path
+        The file to read.
+    """
+    return find_file(spec, "scenario")

@@ -8,71 +8,36 @@ metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are document
 from dataclasses import dataclass, field
 import math
 from pathlib import Path
-import tomllib
 import warnings
 
 import numpy as np
 
 from quadcog import config, validate
-from quadcog.scenarios.files import scenario_path
-from quadcog.controllers import BY_NAME, make_controller
-from quadcog.sim.sensing import Sensed, Sensing
-from quadcog.model.columns import trajectory_columns
-from quadcog.errors import InputError
+from quadcog.controllers.registry import controller_names, make_controller
+from quadcog.errors import InputError, ScenarioError
 from quadcog.files import RunFiles, strict_json, write_csv
-from quadcog.sim.plant import TruthOptions
-from quadcog.viz.progress import ProgressBar
+from quadcog.model.columns import trajectory_columns
+from quadcog.scenarios.files import read_toml, scenario_path
+from quadcog.scenarios.schema import (
+    COG,
+    DISTURBANCE,
+    LIMITS,
+    NUMBER,
+    SENSING,
+    TOP,
+    TRUTH,
+    VEHICLE,
+    controller_params,
+    trajectory_schema,
+)
 from quadcog.sim.divergence import Limits
 from quadcog.sim.flight import simulate, start_at_reference
+from quadcog.sim.plant import TruthOptions
+from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
-from quadcog.trajectories.analytic import Circle, Figure8, Helix, Hover
-from quadcog.trajectories.waypoints import MinimumSnap
-from quadcog.vehicles.vehicle import FIELD_NAMES, HUMMINGBIRD, PRESETS
-
-
-class ScenarioError(InputError):
-    """A scenario file is malformed: the message names the file, the key and what was expected."""
-
-
-NUMBER = (int, float)
-TRAJECTORIES = {
-    "hover": (Hover, {"position": "vec3", "yaw": NUMBER}),
-    "circle": (Circle, {"center": "vec3", "radius": NUMBER, "period": NUMBER, "yaw": NUMBER}),
-    "figure8": (Figure8, {"center": "vec3", "size": NUMBER, "period": NUMBER, "yaw": NUMBER}),
-    "helix": (Helix, {"center": "vec3", "radius": NUMBER, "period": NUMBER,
-                      "climb_rate": NUMBER, "yaw": NUMBER}),
-    "waypoints": (MinimumSnap, {"waypoints": "points", "times": "vec", "max_speed": NUMBER,
-                                "max_acceleration": NUMBER, "yaw": NUMBER}),
-}
-CONTROLLER_PARAMS = {
-    "pd": {"poles_z": "vec", "poles_psi": "vec", "poles_x": "vec", "poles_y": "vec",
-           "max_tilt": NUMBER},
-    "fl": {"poles_z": "vec", "poles_attitude": "vec", "poles_psi": "vec",
-           "poles_position": "vec", "max_tilt": NUMBER},
-}
-CONTROLLER_PARAMS["adaptive"] = dict(CONTROLLER_PARAMS["fl"], gamma="number_or_vec3",
-                                     projection_radius="number_or_false", Q_scale=NUMBER)
-CONTROLLER_PARAMS["fl_integral"] = dict(CONTROLLER_PARAMS["fl"], integral_pole=NUMBER,
-                                        integral_limit=NUMBER)
-CONTROLLER_PARAMS["composite"] = dict(
-    CONTROLLER_PARAMS["adaptive"], filter_rate=NUMBER, ls_gain=NUMBER, forgetting=NUMBER,
-    covariance_bound=NUMBER, force_weight=NUMBER, allocation=bool, motor_lag=bool,
-    warm_up=NUMBER)
-TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "dt": NUMBER,
-       "path": str, "trajectory": dict, "cog": list, "disturbance": list, "vehicle": dict,
-       "controller_model": dict, "controller_params": dict, "truth": dict, "limits": dict,
-       "sensing": dict,
-       "initial_offset": "vec3"}
-# every Vehicle field, and a preset to start from
-VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
-                  "name": str}.get(name, NUMBER) for name in FIELD_NAMES}
-VEHICLE["preset"] = str
-TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
-SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,
-           "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}
-LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}
-COG = {"t": NUMBER, "r": "vec3", "ramp": NUMBER}
-DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3"}
+from quadcog.trajectories.analytic import Hover
+from quadcog.vehicles.vehicle import HUMMINGBIRD, PRESETS
+from quadcog.viz.progress import ProgressBar
 
 
 @dataclass
@@ -226,7 +191,7 @@ def parse(data, source="<scenario>"):
         if key not in data:
             raise ScenarioError(f"{source}: missing key {key!r}")
     w = lambda key: f"{source}: key {key!r}"
-    controller = validate.choice(data["controller"], w("controller"), tuple(BY_NAME),
+    controller = validate.choice(data["controller"], w("controller"), controller_names(),
                                  ScenarioError)
     duration = validate.positive(data["duration"], w("duration"), "s", ScenarioError)
     dt = validate.positive(data.get("dt", config.defaults["simulate.dt"]), w("dt"), "s",
@@ -238,16 +203,16 @@ def parse(data, source="<scenario>"):
     traj = dict(data.get("trajectory", {"kind": "hover"}))
     if "kind" not in traj:
         raise ScenarioError(f"{w('trajectory')}: missing key 'kind' (one of "
-                            f"{', '.join(TRAJECTORIES)})")
-    kind = validate.choice(traj.pop("kind"), w("trajectory.kind"), tuple(TRAJECTORIES),
+                            f"{', '.join(trajectory_schema())})")
+    kind = validate.choice(traj.pop("kind"), w("trajectory.kind"), tuple(trajectory_schema()),
                            ScenarioError)
-    cls, schema = TRAJECTORIES[kind]
+    cls, schema = trajectory_schema()[kind]
     _validate(traj, schema, source, "trajectory.", f" for kind {kind!r}")
     vehicle = _vehicle(data, "vehicle", None, source)
     controller_model = (_vehicle(data, "controller_model", vehicle.with_cog(np.zeros(3)), source)
                         if "controller_model" in data else None)
     cparams = data.get("controller_params", {})
-    _validate(cparams, CONTROLLER_PARAMS[controller], source, "controller_params.",
+    _validate(cparams, controller_params()[controller], source, "controller_params.",
               f" for controller {controller!r}")
     truth, limits = data.get("truth", {}), data.get("limits", {})
     sensing = data.get("sensing")
@@ -309,22 +274,7 @@ def load_scenario(path, overrides=()):
     see ``quadcog.scenarios.files.scenario_path``). ``overrides``: ``--set`` texts ("vehicle.m=0.8",
     see ``quadcog.scenarios.keys``), applied before the validation, which then names them."""
     path = scenario_path(path)
-    if path.is_dir():
-        raise ScenarioError(f"{path}: is a folder, not a scenario file")
-    if not path.is_file():
-        raise ScenarioError(f"{path}: no such scenario file")
-    try:
-        # utf-8-sig: a byte order mark (as some editors write) is not part of the TOML
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except tomllib.TOMLDecodeError as e:
-        raise ScenarioError(f"{path}: not valid TOML ({e})") from None
-    except RecursionError:
-        raise ScenarioError(f"{path}: arrays or tables nested too deeply to read (expected "
-                            f"the flat layout of README 'Scenario files')") from None
-    except UnicodeDecodeError as e:
-        raise ScenarioError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
-    except OSError as e:
-        raise ScenarioError(f"{path}: cannot be read ({e.strerror})") from None
+    data = read_toml(path, ScenarioError)
     source = str(path)
     if overrides:
         from quadcog.scenarios.keys import apply_overrides

@@ -8,18 +8,24 @@ import time
 import numpy as np
 
 from quadcog import config, validate
-from quadcog.sim.closed_loop import (ACCUMULATORS, CHUNK, monitored_chunk_function, monitored_step,
-                                     packed)
-from quadcog.controllers.base import Controller
-from quadcog.sim.divergence import DivergenceCause, divergence_rule, magnitude
-from quadcog.errors import InputError
 from quadcog.codegen.vector_kernel import kernel_for
-from quadcog.sim.plant import Actuation, initial_rotor_thrusts
+from quadcog.controllers.base import Controller
+from quadcog.errors import InputError
+from quadcog.model.conventions import N_STATE, R_G
+from quadcog.sim.closed_loop import (
+    ACCUMULATORS,
+    CHUNK,
+    monitored_chunk_function,
+    monitored_step,
+    packed,
+)
+from quadcog.sim.divergence import DivergenceCause, divergence_rule, magnitude
+from quadcog.sim.plant import Actuation
+from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference
 from quadcog.sim.result import metrics_from_sums, position_errors
-from quadcog.sim.schedule import STEP_INPUTS, Schedule
-from quadcog.sim.flight import check_time, run_options, start_at_reference
+from quadcog.sim.schedule import Schedule, cog_at
 from quadcog.sim.timeline import CogProfile
-from quadcog.trajectories.analytic import as_trajectory
+from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
 
@@ -119,21 +125,17 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
                               disturbances=disturbances, cog_scale=cog_scale)
     x0 = start_at_reference(schedule.ref[0])
-    nc, nf = controller.n_state, actuation.n_rotor_states
-    nX = 12 + nf + nc
-    Z = np.zeros((len(vehicles), nX + len(ACCUMULATORS)))
-    Z[:, :12] = x0
-    for b, v in enumerate(vehicles):
-        Z[b, 12:12 + nf] = initial_rotor_thrusts(
-            v.with_cog(schedule.r_G(v.r_G)[0]), actuation)
-    Z[:, 12 + nf:nX] = controller.initial_state()
-    Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
+    nX = N_STATE + actuation.n_rotor_states + controller.n_state
+    P0 = params.copy()
+    P0[:, R_G] = cog_at(params[:, R_G], schedule.cog_scale[0], schedule.cog[0])
+    Z = batch_start(controller, actuation, P0, x0)
     t0 = time.perf_counter()
     kernel = batch_kernel(controller, actuation, limits)
     if kernel is not None:
         Z = run_kernel(kernel, Z, params, schedule, threads=threads, progress=progress)
     else:
-        Z = _run_map(controller, actuation, limits, Z, params, schedule, threads, progress)
+        Z = run_map(monitored_chunk_function(controller, actuation, limits), Z, params,
+                    schedule, threads=threads, progress=progress)
     seconds = time.perf_counter() - t0
     return batch_metrics(Z, nX, schedule, limits, seconds)
 
@@ -152,13 +154,15 @@ def run_kernel(kernel, Z, Q, schedule, *extra, threads=1, progress=None):
     return Z
 
 
-def _run_map(controller, actuation, limits, Z, params, schedule, threads, progress):
-    """The CasADi path: ``threads`` threads, each mapping its share of the flights serially
-    (a plain "thread" map starts about one thread per flight); the per-step inputs are shared
-    by all flights (reduce_in, not B copies). Padding steps have dt = 0 and count nothing."""
-    chunk = monitored_chunk_function(controller, actuation, limits)
+def run_map(chunk, Z, Q, schedule, *extra, threads=1, progress=None):
+    """Z (B, nZ) after the schedule's steps through CasADi's map of ``chunk``
+    (``quadcog.sim.closed_loop.chunk_of``): ``threads`` threads, each mapping its share of the
+    flights serially (a plain "thread" map starts about one thread per flight); the per-step
+    inputs and the ``extra`` per-step arrays (N, k) are shared by all flights (reduce_in, not
+    B copies). Padding steps have dt = 0 and count nothing."""
     B = Z.shape[0]
-    shared = list(range(2, 2 + len(STEP_INPUTS)))
+    n_shared = chunk.n_in() - 2
+    shared = list(range(2, 2 + n_shared))
     parts = max(1, min(threads, B))
     share = -(-B // parts)
     mapped = chunk.map("share", "serial", share, shared, [])
@@ -166,11 +170,15 @@ def _run_map(controller, actuation, limits, Z, params, schedule, threads, progre
         mapped = mapped.map("batch", "thread", parts, shared, [])
     pad = parts * share - B
     Zp = np.vstack([Z, np.repeat(Z[-1:], pad, axis=0)]).T if pad else Z.T
-    Pp = np.vstack([params, np.repeat(params[-1:], pad, axis=0)]).T if pad else params.T
+    Qp = np.vstack([Q, np.repeat(Q[-1:], pad, axis=0)]).T if pad else Q.T
     padded, n = schedule.padded(CHUNK), schedule.n_steps
+    n_pad = padded.n_steps - n
+    extra = [np.asarray(a, dtype=float).reshape(len(a), -1) for a in extra]
+    extra = [np.vstack([a, np.repeat(a[-1:], n_pad, axis=0)]) if n_pad else a for a in extra]
     k = 0
     while k < n:
-        Zp = np.array(mapped(Zp, Pp, *padded.matrices(k, k + CHUNK)))
+        Zp = np.array(mapped(Zp, Qp, *padded.matrices(k, k + CHUNK),
+                             *[a[k:k + CHUNK].T for a in extra]))
         k += min(CHUNK, n - k)
         if progress:
             progress(k / n)
@@ -186,7 +194,7 @@ def batch_metrics(Z, nX, schedule, limits, seconds):
     n, B = schedule.n_steps, Z.shape[0]
     e_final = position_errors(Z[:, :3], np.repeat(schedule.ref[n:n + 1], B, axis=0))
     final_codes = np.array(divergence_rule(limits).map(B)(
-        Z[:, :12].T, e_final[None, :], magnitude(Z[:, 12:nX])[None, :])).ravel()
+        Z[:, :N_STATE].T, e_final[None, :], magnitude(Z[:, N_STATE:nX])[None, :])).ravel()
     tail_n = schedule.tail[n]
     metrics = []
     for b in range(B):

@@ -10,6 +10,7 @@ import itertools
 import casadi as ca
 
 from quadcog.codegen.compiled import cached_compile
+from quadcog.model.conventions import N_PARAM, N_STATE
 from quadcog.sim.divergence import divergence_code
 from quadcog.sim.plant import rk4_step_expression
 from quadcog.sim.schedule import STEP_INPUTS, truth_parameters
@@ -28,9 +29,9 @@ def closed_loop_step(controller, actuation, limits):
     code is the divergence code of the sample at the start of the step (X and the controller's
     input U there, with ref)."""
     nc, nf = controller.n_state, actuation.n_rotor_states
-    X, P = ca.SX.sym("X", 12 + nf + nc), ca.SX.sym("P", 14)
+    X, P = ca.SX.sym("X", N_STATE + nf + nc), ca.SX.sym("P", N_PARAM)
     s = _step_symbols()
-    x, f, c = X[:12], X[12:12 + nf], X[12 + nf:]
+    x, f, c = X[:N_STATE], X[N_STATE:N_STATE + nf], X[N_STATE + nf:]
     U, c_dot = controller.function()(s["t"], x, s["ref"], c)
     x_next, f_next, U_app = rk4_step_expression(
         controller.model, x, f, U, truth_parameters(P, s["cog_scale"], s["cog"]), s["wrench"],
@@ -53,7 +54,7 @@ def chunk_function(controller, actuation, limits, n=CHUNK):
     def build():
         step = closed_loop_step(controller, actuation, limits)
         acc = step.mapaccum("closed_loop_steps", n)
-        X0, P = ca.MX.sym("X0", step.size1_in(0)), ca.MX.sym("P", 14)
+        X0, P = ca.MX.sym("X0", step.size1_in(0)), ca.MX.sym("P", N_PARAM)
         per_step = [ca.MX.sym(name, rows, n) for name, rows in STEP_INPUTS]
         Xs, Us, codes = acc(X0, ca.repmat(P, 1, n), *per_step)
         return ca.Function("closed_loop_chunk", [X0, P] + per_step, [Xs, Us, codes],
@@ -74,7 +75,7 @@ def monitored_step(controller, actuation, limits):
     (``divergence_code``); then the code and the time are kept and the state is frozen."""
     step = closed_loop_step(controller, actuation, limits)
     nX = step.size1_in(0)
-    Z, P = ca.SX.sym("Z", nX + len(ACCUMULATORS)), ca.SX.sym("P", 14)
+    Z, P = ca.SX.sym("Z", nX + len(ACCUMULATORS)), ca.SX.sym("P", N_PARAM)
     s = _step_symbols()
     X, a = Z[:nX], dict(zip(ACCUMULATORS, ca.vertsplit(Z[nX:])))
     X_next, _, code = step(X, P, *[s[name] for name, _ in STEP_INPUTS])
@@ -91,16 +92,23 @@ def monitored_step(controller, actuation, limits):
                        [Z_next])
 
 
+def chunk_of(step, key, n=CHUNK):
+    """Compiled Function (Z, Q, per-step inputs (n columns each)) -> Z after n steps of the SX
+    Function ``step(Z, Q, *per_step) -> Z_next``: the CasADi path of every batch (the vector
+    kernel's fallback). ``key``: the compile-cache key of ``step``."""
+    def build():
+        acc = step.mapaccum(step.name() + "_chunk", n)
+        Z, Q = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("Q", step.size1_in(1))
+        per_step = [ca.MX.sym(f"in{i}", step.size1_in(i), n) for i in range(2, step.n_in())]
+        return ca.Function(step.name() + "_last", [Z, Q] + per_step,
+                           [acc(Z, ca.repmat(Q, 1, n), *per_step)[:, -1]])
+    return cached_compile(("chunk", key, n), build)
+
+
 def monitored_chunk_function(controller, actuation, limits, n=CHUNK):
     """Compiled Function (Z, P, per-step inputs (n columns)) -> Z after n monitored steps."""
-    def build():
-        step = monitored_step(controller, actuation, limits)
-        acc = step.mapaccum("monitored_chunk", n)
-        Z, P = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("P", 14)
-        per_step = [ca.MX.sym(name, rows, n) for name, rows in STEP_INPUTS]
-        return ca.Function("monitored_last", [Z, P] + per_step,
-                           [acc(Z, ca.repmat(P, 1, n), *per_step)[:, -1]])
-    return cached_compile(("batch", controller.cache_key(), actuation, limits, n), build)
+    return chunk_of(monitored_step(controller, actuation, limits),
+                    ("batch", controller.cache_key(), actuation, limits), n)
 
 
 def packed(step):

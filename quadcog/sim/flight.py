@@ -19,104 +19,40 @@ import warnings
 
 import numpy as np
 
-from quadcog import config, validate
-from quadcog.sim.closed_loop import CHUNK, chunk_function
+from quadcog import validate
 from quadcog.codegen.compiled import cached_compile
-from quadcog.controllers.base import Controller
-from quadcog.model.conventions import R_G, rotation_matrix
-from quadcog.model.admissibility import LARGEST
-from quadcog.sim.divergence import (DivergenceCause, Limits, check_euler_singularity,
-                                    divergence_rule, first_divergence, magnitude)
-from quadcog.errors import InputError, QuadcogError
 from quadcog.codegen.fastcall import FastCall
+from quadcog.errors import InputError, ReferenceWarning
+from quadcog.model.conventions import N_STATE, R_G
 from quadcog.model.functions import load
-from quadcog.model.parameters import check_parameters, with_cog
-from quadcog.trajectories.feasibility import ReferenceWarning, check_reference
-from quadcog.sim.plant import Actuation, TruthOptions, initial_rotor_thrusts, plant_step_function
+from quadcog.sim.closed_loop import CHUNK, chunk_function
+from quadcog.sim.divergence import (
+    DivergenceCause,
+    Limits,
+    check_euler_singularity,
+    divergence_rule,
+    first_divergence,
+    magnitude,
+)
+from quadcog.sim.plant import plant_step_function
+from quadcog.sim.prepare import (
+    RK4_LIMIT,
+    as_cog_profile,
+    check_cog_changes,
+    check_step_size,
+    check_time,
+    prepare_flight,
+    run_options,
+    start_at_reference,
+)
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
-from quadcog.sim.schedule import Schedule, cog_at, truth_parameters
-from quadcog.sim.timeline import CogProfile
-from quadcog.trajectories.analytic import POS, VEL, YAW, as_trajectory
-from quadcog.validate import positive, step_count
-from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
+from quadcog.sim.schedule import truth_parameters
+from quadcog.sim.user_controller import user_call
+from quadcog.trajectories.feasibility import check_reference
 
-RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region with margin
-
+# check_time ... start_at_reference live in quadcog.sim.prepare; importable here as before
 __all__ = ["simulate", "check_time", "check_step_size", "start_at_reference", "run_options",
-           "RK4_LIMIT", "Limits"]
-
-
-def check_time(duration, dt):
-    """(duration, dt) as floats; InputError unless both are positive numbers (s), dt <=
-    duration and the step count is within ``config.defaults["simulate.max_steps"]``."""
-    duration, dt = positive(duration, "duration", "s"), positive(dt, "dt", "s")
-    if dt > duration:
-        raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
-    step_count(duration, dt, config.defaults["simulate.max_steps"])
-    return duration, dt
-
-
-def run_options(truth, limits, progress):
-    """The checked (TruthOptions, Limits) of a run (defaults for None); a typed error naming
-    ``truth``, ``limits`` or ``progress`` when one is of the wrong kind. Shared by ``simulate``
-    and the batch paths."""
-    options = TruthOptions() if truth is None else truth
-    if not isinstance(options, TruthOptions):
-        validate.fail("truth", "a quadcog TruthOptions", truth)
-    limits = Limits() if limits is None else limits
-    if not isinstance(limits, Limits):
-        validate.fail("limits", "a quadcog Limits", limits)
-    if progress is not None and not callable(progress):
-        validate.fail("progress", "None or a callable(fraction), e.g. a ProgressBar", progress)
-    return options, limits
-
-
-def check_step_size(controller, x0, ref0, P, dt, actuation):
-    """Raise InputError if RK4 with step dt is unstable for the closed loop at the start, or
-    for the motor lag. ``controller`` may be None (a Python controller: no closed-loop check).
-
-    The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from CasADi AD."""
-    if actuation.n_rotor_states and dt / actuation.time_constant > RK4_LIMIT:
-        raise InputError(f"dt = {dt} s is too large for the motor time constant "
-                         f"{actuation.time_constant} s: RK4 needs dt < "
-                         f"{RK4_LIMIT * actuation.time_constant:.3g} s")
-    if controller is None:
-        return
-    lam = np.linalg.eigvals(np.array(controller.closed_loop_jacobian()(x0, ref0, P)))
-    fastest = float(np.max(np.abs(lam)))
-    if fastest * dt > RK4_LIMIT:
-        raise InputError(f"dt = {dt} s is too large: the closed loop has an eigenvalue of "
-                         f"magnitude {fastest:.3g} 1/s, and RK4 needs dt < "
-                         f"{RK4_LIMIT / fastest:.3g} s")
-
-
-def start_at_reference(ref):
-    """The state (12,) on the reference row ``ref`` (14,): its position and heading, level,
-    moving with its velocity (expressed in body axes)."""
-    x0 = np.zeros(12)
-    x0[:3], x0[5] = ref[POS], ref[YAW]
-    x0[6:9] = rotation_matrix(0.0, 0.0, ref[YAW]).T @ ref[VEL]
-    return x0
-
-
-def as_cog_profile(cog):
-    """A CogProfile from ``cog`` (None, a CogProfile or a list of (t, r, ramp) changes)."""
-    if cog is None:
-        return CogProfile([])
-    if isinstance(cog, CogProfile):
-        return cog
-    if not isinstance(cog, (list, tuple)):
-        validate.fail("cog", "None, a CogProfile or a list of (t, r, ramp) changes", cog)
-    return CogProfile(list(cog))
-
-
-def check_cog_changes(P, cog):
-    """Raise ParameterError if the vehicle (parameters P) is inadmissible with any CoG of the
-    profile. The admissible set of r_G is convex (|r|^2 - (u.r)^2 is convex for every unit u),
-    so checking where each change ends covers the ramps between them."""
-    for i, change in enumerate(cog.changes):
-        check_parameters(with_cog(P, cog_at(P[R_G], 1.0, np.asarray(change.r))),
-                         f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
+           "as_cog_profile", "check_cog_changes", "RK4_LIMIT", "Limits"]
 
 
 def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=None,
@@ -151,54 +87,16 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=Non
     SimulationResult. A diverged run stops at the first diverged sample (kept when finite);
     result.metrics counts the samples before it and says when and why.
     """
-    options, limits = run_options(truth, limits, progress)
-    validate.flag(check_dt, "check_dt")
-    dt = config.get("simulate.dt", dt)
-    validate.choice(path, "path", ("compiled", "python"))
-    is_law = isinstance(controller, Controller)
-    if not is_law and not (path == "python" and callable(controller)):
-        raise InputError("controller must be a quadcog Controller, or a callable "
-                         f"ctrl(t, x, ref, c) with path='python'; got {controller!r}")
-    if vehicle is None:
-        vehicle = controller.vehicle if is_law else HUMMINGBIRD
-        model_default = vehicle
-    else:
-        model_default = vehicle.with_cog(np.zeros(3)) if isinstance(vehicle, Vehicle) else None
-    for name, v in (("vehicle", vehicle), ("controller_model", controller_model)):
-        if v is not None and not isinstance(v, Vehicle):
-            raise InputError(f"{name} must be a quadcog Vehicle, got {v!r}")
-    if is_law:
-        controller = controller.for_vehicle(controller_model or model_default)
-    duration, dt = check_time(duration, dt)
-    trajectory = as_trajectory(trajectory)
-    cog = as_cog_profile(cog)
-    P = vehicle.parameters()
-    check_cog_changes(P, cog)
-    schedule = Schedule.build(trajectory, duration, dt, cog, disturbances)
-    x0 = start_at_reference(schedule.ref[0]) if x0 is None else validate.vector(x0, "x0", 12)
-    if not np.abs(x0).max() <= LARGEST:
-        validate.fail("x0", f"12 finite numbers within +-{LARGEST:g}", x0.tolist())
-    _, cause = first_divergence(x0[None, :], position_errors(x0[None, :], schedule.ref[:1]),
-                                limits)
-    if cause is not None:
-        raise InputError(f"x0 = {x0.tolist()} has already diverged: {cause.describe(limits)}")
-    actuation = Actuation.of(vehicle, options)
-    P0 = truth_parameters(P, schedule.cog_scale[0], schedule.cog[0])
-    f0 = initial_rotor_thrusts(vehicle.with_parameters(P0), actuation)
-    if check_dt:
-        check_step_size(controller if is_law else None, x0, schedule.ref[0], P0, dt, actuation)
-    n_state, c0 = ((controller.n_state, controller.initial_state()) if is_law
-                   else _user_state(controller))
-    X0 = np.concatenate([x0, f0, c0])
+    setup = prepare_flight(controller, trajectory, duration, dt, vehicle, controller_model, cog,
+                           disturbances, truth, x0, path, limits, progress, check_dt)
     t0 = time.perf_counter()
-    if path == "compiled":
-        X, U, code = _run_compiled(controller, P, schedule, X0, actuation, limits, progress)
+    if setup.path == "compiled":
+        X, U, code = _run_compiled(setup, progress)
     else:
-        X, U, code = _run_python(controller, P, schedule, X0, actuation, limits, progress,
-                                 is_law)
+        X, U, code = _run_python(setup, progress)
     elapsed = time.perf_counter() - t0
-    result = _result(controller, X, U, code, schedule, P, limits, path, elapsed, f0.size)
-    _check_reference(result, schedule, vehicle, limits)
+    result = _result(setup, X, U, code, elapsed)
+    _check_reference(result, setup.schedule, setup.vehicle, setup.limits)
     return result
 
 
@@ -213,7 +111,9 @@ def _check_reference(result, schedule, vehicle, limits):
                       ReferenceWarning, stacklevel=3)
 
 
-def _run_compiled(controller, P, schedule, X0, actuation, limits, progress):
+def _run_compiled(setup, progress):
+    controller, P, schedule, X0 = setup.controller, setup.P, setup.schedule, setup.X0
+    actuation, limits = setup.actuation, setup.limits
     chunk = chunk_function(controller, actuation, limits)
     n_steps = schedule.n_steps
     padded = schedule.padded(CHUNK)
@@ -249,68 +149,15 @@ def _run_compiled(controller, P, schedule, X0, actuation, limits, progress):
     return X[:n_steps + 1], U[:n_steps + 1], 0
 
 
-def _guarded(fn, what, when, *args):
-    """``fn(*args)`` of a user's controller; an exception it raises becomes an InputError
-    naming ``what`` and ``when`` (the cause kept)."""
-    try:
-        return fn(*args)
-    except QuadcogError:
-        raise
-    except Exception as e:              # the user's function failed: say when, keep the cause
-        hint = (" (a Python controller is called as ctrl(t, x, ref, c))"
-                if isinstance(e, TypeError) and "positional argument" in str(e) else "")
-        raise InputError(f"{what} raised {type(e).__name__} at {when}: {e}{hint}") from e
-
-
-def _finite(value, where, n):
-    """``value`` as n finite numbers, else an InputError naming ``where``."""
-    a = validate.vector(value, where, n, finite=False)
-    if not np.isfinite(a).all():
-        raise InputError(f"{where}: expected {n} finite numbers, got {validate.plain(a.tolist())}")
-    return a
-
-
-def _user_call(controller, n_state):
-    """(call, project) for a user's Python controller: ``call(t, x, ref, c)`` returns
-    (U (4,), c_dot (n_state,)) and ``project(c, t)`` its optional ``project_numpy(c)``,
-    checked: a typed error naming the time when the controller raises or returns anything but
-    finite numbers of those shapes."""
-    user_project = getattr(controller, "project_numpy", None)
-
-    def call(t, x, ref, c):
-        when = f"t = {validate.plain(float(t))} s"
-        out = _guarded(controller, "controller", when, float(t), x.copy(), ref.copy(), c.copy())
-        U, c_dot = out if isinstance(out, tuple) and len(out) == 2 else (out, np.zeros(0))
-        return (_finite(U, f"controller output at {when}", 4),
-                _finite(c_dot, f"controller output c_dot at {when}", n_state))
-
-    def project(c, t):
-        if user_project is None:
-            return c
-        when = f"t = {validate.plain(float(t))} s"
-        return _finite(_guarded(user_project, "controller.project_numpy", when, c.copy()),
-                       f"controller.project_numpy output at {when}", n_state)
-    return call, project
-
-
-def _user_state(controller):
-    """(n_state, c0) of a user's Python controller: its optional ``n_state`` and
-    ``initial_state()`` (default 0 and zeros), checked."""
-    n = validate.integer(getattr(controller, "n_state", 0), "controller.n_state", lo=0,
-                         hi=10_000)
-    if not hasattr(controller, "initial_state"):
-        return n, np.zeros(n)
-    c0 = _guarded(controller.initial_state, "controller.initial_state()", "the start")
-    return n, _finite(c0, "controller.initial_state()", n)
-
-
-def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law):
+def _run_python(setup, progress):
+    controller, P, schedule, X0 = setup.controller, setup.P, setup.schedule, setup.X0
+    actuation, limits, is_law = setup.actuation, setup.limits, setup.is_law
     plant = FastCall(cached_compile(("plant", actuation),
                                     lambda: plant_step_function(load(), actuation)))
     rule = FastCall(divergence_rule(limits))
     n_steps = schedule.n_steps
     nf = actuation.n_rotor_states
-    ic = 12 + nf                 # where the controller state starts in X
+    ic = N_STATE + nf                 # where the controller state starts in X
     nc = X0.size - ic
     X = np.empty((n_steps + 1, X0.size))
     U = np.empty((n_steps + 1, 4))
@@ -321,7 +168,7 @@ def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law
         U_out, cdot_out = law.outputs
         project = lambda c, t: controller.project_numpy(c)
     else:
-        call, project = _user_call(controller, nc)
+        call, project = user_call(controller, nc)
     px, pf, pU, pP, pw, pdt = plant.inputs
     x_next, f_next, U_app = plant.outputs
     rule_x, rule_e, rule_rest = rule.inputs
@@ -330,7 +177,7 @@ def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law
     report_every = max(1, n_steps // 100)
     with np.errstate(over="ignore", invalid="ignore"):     # a diverging step may overflow
         for k in range(n_steps):
-            x, c = X[k, :12], X[k, ic:]
+            x, c = X[k, :N_STATE], X[k, ic:]
             if is_law:
                 t_in[0] = s.t[k]
                 x_in[:] = x
@@ -342,7 +189,7 @@ def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law
             else:
                 pU[:], c_dot = call(float(s.t[k]), x, s.ref[k], c)
             px[:] = x
-            pf[:] = X[k, 12:ic]
+            pf[:] = X[k, N_STATE:ic]
             pP[:] = truth_parameters(P, s.cog_scale[k], s.cog[k])
             pw[:] = s.wrench[k]
             pdt[0] = s.dt[k]
@@ -352,12 +199,12 @@ def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law
             d = x[:3] - s.ref[k, :3]
             rule_x[:] = x
             rule_e[0] = math.sqrt(d @ d)
-            rule_rest[0] = magnitude(X[k, 12:]) + magnitude(pU)
+            rule_rest[0] = magnitude(X[k, N_STATE:]) + magnitude(pU)
             rule.eval()
             if code[0]:
                 return X[:k + 1], U[:k + 1], int(code[0])
-            X[k + 1, :12] = x_next
-            X[k + 1, 12:ic] = f_next
+            X[k + 1, :N_STATE] = x_next
+            X[k + 1, N_STATE:ic] = f_next
             if nc:
                 X[k + 1, ic:] = project(c + s.dt[k] * c_dot, s.t[k + 1])
             if progress and k % report_every == 0:
@@ -368,10 +215,12 @@ def _run_python(controller, P, schedule, X0, actuation, limits, progress, is_law
     return X, U, 0
 
 
-def _result(controller, X, U, code, schedule, P, limits, path, elapsed, nf):
+def _result(setup, X, U, code, elapsed):
     """The SimulationResult of samples X (n, .) and applied inputs U (n, 4). Both loops stop
     at the first diverged sample, with its divergence code (0: none); the final sample of a
     finished run, which no step has checked, is checked here with the same rule."""
+    controller, schedule, P, limits = setup.controller, setup.schedule, setup.P, setup.limits
+    path, nf = setup.path, setup.n_rotor_states
     n = X.shape[0]
     t, ref = schedule.t[:n], schedule.ref[:n]
     r_G = schedule.r_G(P[R_G])[:n]
@@ -379,7 +228,7 @@ def _result(controller, X, U, code, schedule, P, limits, path, elapsed, nf):
     if code:
         idx, cause = n - 1, DivergenceCause(code)
     else:
-        idx, cause = first_divergence(X[-1:, :12], e[-1:], limits, magnitude(X[-1:, 12:]))
+        idx, cause = first_divergence(X[-1:, :N_STATE], e[-1:], limits, magnitude(X[-1:, N_STATE:]))
         idx = None if idx is None else n - 1
     if idx == 0:       # x0 was checked: the controller's first output or state is not finite
         raise InputError(f"the controller gives a non-finite input or state at t = 0 (U = "
@@ -392,12 +241,12 @@ def _result(controller, X, U, code, schedule, P, limits, path, elapsed, nf):
     check_euler_singularity(t[:keep], X[:keep], limits)
     metrics = flight_metrics(e, schedule.tail[:n], idx, None if idx is None else t[idx],
                              cause, limits)
-    x = X[:keep, :12]
+    x = X[:keep, :N_STATE]
     estimating = bool(getattr(controller, "estimates_cog", False))
-    r_hat = X[:keep, 12 + nf:15 + nf] if estimating else np.zeros((keep, 3))
+    r_hat = X[:keep, N_STATE + nf:N_STATE + 3 + nf] if estimating else np.zeros((keep, 3))
     if estimating:
         last = n - 1 if idx is None else idx - 1       # the last counted sample
-        metrics.r_hat_final = X[last, 12 + nf:15 + nf].tolist()
+        metrics.r_hat_final = X[last, N_STATE + nf:N_STATE + 3 + nf].tolist()
         metrics.r_G_final = r_G[last].tolist()
     name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))
     return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,

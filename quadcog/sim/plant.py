@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from quadcog.model.conventions import IDX, R_G
 from quadcog.errors import InputError
+from quadcog.model.conventions import IDX, R_G, hover_trim
 from quadcog.vehicles.vehicle import N_ROTORS
 
 
@@ -144,9 +144,10 @@ def plant_step_function(model, actuation):
                        ["x", "f", "U", "p", "wrench", "dt"], ["x_next", "f_next", "U_applied"])
 
 
-def initial_rotor_thrusts(vehicle, actuation):
-    """Rotor thrusts (n_rotor_states,) at t = 0: those of a level hover of ``vehicle`` (its
-    r_G at t = 0), within the limits (the motors spin up before the run starts)."""
+def initial_rotor_thrusts(P0, actuation):
+    """Rotor thrusts (n_rotor_states,) at t = 0: those of a level hover of the truth
+    parameters ``P0`` (14,) (r_G at t = 0), within the limits (the motors spin up before the
+    run starts)."""
     if not actuation.n_rotor_states:
         return np.zeros(0)
-    return actuation.rotor_command_numpy(vehicle.hover_input())
+    return actuation.rotor_command_numpy(hover_trim(P0))

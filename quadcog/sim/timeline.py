@@ -4,8 +4,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from quadcog import validate
-from quadcog.model.admissibility import LARGEST
 from quadcog.errors import InputError
+from quadcog.model.parameters import LARGEST
 
 
 @dataclass(frozen=True)

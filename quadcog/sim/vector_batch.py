@@ -14,14 +14,14 @@ import casadi as ca
 import numpy as np
 
 from quadcog import config
-from quadcog.sim.batch import batch_metrics, run_kernel
-from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, monitored_step, packed
-from quadcog.codegen.compiled import cached_compile
-from quadcog.sim.plant import Actuation, initial_rotor_thrusts
+from quadcog.model.conventions import N_PARAM, N_STATE, R_G
+from quadcog.sim.batch import batch_metrics, run_kernel, run_map
+from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
+from quadcog.sim.plant import Actuation
+from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference
 from quadcog.sim.schedule import STEP_INPUTS, Schedule, cog_at
-from quadcog.sim.flight import check_time, run_options, start_at_reference
 from quadcog.sim.timeline import CogChange, CogProfile
-from quadcog.trajectories.analytic import as_trajectory
+from quadcog.trajectories.registry import as_trajectory
 
 
 def sweep_step(controller, actuation, limits, n_changes):
@@ -32,16 +32,16 @@ def sweep_step(controller, actuation, limits, n_changes):
     have dt = 0 and change nothing (the monitored step counts only dt > 0)."""
     step = monitored_step(controller, actuation, limits)
     nZ = step.size1_in(0)
-    Z, Q = ca.SX.sym("Z", nZ), ca.SX.sym("Q", 14 + 3 * n_changes)
+    Z, Q = ca.SX.sym("Z", nZ), ca.SX.sym("Q", N_PARAM + 3 * n_changes)
     per_step = {name: ca.SX.sym(name, rows) for name, rows in STEP_INPUTS}
     shapes = ca.SX.sym("shapes", n_changes)
     # the flight's CoG profile enters where a single flight's does (the schedule's cog input),
     # so r_G(t) is formed in one place (``quadcog.sim.schedule.cog_at``)
     cog = ca.SX.zeros(3)
     for j in range(n_changes):
-        cog = cog + shapes[j] * Q[14 + 3 * j:17 + 3 * j]
+        cog = cog + shapes[j] * Q[N_PARAM + 3 * j:N_PARAM + 3 * j + 3]
     inputs = dict(per_step, cog=cog, cog_scale=1.0)
-    Z_next = step(Z, Q[:14], *[inputs[name] for name, _ in STEP_INPUTS])
+    Z_next = step(Z, Q[:N_PARAM], *[inputs[name] for name, _ in STEP_INPUTS])
     names = [name for name, _ in STEP_INPUTS]
     return ca.Function("sweep_step", [Z, Q] + [per_step[n] for n in names] + [shapes],
                        [Z_next], ["Z", "Q"] + names + ["shapes"], ["Z_next"])
@@ -94,17 +94,13 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     B, J = P.shape[0], len(cog_times)
     D = np.asarray(D, dtype=float).reshape(B, 3 * J)
     shapes = cog_shapes(schedule.t, cog_times)
-    nc, nf = controller.n_state, actuation.n_rotor_states
-    nX = 12 + nf + nc
+    nX = N_STATE + actuation.n_rotor_states + controller.n_state
     if x0 is None:
         x0 = start_at_reference(schedule.ref[0])
-    Z = np.zeros((B, nX + len(ACCUMULATORS)))
-    Z[:, :12] = x0
-    for b, v in enumerate(vehicles):
-        r0 = cog_at(v.r_G, 1.0, shapes[0] @ D[b].reshape(J, 3) if J else 0.0)
-        Z[b, 12:12 + nf] = initial_rotor_thrusts(v.with_cog(r0), actuation)
-    Z[:, 12 + nf:nX] = controller.initial_state()
-    Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
+    P0 = P.copy()
+    if J:           # each flight's CoG at t = 0
+        P0[:, R_G] = cog_at(P[:, R_G], 1.0, np.einsum("j,bjk->bk", shapes[0], D.reshape(B, J, 3)))
+    Z = batch_start(controller, actuation, P0, x0)
     Q = np.hstack([P, D])
     t0 = time.perf_counter()
     run = None
@@ -116,32 +112,10 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     if run is not None:
         Z = run_kernel(run, Z, Q, schedule, shapes, threads=threads)
     else:
-        Z = _run_casadi(controller, actuation, limits, J, Z, Q, schedule, shapes, threads)
+        chunk = chunk_of(sweep_step(controller, actuation, limits, J),
+                         ("sweep_step", controller.cache_key(), actuation, limits, J))
+        Z = run_map(chunk, Z, Q, schedule, shapes, threads=threads)
     seconds = time.perf_counter() - t0
     # the CoG is in P, so the schedule's own CoG (zero) is what batch_metrics sees: it only
     # needs the reference, the tail and the times
     return batch_metrics(Z, nX, schedule, limits, seconds)
-
-
-def _run_casadi(controller, actuation, limits, J, Z, Q, schedule, shapes, threads):
-    def build():
-        step = sweep_step(controller, actuation, limits, J)
-        acc = step.mapaccum("sweep_chunk", CHUNK)
-        z, q = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("Q", step.size1_in(1))
-        per_step = [ca.MX.sym(name, rows, CHUNK) for name, rows in STEP_INPUTS]
-        sh = ca.MX.sym("shapes", J, CHUNK)
-        return ca.Function("sweep_last", [z, q] + per_step + [sh],
-                           [acc(z, ca.repmat(q, 1, CHUNK), *per_step, sh)[:, -1]])
-
-    last = cached_compile(("sweep_batch", controller.cache_key(), actuation, limits, J, CHUNK),
-                          build)
-    B = Z.shape[0]
-    shared = list(range(2, 3 + len(STEP_INPUTS)))     # per-step inputs and shapes
-    mapped = last.map("batch", "thread" if threads > 1 else "serial", B, shared, [])
-    padded = schedule.padded(CHUNK)
-    n_pad = padded.n_steps - schedule.n_steps
-    shapes = np.vstack([shapes, np.repeat(shapes[-1:], n_pad, axis=0)]) if n_pad else shapes
-    Zt, Qt = Z.T, Q.T
-    for k in range(0, schedule.n_steps, CHUNK):
-        Zt = np.array(mapped(Zt, Qt, *padded.matrices(k, k + CHUNK), shapes[k:k + CHUNK].T))
-    return Zt.T

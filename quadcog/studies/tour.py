@@ -1,7 +1,7 @@
 """`quadcog tour`: the generated functions evaluated at hover, as a first look."""
 import numpy as np
 
-from quadcog.model.conventions import R_G, hover_trim
+from quadcog.model.conventions import N_STATE, R_G, hover_trim
 from quadcog.model.functions import load
 from quadcog.vehicles.vehicle import default_parameters
 
@@ -9,7 +9,7 @@ from quadcog.vehicles.vehicle import default_parameters
 def tour(print_=print):
     model = load()
     p = default_parameters(x_G=0.03, y_G=-0.02)
-    x = np.zeros(12)
+    x = np.zeros(N_STATE)
     U = hover_trim(p)
     fmt = {"float_kind": lambda v: f"{v: .4g}"}
 

@@ -10,9 +10,9 @@ import json
 
 import numpy as np
 
+from quadcog.scenarios.keys import set_key
 from quadcog.scenarios.scenario import parse
 from quadcog.sim.flight import start_at_reference
-from quadcog.sweeps.spec import set_key
 
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
            "final_position_error", "diverged", "diverged_at")

@@ -17,22 +17,13 @@ import time
 import numpy as np
 
 from quadcog.errors import QuadcogError
+from quadcog.files import atomic_write
 from quadcog.sweeps.flights import make_job, run_chunk
 from quadcog.sweeps.spec import Sweep, SweepError, from_dict, load_sweep
+from quadcog.sweeps.table import require_pyarrow, to_arrow
 
 CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"
-
-
-def require_pyarrow():
-    """The pyarrow module, or a QuadcogError saying how to install it."""
-    try:
-        import pyarrow
-        import pyarrow.parquet  # noqa: F401
-        return pyarrow
-    except ImportError:
-        raise QuadcogError("writing sweep results needs pyarrow: pip install 'quadcog[sweep]'") \
-            from None
 
 
 class Progress:
@@ -105,22 +96,6 @@ class ChunkStore:
                 for name in table.column_names}
 
 
-def atomic_write(path, text):
-    """Write ``text`` to ``path`` through a temporary file and a rename (all or nothing)."""
-    tmp = Path(str(path) + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
-def to_arrow(columns):
-    """A pyarrow Table of {name: numpy array}."""
-    pa = require_pyarrow()
-    arrays = []
-    for v in columns.values():
-        arrays.append(pa.array(v.tolist() if v.dtype.kind == "U" else v))
-    return pa.table(arrays, names=list(columns))
-
-
 def _concat(parts):
     names = list(parts[0])
     return {k: np.concatenate([p[k] for p in parts]) for k in names}
@@ -149,7 +124,8 @@ def _dask(jobs, workers, scheduler, fingerprint, on_done):
     """Chunks on Dask: a LocalCluster of ``workers`` processes, or the cluster at
     ``scheduler``. A task whose worker dies is run again elsewhere (Dask reschedules it)."""
     try:
-        from distributed import Client, LocalCluster, as_completed as dask_completed
+        from distributed import Client, LocalCluster
+        from distributed import as_completed as dask_completed
     except ImportError:
         raise QuadcogError("--workers/--scheduler need Dask: pip install 'quadcog[sweep]'") \
             from None

@@ -8,98 +8,29 @@ way the scenario file spells it: ``controller``, ``duration``, ``vehicle.m``,
 a sweep accepts exactly what a scenario file accepts. The keys of a sweep file are listed in
 README.md ("Sweeps").
 """
-from dataclasses import dataclass, field
 import copy
+from dataclasses import dataclass, field
 import hashlib
 import itertools
 import json
 import math
 from pathlib import Path
-import re
-import tomllib
 
 import numpy as np
 
-from quadcog.model.admissibility import admissible_radius
-from quadcog.scenarios.files import scenario_path
-from quadcog.errors import InputError, ParameterError
+from quadcog.errors import ParameterError, SweepError
+from quadcog.model.parameters import admissible_radius
+from quadcog.scenarios.files import find_file, read_toml, scenario_path, shipped_names
+from quadcog.scenarios.keys import KEY_EXAMPLE, parse_key, set_key
 from quadcog.scenarios.scenario import ScenarioError, parse
 from quadcog.sim.flight import check_cog_changes
 
-SUFFIX = ".toml"
 MODES = ("grid", "monte-carlo")
 TOP = {"name", "description", "scenario", "mode", "samples", "seed", "chunk", "threshold",
        "inadmissible", "set", "dimension"}
 SOURCES = ("values", "range", "uniform", "normal", "ball")
 DEFAULT_CHUNK = 64          # flights per chunk: the unit of scheduling, retry and resume
 DEFAULT_THRESHOLD = 0.5     # m: tail RMS above this (or a diverged run) counts as failed
-
-
-class SweepError(InputError):
-    """A sweep file is malformed: the message names the file, the key and what was expected."""
-
-
-_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]|\.")
-
-
-def parse_key(key):
-    """``"cog[0].r[1]"`` -> ``["cog", 0, "r", 1]``; None when the key is not well formed."""
-    if not isinstance(key, str) or not key or key[0] in ".[":
-        return None
-    tokens, pos, expect_name = [], 0, True
-    while pos < len(key):
-        m = _TOKEN.match(key, pos)
-        if m is None:
-            return None
-        if m.group(1) is not None:
-            if not expect_name:
-                return None
-            tokens.append(m.group(1))
-            expect_name = False
-        elif m.group(2) is not None:
-            if expect_name:
-                return None
-            tokens.append(int(m.group(2)))
-        else:
-            if expect_name:
-                return None
-            expect_name = True
-        pos = m.end()
-    return None if expect_name else tokens
-
-
-def set_key(data, key, value):
-    """Set ``value`` at ``key`` in the nested scenario dict ``data`` (in place).
-
-    Tables on the way are created; arrays must already hold the index (the base scenario
-    says how many CoG changes there are). Raises KeyError with a readable reason."""
-    tokens = parse_key(key)
-    if tokens is None:
-        raise KeyError(f"not a key (expected names joined by '.', with [index] for arrays, "
-                       f"like 'cog[0].r[1]')")
-    node = data
-    for here, nxt in zip(tokens, tokens[1:]):
-        if isinstance(here, int):
-            if not isinstance(node, list) or here >= len(node):
-                raise KeyError(f"the base scenario has no entry [{here}] there")
-            node = node[here]
-        else:
-            if not isinstance(node, dict):
-                raise KeyError(f"{here!r} is inside a value that is not a table")
-            if here not in node:
-                if isinstance(nxt, int):
-                    raise KeyError(f"the base scenario has no array {here!r}")
-                node[here] = {}
-            node = node[here]
-    last = tokens[-1]
-    if isinstance(last, int):
-        if not isinstance(node, list) or last >= len(node):
-            raise KeyError(f"the base scenario has no entry [{last}] there")
-        node[last] = value
-    else:
-        if not isinstance(node, dict):
-            raise KeyError(f"{last!r} is inside a value that is not a table")
-        node[last] = value
 
 
 def _plain(v):
@@ -257,8 +188,12 @@ def _dimension(i, spec, source, mode):
         raise _err(source, where, f"expected a table, got {spec!r}")
     key = spec.get("key")
     if not isinstance(key, str) or parse_key(key) is None:
-        raise _err(source, f"{where}.key", f"expected a scenario key such as 'vehicle.m' or "
-                   f"'cog[0].r[1]', got {key!r}")
+        try:
+            set_key({}, key, None, error=SweepError, where=f"{source}: key {where + '.key'!r}")
+        except SweepError as e:         # the grammar's own reason (e.g. the bracket form)
+            raise SweepError(f"{e}; got {key!r}") from None
+        raise _err(source, f"{where}.key", f"expected a scenario key ({KEY_EXAMPLE}), got "
+                   f"{key!r}")
     for k in spec:
         if k != "key" and k not in SOURCES:
             raise _err(source, f"{where}.{k}", f"unknown; expected 'key' and one of "
@@ -385,18 +320,15 @@ def from_dict(data, source="<sweep>", folder=None):
     candidate = Path(folder or ".") / spec
     try:
         base_path = candidate if candidate.is_file() else scenario_path(spec)
-        base = tomllib.loads(Path(base_path).read_text(encoding="utf-8"))
-    except (ScenarioError, OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        base = read_toml(Path(base_path), ScenarioError)
+    except ScenarioError as e:
         raise _err(source, "scenario", str(e)) from None
     base_source = str(base_path)
     fixed = data.get("set", {})
     if not isinstance(fixed, dict):
         raise _err(source, "set", f"expected a table of scenario keys, got {fixed!r}")
     for key, value in fixed.items():
-        try:
-            set_key(base, key, value)
-        except KeyError as e:
-            raise _err(source, f"set.{key}", e.args[0]) from None
+        set_key(base, key, value, error=SweepError, where=f"{source}: key {'set.' + key!r}")
     try:
         parse(base, base_source)
     except ScenarioError as e:
@@ -430,10 +362,7 @@ def _validate_flights(sweep, combos, skip):
         values = {k: _plain(v) for k, v in values.items()}
         data = copy.deepcopy(sweep.base)
         for key, value in values.items():
-            try:
-                set_key(data, key, value)
-            except KeyError as e:
-                raise _err(sweep.source, key, e.args[0]) from None
+            set_key(data, key, value, error=SweepError, where=f"{sweep.source}: key {key!r}")
         try:
             scenario = parse(data, f"{sweep.source} (flight {index})")
         except ScenarioError as e:
@@ -471,38 +400,20 @@ def _describe(values):
     return ", ".join(f"{k} = {v}" for k, v in values.items())
 
 
-def sweep_folder():
-    """The folder of the sweep files that ship with quadcog."""
-    from importlib import resources
-    return Path(str(resources.files("quadcog") / "sweeps"))
-
-
 def sweep_names():
     """Names of the shipped sweep files, sorted."""
-    return tuple(sorted(p.stem for p in sweep_folder().glob(f"*{SUFFIX}")))
+    return shipped_names("sweep")
 
 
 def sweep_path(spec):
     """A sweep file path, or the name of a shipped one (``"failure-map"``)."""
-    path = Path(spec)
-    if path.is_file():
-        return path
-    name = path.name[:-len(SUFFIX)] if path.name.endswith(SUFFIX) else path.name
-    if path.name == str(spec) and name in sweep_names():
-        return sweep_folder() / f"{name}{SUFFIX}"
-    raise SweepError(f"{spec}: no such sweep file, and no shipped sweep of that name "
-                     f"(shipped: {', '.join(sweep_names())})")
+    return find_file(spec, "sweep")
 
 
 def read_sweep_file(spec):
     """(parsed TOML dict, path) of a sweep file or shipped name."""
     path = sweep_path(spec)
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8")), path
-    except tomllib.TOMLDecodeError as e:
-        raise SweepError(f"{path}: not valid TOML ({e})") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise SweepError(f"{path}: cannot be read ({e})") from None
+    return read_toml(path, SweepError), path
 
 
 def load_sweep(spec, **settings):

@@ -2,10 +2,12 @@
 quantiles of the tail error) and plots chosen from the dimensions."""
 import json
 import os
-from pathlib import Path
 import re
 
 import numpy as np
+
+from quadcog.files import atomic_write
+from quadcog.sweeps.table import require_pyarrow, to_arrow
 
 QUANTILES = (0.5, 0.9, 0.99)
 _COG_XY = re.compile(r"^(cog\[\d+\]\.r)\[([01])\]$")
@@ -55,7 +57,6 @@ def summary_markdown(summary):
 
 def write_outputs(sweep, columns, summary, out, plots=True):
     """results.parquet, results.csv, summary.json, summary.md and the plots into ``out``."""
-    from quadcog.sweeps.runner import atomic_write, require_pyarrow, to_arrow
     pa = require_pyarrow()
     import pyarrow.csv  # noqa: F401
     table = to_arrow(columns)
@@ -92,8 +93,8 @@ def plot_sweep(sweep, columns, out):
     RMS per controller. Returns the file names written."""
     import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
+    import matplotlib.pyplot as plt
     written = []
     ctl = columns["controller"]
     names = list(dict.fromkeys(ctl.tolist()))

@@ -1,2 +1,3 @@
 """Layer 4, references: analytic trajectories (``analytic``), minimum-snap waypoints
-(``waypoints``) and what a vehicle can follow (``feasibility``)."""
+(``waypoints``), what a vehicle can follow (``feasibility``) and the one table of trajectory
+kinds (``registry``)."""

@@ -10,8 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from quadcog import validate
-from quadcog.model.admissibility import LARGEST
 from quadcog.errors import InputError, QuadcogError
+from quadcog.kinds import Number, Vec3
+from quadcog.model.parameters import LARGEST
 
 REF_SIZE = 14
 POS, VEL, ACC, JERK = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -54,7 +55,7 @@ def _describe(trajectory):
     return repr(trajectory)
 
 
-def check_reference(ref, t, trajectory):
+def _checked_reference(ref, t, trajectory):
     """``ref`` (N, 14) if every entry is finite and within +-REFERENCE_LIMIT, else InputError
     naming the trajectory, the first bad time and entry."""
     with np.errstate(invalid="ignore"):
@@ -80,7 +81,7 @@ class Trajectory:
             p, v, a, j = self._pvaj(t)
             yaw = np.full((t.size, 1), float(self.yaw))
             ref = np.hstack([p, v, a, j, yaw, np.zeros((t.size, 1))])
-        return check_reference(ref, t, self)
+        return _checked_reference(ref, t, self)
 
     def __call__(self, t):
         """The 14-vector reference at time t (s)."""
@@ -90,8 +91,8 @@ class Trajectory:
 @dataclass
 class Hover(Trajectory):
     """Hold ``position`` (m) at heading ``yaw`` (rad)."""
-    position: tuple = (0.0, 0.0, 1.0)
-    yaw: float = 0.0
+    position: Vec3 = (0.0, 0.0, 1.0)
+    yaw: Number = 0.0
 
     def __post_init__(self):
         self.position = _vec3("hover position", self.position)
@@ -106,10 +107,10 @@ class Hover(Trajectory):
 class Circle(Trajectory):
     """Horizontal circle of ``radius`` (m) about ``center`` (m), one lap per ``period`` (s),
     counter-clockwise, starting at center + [radius, 0, 0]."""
-    center: tuple = (0.0, 0.0, 1.0)
-    radius: float = 1.0
-    period: float = 10.0
-    yaw: float = 0.0
+    center: Vec3 = (0.0, 0.0, 1.0)
+    radius: Number = 1.0
+    period: Number = 10.0
+    yaw: Number = 0.0
 
     def __post_init__(self):
         self.center = _vec3("circle center", self.center)
@@ -133,10 +134,10 @@ class Circle(Trajectory):
 class Figure8(Trajectory):
     """Lemniscate of Gerono in the horizontal plane: x = size sin(w t),
     y = size sin(2 w t) / 2 about ``center``, one figure per ``period`` (s)."""
-    center: tuple = (0.0, 0.0, 1.0)
-    size: float = 1.0
-    period: float = 12.0
-    yaw: float = 0.0
+    center: Vec3 = (0.0, 0.0, 1.0)
+    size: Number = 1.0
+    period: Number = 12.0
+    yaw: Number = 0.0
 
     def __post_init__(self):
         self.center = _vec3("figure8 center", self.center)
@@ -157,7 +158,7 @@ class Figure8(Trajectory):
 @dataclass
 class Helix(Circle):
     """A circle that climbs at ``climb_rate`` (m/s)."""
-    climb_rate: float = 0.1
+    climb_rate: Number = 0.1
 
     def __post_init__(self):
         super().__post_init__()
@@ -221,19 +222,7 @@ class FromCallable(Trajectory):
                     j = (pos(tk + 2 * h) - 2 * pos(tk + h) + 2 * pos(tk - h)
                          - pos(tk - 2 * h)) / (2 * h ** 3)
             rows.append(np.concatenate([p, v, a, j, [0.0, 0.0]]))
-        return check_reference(np.array(rows).reshape(t.size, REF_SIZE), t, self)
+        return _checked_reference(np.array(rows).reshape(t.size, REF_SIZE), t, self)
 
     def __repr__(self):
         return f"FromCallable({getattr(self.f, '__name__', type(self.f).__name__)})"
-
-
-def as_trajectory(trajectory):
-    """Accept a Trajectory, a name ('hover', 'circle', 'figure8', 'helix') or a callable."""
-    if isinstance(trajectory, Trajectory):
-        return trajectory
-    if isinstance(trajectory, str):
-        kinds = {"hover": Hover, "circle": Circle, "figure8": Figure8, "helix": Helix}
-        return kinds[validate.choice(trajectory, "trajectory", tuple(kinds))]()
-    if callable(trajectory):
-        return FromCallable(trajectory)
-    validate.fail("trajectory", "a Trajectory, a name or a callable", trajectory)

@@ -17,12 +17,7 @@ import math
 import numpy as np
 
 from quadcog import config
-from quadcog.errors import QuadcogWarning
 from quadcog.trajectories.analytic import ACC, JERK
-
-
-class ReferenceWarning(QuadcogWarning):
-    """A reference asks for more acceleration or jerk than the vehicle can give."""
 
 
 @dataclass

@@ -19,6 +19,7 @@ enough to reach the speed (``d >= v^2 / a``), else ``T = 2 sqrt(d / a)``; at lea
 import numpy as np
 
 from quadcog.errors import InputError
+from quadcog.kinds import Number, Points, Vector
 from quadcog.trajectories.analytic import Trajectory
 
 DEGREE = 7                   # minimum snap: 2 r - 1 with r = 4
@@ -64,7 +65,8 @@ class MinimumSnap(Trajectory):
     last one.
     """
 
-    def __init__(self, waypoints, times=None, max_speed=1.0, max_acceleration=1.0, yaw=0.0):
+    def __init__(self, waypoints: Points, times: Vector | None = None, max_speed: Number = 1.0,
+                 max_acceleration: Number = 1.0, yaw: Number = 0.0) -> None:
         pts = np.asarray(waypoints, dtype=float)
         if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2 or not np.isfinite(pts).all():
             raise InputError(f"waypoints: expected at least 2 rows of 3 finite numbers (m), got "
@@ -100,11 +102,15 @@ class MinimumSnap(Trajectory):
                 rhs[row] = value
 
         for i in range(n):                       # each piece passes through both its ends
-            put(i, 0.0, 0, self.waypoints[i]); row += 1
-            put(i, T[i], 0, self.waypoints[i + 1]); row += 1
+            put(i, 0.0, 0, self.waypoints[i])
+            row += 1
+            put(i, T[i], 0, self.waypoints[i + 1])
+            row += 1
         for order in (1, 2, 3):                  # at rest at both ends
-            put(0, 0.0, order, 0.0); row += 1
-            put(n - 1, T[-1], order, 0.0); row += 1
+            put(0, 0.0, order, 0.0)
+            row += 1
+            put(n - 1, T[-1], order, 0.0)
+            row += 1
         for i in range(n - 1):                   # interior joins: derivatives 1..6 continuous
             for order in range(1, 7):
                 put(i, T[i], order)

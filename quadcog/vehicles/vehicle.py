@@ -20,8 +20,8 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
 from quadcog.errors import InputError, ParameterError
+from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
 from quadcog.model.parameters import check_parameters
 from quadcog.validate import real
 

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
+from quadcog.errors import InputError
 from quadcog.model import columns as col
 from quadcog.model.conventions import rotation_matrix
-from quadcog.errors import InputError
 
 ROTOR_RADIUS = 0.3         # rotor disc radius as a fraction of the arm length (drawing only)
 
@@ -79,8 +79,9 @@ def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
     """
     import matplotlib
     matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation, PillowWriter
+    import matplotlib.pyplot as plt
+
     from quadcog.viz.plots import flight_title
 
     if not (np.isfinite(speed) and speed > 0):

@@ -20,18 +20,22 @@ import numpy as np
 
 from quadcog import config
 from quadcog.model.conventions import IDX
+from quadcog.studies.analysis.adaptive_design import design_checks, lyapunov_study, plot_lyapunov
+from quadcog.studies.analysis.analysis_files import write_json, write_latex, write_markdown
+from quadcog.studies.analysis.failure_map import (
+    adaptive_failures_vs_projection,
+    failure_map,
+    plot_failure_map,
+    save_failure_map,
+)
+from quadcog.studies.analysis.linear import hover_statespace, loop_statespace
+from quadcog.studies.analysis.pd_design import pd_design, plot_sigma
+from quadcog.studies.analysis.zero_dynamics import plot_zero_dynamics, zero_dynamics_study
 from quadcog.vehicles.vehicle import default_parameters
 from quadcog.viz.progress import ProgressBar
-from quadcog.studies.analysis.adaptive_design import design_checks, lyapunov_study, plot_lyapunov
-from quadcog.studies.analysis.failure_map import (adaptive_failures_vs_projection, failure_map,
-                                                  plot_failure_map, save_failure_map)
-from quadcog.studies.analysis.pd_design import pd_design, plot_sigma
-from quadcog.studies.analysis.linear import hover_statespace, loop_statespace
-from quadcog.studies.analysis.analysis_files import write_json, write_latex, write_markdown
-from quadcog.studies.analysis.zero_dynamics import plot_zero_dynamics, zero_dynamics_study
 
-__all__ = ["analyze", "hover_statespace", "loop_statespace", "pd_design", "zero_dynamics_study", "design_checks", "lyapunov_study",
-           "failure_map"]
+__all__ = ["analyze", "hover_statespace", "loop_statespace", "pd_design", "zero_dynamics_study",
+           "design_checks", "lyapunov_study", "failure_map"]
 
 
 def _say(progress, text):

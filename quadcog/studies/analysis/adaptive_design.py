@@ -13,9 +13,12 @@ from quadcog.controllers import AdaptiveFeedbackLinearization
 from quadcog.sim.divergence import Limits
 from quadcog.sim.flight import simulate
 from quadcog.sim.timeline import CogProfile
-from quadcog.studies.analysis.adaptive_variants import (OracleAdaptive, OracleBMixin,
-                                                        OracleOutputRegulationAdaptive,
-                                                        OutputRegulationAdaptive)
+from quadcog.studies.analysis.adaptive_variants import (
+    OracleAdaptive,
+    OracleBMixin,
+    OracleOutputRegulationAdaptive,
+    OutputRegulationAdaptive,
+)
 
 STEP_TIME = 1.0                        # s
 STEP_R = (0.06, 0.06, 0.0)             # m, the Fig. 6 scenario

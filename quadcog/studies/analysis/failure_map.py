@@ -4,15 +4,20 @@ import time
 
 import numpy as np
 
-from quadcog.controllers import (AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization,
-                                 make_controller)
+from quadcog import config
+from quadcog.controllers import (
+    AdaptiveFeedbackLinearization,
+    CascadePD,
+    FeedbackLinearization,
+    make_controller,
+)
 from quadcog.controllers.adaptive import admissible_estimate_radius
 from quadcog.errors import ParameterError
+from quadcog.model.conventions import N_STATE
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
-from quadcog import config
 from quadcog.sim.flight import RK4_LIMIT
-from quadcog.vehicles.vehicle import HUMMINGBIRD, default_parameters
 from quadcog.trajectories.analytic import Hover
+from quadcog.vehicles.vehicle import HUMMINGBIRD, default_parameters
 
 THRESHOLD = 0.5          # m: tail RMS above this (or a diverged run) counts as a failure
 LABELS = {"pd": "cascade PD", "fl": "feedback linearization", "adaptive": "adaptive FL"}
@@ -52,7 +57,7 @@ def rk4_stiffness(controller, params, dt=None):
     ``config.defaults["simulate.dt"]``. Returns (B,)."""
     dt = config.get("simulate.dt", dt)
     ref = Hover()(0.0)
-    x0 = np.zeros(12)
+    x0 = np.zeros(N_STATE)
     x0[2] = ref[2]
     J = controller.closed_loop_jacobian()
     Js = np.array(J.map(params.shape[0])(x0, ref, params.T)).reshape(12, params.shape[0], 12)
@@ -164,10 +169,10 @@ def plot_failure_map(fm, path):
     boundary as contours; saved to ``path`` (PNG)."""
     import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap, LogNorm
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
+    import matplotlib.pyplot as plt
     xs, ys, adm = fm["x_G"] * 100, fm["y_G"] * 100, fm["admissible"]
     ctls = fm["controllers"]
     finite = np.concatenate([c["tail_rms"][np.isfinite(c["tail_rms"])] for c in ctls.values()])

@@ -8,6 +8,8 @@ finds the same gain range from eigenvalues only (no frequency response), the cro
 """
 import numpy as np
 
+from quadcog.errors import InputError
+
 
 def channel_loop(A, B, K, i):
     """(A_i, b_i, k_i) of the SISO loop of input channel i with the other channels closed.
@@ -69,7 +71,8 @@ def gain_range_by_eigenvalues(A, B, K, i, k_max=1e4, n_grid=4000):
         return np.max(np.linalg.eigvals(A - B @ Kk).real) < 0
 
     if not stable(1.0):
-        raise ValueError("the nominal loop (k = 1) is not stable")
+        raise InputError("the nominal loop (k = 1) is not stable: expected poles that make the "
+                         "linearized closed loop stable")
 
     def edge(lo, hi):          # stable at lo, unstable at hi (in log k)
         for _ in range(80):

@@ -7,7 +7,7 @@ L(s) = K (s I - A)^{-1} B, whose margins and singular values ``pd_design`` repor
 """
 import numpy as np
 
-from quadcog.model.conventions import INPUT_NAMES, STATE_NAMES, hover_trim
+from quadcog.model.conventions import INPUT_NAMES, N_STATE, STATE_NAMES, hover_trim
 
 
 def hover_statespace(vehicle=None, position=(0.0, 0.0, 1.0), yaw=0.0, outputs=None):
@@ -33,11 +33,12 @@ def hover_statespace(vehicle=None, position=(0.0, 0.0, 1.0), yaw=0.0, outputs=No
         Signal names carry no units (python-control's names); ``quadcog.model.columns`` lists them.
     """
     import control
-    from quadcog import load
+
+    from quadcog.model.functions import load
     from quadcog.vehicles.vehicle import HUMMINGBIRD
     vehicle = vehicle or HUMMINGBIRD
     p = vehicle.parameters()
-    x0 = np.zeros(12)
+    x0 = np.zeros(N_STATE)
     x0[:3], x0[5] = position, yaw
     A, B = load().linearization(x0, hover_trim(p), p)
     names = list(outputs) if outputs is not None else list(STATE_NAMES)

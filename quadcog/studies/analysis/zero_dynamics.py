@@ -18,7 +18,8 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from quadcog.model.conventions import IDX, OUTPUT_ROWS
+from quadcog.errors import QuadcogError
+from quadcog.model.conventions import IDX, N_PARAM, N_STATE, NU, OUTPUT_ROWS, R_G
 from quadcog.model.functions import load
 from quadcog.model.parameters import check_parameters, with_cog
 from quadcog.vehicles.vehicle import default_parameters
@@ -44,7 +45,7 @@ def zero_dynamics_function(model=None):
         return _cache[key]
     f = model.casadi_function("dynamics")
     alpha, drift = model.casadi_function("decoupling"), model.casadi_function("drift")
-    zeta, y0, p = ca.SX.sym("zeta", 4), ca.SX.sym("y0", 4), ca.SX.sym("p", 14)
+    zeta, y0, p = ca.SX.sym("zeta", 4), ca.SX.sym("y0", 4), ca.SX.sym("p", N_PARAM)
     w = ca.SX.sym("w")
     zero3 = ca.SX.zeros(3)
     x_w = ca.vertcat(zeta[0], zeta[1], y0, zeta[2], zeta[3], w, zero3)
@@ -58,12 +59,12 @@ def zero_dynamics_function(model=None):
     zeta_dot = xdot[ZETA_ROWS]
     w_rate = ca.jtimes(w_star, zeta, zeta_dot)
     residual = ca.vertcat(xdot[list(OUTPUT_ROWS)], alpha(x, p) @ U + drift(x, p),
-                          xdot[8] - w_rate, ca.norm_2(xdot[9:12]))
+                          xdot[8] - w_rate, ca.norm_2(xdot[NU][3:]))
     fn = ca.Function("zero_dynamics", [zeta, y0, p], [zeta_dot, U, residual],
                      ["zeta", "y0", "p"], ["zeta_dot", "U", "residual"])
     jac = ca.Function("zero_dynamics_jacobians", [zeta, y0, p],
-                      [ca.jacobian(zeta_dot, zeta), ca.jacobian(zeta_dot, p[11:14]),
-                       ca.jacobian(U, p[11:14])],
+                      [ca.jacobian(zeta_dot, zeta), ca.jacobian(zeta_dot, p[R_G]),
+                       ca.jacobian(U, p[R_G])],
                       ["zeta", "y0", "p"], ["A_zd", "dzeta_dot_dr", "dU_dr"])
     _cache[key] = (fn, jac)
     return fn, jac
@@ -86,7 +87,7 @@ def relative_equilibrium(p, y0, model=None, tol=1e-13):
         J = np.array(jac(zeta, y0, p)[0])[2:, 2:]
         zeta[2:] -= np.linalg.solve(J, zd)
     else:
-        raise RuntimeError(f"no zero-dynamics equilibrium found for y0 = {y0}")
+        raise QuadcogError(f"no zero-dynamics equilibrium found for y0 = {y0}")
     return zeta
 
 
@@ -149,7 +150,7 @@ def _output_tracking_law(model, kp, kd):
     """CasADi Function (x, p, y_d, y_dot_d, y_ddot_d) -> x_dot of the exact FL closed loop
     with the true parameters: U = alpha^{-1} (y_ddot_d - kp e - kd e_dot - b)."""
     f = model.casadi_function("dynamics")
-    x, p = ca.SX.sym("x", 12), ca.SX.sym("p", 14)
+    x, p = ca.SX.sym("x", 12), ca.SX.sym("p", N_PARAM)
     yd, ydd, yddd = ca.SX.sym("yd", 4), ca.SX.sym("ydd", 4), ca.SX.sym("yddd", 4)
     y_dot = f(x, ca.SX.zeros(4), p)[list(OUTPUT_ROWS)]
     v = yddd - ca.DM(kp) * (x[list(OUTPUT_ROWS)] - yd) - ca.DM(kd) * (y_dot - ydd)
@@ -185,7 +186,7 @@ def nonlinear_check(r_list, duration=5.0, u0=(0.5, -0.3), moving=False, model=No
     out = []
     for r in r_list:
         p = check_parameters(with_cog(default_parameters(), r))
-        x0 = np.zeros(12)
+        x0 = np.zeros(N_STATE)
         x0[2], x0[6], x0[7] = 1.0, u0[0], u0[1]
         rhs = lambda t, x: np.array(law(x, p, *ref(t))).ravel()
         sol = solve_ivp(rhs, (0, duration), x0, method="DOP853", t_eval=t_eval,

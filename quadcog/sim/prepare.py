@@ -1,0 +1,252 @@
+"""Prepare a run: every check of the arguments, once, and the start of the state.
+
+``prepare_flight`` is the first of the three parts of ``quadcog.simulate`` (prepare -> step loop
+-> result): it checks the arguments in a fixed order (so the first mistake is the one named),
+designs the controller for its model, builds the schedule of per-step inputs and the start
+state, and hands the loop a ``FlightSetup``. The batch paths (``quadcog.sim.batch``,
+``quadcog.sim.vector_batch``) use the same checks and ``batch_start``.
+"""
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from quadcog import config, validate
+from quadcog.controllers.base import Controller
+from quadcog.errors import InputError
+from quadcog.model.conventions import N_STATE, R_G, rotation_matrix
+from quadcog.model.parameters import LARGEST, check_parameters, with_cog
+from quadcog.sim.closed_loop import ACCUMULATORS
+from quadcog.sim.divergence import Limits, first_divergence
+from quadcog.sim.plant import Actuation, TruthOptions, initial_rotor_thrusts
+from quadcog.sim.result import position_errors
+from quadcog.sim.schedule import Schedule, cog_at, truth_parameters
+from quadcog.sim.timeline import CogProfile
+from quadcog.sim.user_controller import user_state
+from quadcog.trajectories.analytic import POS, VEL, YAW
+from quadcog.trajectories.registry import as_trajectory
+from quadcog.validate import positive, step_count
+from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
+
+__all__ = ["RK4_LIMIT", "FlightSetup", "prepare_flight", "batch_start", "check_time",
+           "run_options", "check_step_size", "start_at_reference", "as_cog_profile",
+           "check_cog_changes"]
+
+RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region with margin
+
+
+@dataclass(frozen=True)
+class FlightSetup:
+    """Everything the step loop of one flight needs, checked.
+
+    Attributes
+    ----------
+    controller : Controller or callable
+        The controller, designed for its model (or a user's Python callable).
+    is_law : bool
+        True for a quadcog Controller.
+    vehicle : Vehicle
+        The truth vehicle.
+    P : numpy.ndarray
+        (14,) the truth vehicle's parameters (r_G at the vehicle's own CoG).
+    schedule : Schedule
+        The per-step inputs.
+    X0 : numpy.ndarray
+        (12 + rotor states + controller states,) the start.
+    actuation : Actuation
+        The rotors as the truth model has them.
+    limits : Limits
+        When a run counts as diverged.
+    path : str
+        'compiled' or 'python'.
+    n_rotor_states : int
+        Rotor states in X (motor lag), 0 or 4.
+    """
+    controller: Any
+    is_law: bool
+    vehicle: Vehicle
+    P: np.ndarray
+    schedule: Schedule
+    X0: np.ndarray
+    actuation: Actuation
+    limits: Limits
+    path: str
+    n_rotor_states: int
+
+
+def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float | None,
+                   vehicle: Vehicle | None, controller_model: Vehicle | None, cog: Any,
+                   disturbances: Any, truth: TruthOptions | None, x0: Any, path: str,
+                   limits: Limits | None, progress: Callable[[float], Any] | None,
+                   check_dt: bool) -> FlightSetup:
+    """The checked set-up of one flight (the arguments as ``quadcog.simulate`` takes them).
+
+    Parameters
+    ----------
+    controller, trajectory, duration, dt, vehicle, controller_model, cog : see simulate
+        As for ``quadcog.simulate``.
+    disturbances, truth, x0, path, limits, progress, check_dt : see simulate
+        As for ``quadcog.simulate``.
+
+    Returns
+    -------
+    FlightSetup
+        What the step loop needs.
+
+    Raises
+    ------
+    quadcog.InputError
+        Naming the first argument that is wrong, and what was expected.
+    """
+    options, limits = run_options(truth, limits, progress)
+    validate.flag(check_dt, "check_dt")
+    dt = config.get("simulate.dt", dt)
+    validate.choice(path, "path", ("compiled", "python"))
+    is_law = isinstance(controller, Controller)
+    if not is_law and not (path == "python" and callable(controller)):
+        raise InputError("controller must be a quadcog Controller, or a callable "
+                         f"ctrl(t, x, ref, c) with path='python'; got {controller!r}")
+    if vehicle is None:
+        vehicle = controller.vehicle if is_law else HUMMINGBIRD
+        model_default = vehicle
+    else:
+        model_default = vehicle.with_cog(np.zeros(3)) if isinstance(vehicle, Vehicle) else None
+    for name, v in (("vehicle", vehicle), ("controller_model", controller_model)):
+        if v is not None and not isinstance(v, Vehicle):
+            raise InputError(f"{name} must be a quadcog Vehicle, got {v!r}")
+    if is_law:
+        controller = controller.for_vehicle(controller_model or model_default)
+    duration, dt = check_time(duration, dt)
+    trajectory = as_trajectory(trajectory)
+    cog = as_cog_profile(cog)
+    P = vehicle.parameters()
+    check_cog_changes(P, cog)
+    schedule = Schedule.build(trajectory, duration, dt, cog, disturbances)
+    x0 = start_at_reference(schedule.ref[0]) if x0 is None else validate.vector(x0, "x0", 12)
+    if not np.abs(x0).max() <= LARGEST:
+        validate.fail("x0", f"12 finite numbers within +-{LARGEST:g}", x0.tolist())
+    _, cause = first_divergence(x0[None, :], position_errors(x0[None, :], schedule.ref[:1]),
+                                limits)
+    if cause is not None:
+        raise InputError(f"x0 = {x0.tolist()} has already diverged: {cause.describe(limits)}")
+    actuation = Actuation.of(vehicle, options)
+    P0 = truth_parameters(P, schedule.cog_scale[0], schedule.cog[0])
+    f0 = initial_rotor_thrusts(P0, actuation)
+    if check_dt:
+        check_step_size(controller if is_law else None, x0, schedule.ref[0], P0, dt, actuation)
+    n_state, c0 = ((controller.n_state, controller.initial_state()) if is_law
+                   else user_state(controller))
+    X0 = np.concatenate([x0, f0, c0])
+
+    return FlightSetup(controller, is_law, vehicle, P, schedule, X0, actuation, limits, path,
+                       f0.size)
+
+
+def batch_start(controller: Controller, actuation: Actuation, P0: np.ndarray,
+                x0: np.ndarray) -> np.ndarray:
+    """The start of many flights: state, rotor thrusts, controller state and accumulators.
+
+    Parameters
+    ----------
+    controller : Controller
+        Designed for its model already.
+    actuation : Actuation
+        The rotors (shared by the flights).
+    P0 : numpy.ndarray
+        (B, 14) each flight's truth parameters at t = 0 (its CoG at the start).
+    x0 : numpy.ndarray
+        (12,) the start state, shared.
+
+    Returns
+    -------
+    numpy.ndarray
+        Z (B, 12 + rotor states + controller states + accumulators), as the monitored step
+        (``quadcog.sim.closed_loop``) takes it.
+    """
+    nc, nf = controller.n_state, actuation.n_rotor_states
+    nX = N_STATE + nf + nc
+    Z = np.zeros((P0.shape[0], nX + len(ACCUMULATORS)))
+    Z[:, :N_STATE] = x0
+    for b in range(P0.shape[0]):
+        Z[b, N_STATE:N_STATE + nf] = initial_rotor_thrusts(P0[b], actuation)
+    Z[:, N_STATE + nf:nX] = controller.initial_state()
+    Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
+    return Z
+
+
+def check_time(duration, dt):
+    """(duration, dt) as floats; InputError unless both are positive numbers (s), dt <=
+    duration and the step count is within ``config.defaults["simulate.max_steps"]``."""
+    duration, dt = positive(duration, "duration", "s"), positive(dt, "dt", "s")
+    if dt > duration:
+        raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
+    step_count(duration, dt, config.defaults["simulate.max_steps"])
+    return duration, dt
+
+
+
+def run_options(truth, limits, progress):
+    """The checked (TruthOptions, Limits) of a run (defaults for None); a typed error naming
+    ``truth``, ``limits`` or ``progress`` when one is of the wrong kind. Shared by ``simulate``
+    and the batch paths."""
+    options = TruthOptions() if truth is None else truth
+    if not isinstance(options, TruthOptions):
+        validate.fail("truth", "a quadcog TruthOptions", truth)
+    limits = Limits() if limits is None else limits
+    if not isinstance(limits, Limits):
+        validate.fail("limits", "a quadcog Limits", limits)
+    if progress is not None and not callable(progress):
+        validate.fail("progress", "None or a callable(fraction), e.g. a ProgressBar", progress)
+    return options, limits
+
+
+
+def check_step_size(controller, x0, ref0, P, dt, actuation):
+    """Raise InputError if RK4 with step dt is unstable for the closed loop at the start, or
+    for the motor lag. ``controller`` may be None (a Python controller: no closed-loop check).
+
+    The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from CasADi AD."""
+    if actuation.n_rotor_states and dt / actuation.time_constant > RK4_LIMIT:
+        raise InputError(f"dt = {dt} s is too large for the motor time constant "
+                         f"{actuation.time_constant} s: RK4 needs dt < "
+                         f"{RK4_LIMIT * actuation.time_constant:.3g} s")
+    if controller is None:
+        return
+    lam = np.linalg.eigvals(np.array(controller.closed_loop_jacobian()(x0, ref0, P)))
+    fastest = float(np.max(np.abs(lam)))
+    if fastest * dt > RK4_LIMIT:
+        raise InputError(f"dt = {dt} s is too large: the closed loop has an eigenvalue of "
+                         f"magnitude {fastest:.3g} 1/s, and RK4 needs dt < "
+                         f"{RK4_LIMIT / fastest:.3g} s")
+
+
+
+def start_at_reference(ref):
+    """The state (12,) on the reference row ``ref`` (14,): its position and heading, level,
+    moving with its velocity (expressed in body axes)."""
+    x0 = np.zeros(N_STATE)
+    x0[:3], x0[5] = ref[POS], ref[YAW]
+    x0[6:9] = rotation_matrix(0.0, 0.0, ref[YAW]).T @ ref[VEL]
+    return x0
+
+
+
+def as_cog_profile(cog):
+    """A CogProfile from ``cog`` (None, a CogProfile or a list of (t, r, ramp) changes)."""
+    if cog is None:
+        return CogProfile([])
+    if isinstance(cog, CogProfile):
+        return cog
+    if not isinstance(cog, (list, tuple)):
+        validate.fail("cog", "None, a CogProfile or a list of (t, r, ramp) changes", cog)
+    return CogProfile(list(cog))
+
+
+
+def check_cog_changes(P, cog):
+    """Raise ParameterError if the vehicle (parameters P) is inadmissible with any CoG of the
+    profile. The admissible set of r_G is convex (|r|^2 - (u.r)^2 is convex for every unit u),
+    so checking where each change ends covers the ramps between them."""
+    for i, change in enumerate(cog.changes):
+        check_parameters(with_cog(P, cog_at(P[R_G], 1.0, np.asarray(change.r))),
+                         f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
