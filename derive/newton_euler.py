@@ -9,10 +9,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .symbols import (I_G_inv, Ixx, Iyy, Izz, c_phi, c_psi, c_theta, c_x, c_y, c_z, g, m,
-                      nu, nu1, nu2, r_G, skew)
-
-NU_DOT = sp.Matrix(sp.symbols("udot vdot wdot pdot qdot rdot", real=True))
+from .symbols import (NU_DOT, I_G_inv, Ixx, Iyy, Izz, c_phi, c_psi, c_theta, c_x, c_y, c_z,
+                      g, m, nu, nu1, nu2, r_G, skew)
 
 
 @dataclass(frozen=True)

@@ -27,3 +27,9 @@ class QuadcogWarning(UserWarning):
 
 class EulerSingularityError(QuadcogError):
     """|theta| reached pi/2, where the ZYX Euler-angle kinematics are singular."""
+
+
+class PhysicalConsistencyError(ParameterError):
+    """Ten inertial parameters pi that no rigid body has: the pseudo-inertia matrix is not
+    positive definite (m <= 0, or the principal inertias about the CoG are not positive or
+    break the triangle inequality; docs/model.md sec. 7.2)."""

@@ -14,7 +14,9 @@ from .fastcall import FastCall
 from .generated import C_SOURCE, load_casadi_function, read_contract, verify
 from .params import check_parameters
 from .paths import generated_dir
-from .validate import vector
+from .validate import nonnegative, positive, vector
+from quadcog.errors import ParameterError
+from quadcog.inertial import check_physically_consistent
 
 Linearization = namedtuple("Linearization", "A B")
 _warned_no_compiler = False
@@ -44,6 +46,7 @@ class Model:
         self.backend = library.backend
         self._calls = {}
         self._last_p = None
+        self._last_pi = None
 
     @property
     def functions(self):
@@ -86,7 +89,14 @@ class Model:
         for buf, (arg_name, n), value in zip(call.inputs, spec_in, args):
             if arg_name == "p":
                 self._check_p(value)
+            elif arg_name == "pi":
+                self._check_pi(value)
             buf[:] = _as_vector(arg_name, value, n)
+            if arg_name == "g":          # the model in pi: g > 0, drag >= 0 (as in p)
+                positive(buf[0], "g", unit="m/s^2", error=ParameterError)
+            elif arg_name == "c":
+                for k, v in enumerate(buf):
+                    nonnegative(v, f"c[{k}]", error=ParameterError)
         call()
         if out is None:
             results = [o.copy() for o in call.outputs]
@@ -108,6 +118,15 @@ class Model:
         if key != self._last_p:       # admissibility once per distinct p, not per call
             check_parameters(p)
             self._last_p = key
+
+    def _check_pi(self, pi):
+        try:
+            key = np.asarray(pi, dtype=float).tobytes()
+        except (TypeError, ValueError):
+            key = None                  # check_physically_consistent says what is wrong
+        if key is None or key != self._last_pi:    # consistency once per distinct pi
+            check_physically_consistent(pi, "pi")
+            self._last_pi = key
 
     def dynamics(self, x, U, p, out=None):
         """x_dot (12,) of the state x (12,) under inputs U (4,: N, N m, N m, N m) and p (14,)."""
@@ -151,6 +170,25 @@ class Model:
         entries I_products = [Ixy, Ixz, Iyz], kg m^2) and an external wrench (6,) =
         [force at O in ground axes (N), moment in body axes (N m)]."""
         return self._call("truth_dynamics", (x, U, p, I_products, wrench), out)
+
+    def inertial_regressor(self, x, nu_dot, g, out=None):
+        """Y (6, 10) with Y pi = M nu_dot + C(nu) nu + g_G for any inertial parameters pi
+        (docs/model.md sec. 7); x (12,), nu_dot (6,) a generalized acceleration (m/s^2,
+        rad/s^2), g (m/s^2, a number or (1,)). Drag is not in Y."""
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
+        return self._call("inertial_regressor", (x, nu_dot, g), out)
+
+    def inertial_mass_matrix(self, pi, out=None):
+        """M (6, 6) about O of the rigid body with inertial parameters pi (10,: kg, kg m,
+        kg m^2), which must be physically consistent (quadcog.inertial)."""
+        return self._call("inertial_mass_matrix", (pi,), out)
+
+    def inertial_dynamics(self, x, U, pi, g, c, out=None):
+        """x_dot (12,) of the rigid body with inertial parameters pi (10,), physically
+        consistent; gravity g (m/s^2, a number or (1,)), drag c (6,). Equals
+        dynamics(x, U, p) for (pi, g, c) = quadcog.inertial.inertial_arguments(p)."""
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
+        return self._call("inertial_dynamics", (x, U, pi, g, c), out)
 
     def linearization(self, x, U, p, out=None):
         """Linearization(A (12, 12), B (12, 4)) of the dynamics at x (12,), U (4,), p (14,)."""
