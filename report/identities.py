@@ -15,6 +15,7 @@ import numpy as np
 import quadcog
 from quadcog.conventions import (B_U, FUNCTIONS, IDX, OUTPUT_ROWS, hover_trim,
                                  rotation_matrix)
+from quadcog.inertial import box
 from quadcog.sampling import random_points
 
 SEED = 20110828
@@ -197,7 +198,9 @@ def _backends(c, pt):
     """The compiled C against CasADi's virtual machine, every function."""
     x, U, p, v = pt
     inputs = {"x": x, "U": U, "p": p, "vartheta": v, "I_products": 0.1 * p[2:5] * np.sin(x[:3]),
-              "wrench": np.concatenate([v[:3], 0.1 * v[3:]])}
+              "wrench": np.concatenate([v[:3], 0.1 * v[3:]]), "nu_dot": v,
+              "pi": box(p[IDX["m"]], 10 * p[2:5], p[IDX["x_G"]:]),     # consistent
+              "g": p[IDX["g"]:IDX["g"] + 1], "c": p[IDX["c_x"]:IDX["c_psi"] + 1]}
     worst = 0.0
     for name, (spec_in, _) in FUNCTIONS.items():
         args = [inputs[n] for n, _ in spec_in]
