@@ -192,8 +192,9 @@ def test_round_trip_and_bad_arguments():
 def test_default_vehicle_rim_along_z():
     """The paper's model holds I_O = diag(Ixx, Ixx, Izz): a CoG offset z_G along the axis
     leaves I_G = diag(Ixx - m z^2, Ixx - m z^2, Izz), a body only while
-    Izz < 2 (Ixx - m z^2), i.e. z_G < sqrt((2 Ixx - Izz) / (2 m)) (3.8 cm for the
-    Hummingbird, inside the 10.09 cm of the admissible ball, docs/model.md sec. 7.2)."""
+    Izz < 2 (Ixx - m z^2), i.e. z_G < sqrt((2 Ixx - Izz) / (2 m)) (3.83 cm for the
+    Hummingbird, inside the 10.09 cm of the admissible ball; 9.39 cm along x or y;
+    docs/model.md sec. 7.2)."""
     p = quadcog.default_parameters()
     m, Ixx, Izz = p[0], p[2], p[4]
     rim = np.sqrt((2 * Ixx - Izz) / (2 * m))
@@ -201,6 +202,13 @@ def test_default_vehicle_rim_along_z():
     for z, ok in ((0.99 * rim, True), (1.01 * rim, False)):
         pi, _, _ = inertial_arguments(quadcog.default_parameters(z_G=z))
         assert is_physically_consistent(pi) == ok
+    # along x: I_G = diag(Ixx, Iyy - m x^2, Izz - m x^2), Ixx < Iyy + Izz - 2 m x^2
+    rim_x = np.sqrt((p[3] + p[4] - p[2]) / (2 * m))
+    assert round(rim_x, 4) == 0.0939
+    for x_G, ok in ((0.99 * rim_x, True), (1.01 * rim_x, False)):
+        for key in ("x_G", "y_G"):
+            pi, _, _ = inertial_arguments(quadcog.default_parameters(**{key: x_G}))
+            assert is_physically_consistent(pi) == ok
 
 
 def test_model_refuses_inconsistent_pi(model):
