@@ -9,7 +9,7 @@ from .catalog import scenario_names, scenario_path, shipped_scenarios
 from .conventions import (B_U, FUNCTIONS, INPUT_NAMES, OUTPUT_NAMES, OUTPUT_ROWS, PARAM_NAMES,
                           STATE_NAMES, hover_trim, rotation_matrix)
 from .errors import (CompileError, EulerSingularityError, GeneratedFilesError, InputError,
-                     ParameterError, QuadcogError, QuadcogWarning)
+                     ParameterError, PhysicalConsistencyError, QuadcogError, QuadcogWarning)
 from .model import Linearization, Model, load
 from .params import check_parameters, inertia_about_cog, with_cog
 from .vehicle import (CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters, plus_layout,
