@@ -21,7 +21,10 @@ eigenvalues are ``(I_j + I_k - I_i) / 2`` for the principal inertias ``I_1, I_2,
 the CoG: J > 0 exactly when m > 0 and those satisfy the strict triangle inequalities (which
 also makes them positive, so the mass matrix M is positive definite).
 """
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from quadcog.conventions import CONTRACT, IDX
 from quadcog.errors import InputError, ParameterError, PhysicalConsistencyError
@@ -77,7 +80,8 @@ def _pi(value, where):
     return pi
 
 
-def inertial_parameters(m, r_G, I_O, where="inertial_parameters"):
+def inertial_parameters(m: float, r_G: ArrayLike, I_O: ArrayLike,
+                        where: str = "inertial_parameters") -> np.ndarray:
     """The ten inertial parameters of a rigid body from its mass, CoG and inertia about O.
 
     Parameters
@@ -108,7 +112,8 @@ def inertial_parameters(m, r_G, I_O, where="inertial_parameters"):
     return pi
 
 
-def from_inertial_parameters(pi, where="pi"):
+def from_inertial_parameters(pi: ArrayLike,
+                             where: str = "pi") -> tuple[float, np.ndarray, np.ndarray]:
     """Mass, CoG and inertia about O of the ten inertial parameters ``pi``.
 
     Parameters
@@ -140,7 +145,7 @@ def from_inertial_parameters(pi, where="pi"):
     return m, pi[_H] / m, _inertia_matrix(pi)
 
 
-def inertial_arguments(p, where="p"):
+def inertial_arguments(p: ArrayLike, where: str = "p") -> tuple[np.ndarray, float, np.ndarray]:
     """The arguments ``(pi, g, c)`` of ``inertial_dynamics`` for the paper's 14-entry ``p``.
 
     The paper's model is the special case ``pi = [m, m r_G, Ixx, 0, Iyy, 0, 0, Izz]`` (I_O
@@ -171,7 +176,7 @@ def inertial_arguments(p, where="p"):
     return pi, float(p[IDX["g"]]), p[IDX["c_x"]:IDX["c_psi"] + 1].copy()
 
 
-def parallel_axis(I_G, m, r):
+def parallel_axis(I_G: ArrayLike, m: float, r: ArrayLike) -> np.ndarray:
     """Inertia about O of a body of mass ``m`` whose CoG is at ``r`` from O (parallel-axis
     theorem): ``I_G + m (|r|^2 I_3 - r r^T)``.
 
@@ -195,7 +200,7 @@ def parallel_axis(I_G, m, r):
     return I_G + _shift(m, r)
 
 
-def point_mass(m, position):
+def point_mass(m: float, position: ArrayLike) -> np.ndarray:
     """pi of a point mass.
 
     Parameters
@@ -216,7 +221,7 @@ def point_mass(m, position):
     return inertial_parameters(m, r, _shift(m, r), "point_mass")
 
 
-def box(m, size, position):
+def box(m: float, size: ArrayLike, position: ArrayLike) -> np.ndarray:
     """pi of a solid homogeneous box with edges along the body axes.
 
     Parameters
@@ -244,7 +249,7 @@ def box(m, size, position):
     return inertial_parameters(m, r, parallel_axis(I_G, m, r), "box")
 
 
-def combine(bodies):
+def combine(bodies: Sequence[ArrayLike]) -> np.ndarray:
     """pi of rigid bodies fastened together: the sum of their pi, all about O.
 
     Parameters
@@ -267,7 +272,7 @@ def combine(bodies):
     return np.sum([_pi(b, f"combine: bodies[{k}]") for k, b in enumerate(bodies)], axis=0)
 
 
-def pseudo_inertia(pi):
+def pseudo_inertia(pi: ArrayLike) -> np.ndarray:
     """The pseudo-inertia matrix of ``pi`` (Wensing, Kim, Slotine 2017).
 
     Parameters
@@ -291,7 +296,7 @@ def pseudo_inertia(pi):
     return J
 
 
-def inertia_about_cog(pi):
+def inertia_about_cog(pi: ArrayLike) -> np.ndarray:
     """Inertia about the CoG of ``pi``: ``I_O - (|h|^2 I_3 - h h^T) / m``.
 
     Parameters
@@ -314,7 +319,7 @@ def _consistency(pi):
     return eig[0], eig, bool(eig[0] > TOLERANCE * max(abs(eig[-1]), np.finfo(float).tiny))
 
 
-def is_physically_consistent(pi):
+def is_physically_consistent(pi: ArrayLike) -> bool:
     """Whether ``pi`` is the inertial parameters of a rigid body of positive volume.
 
     Parameters
@@ -336,7 +341,7 @@ def _g(values):
     return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
 
 
-def check_physically_consistent(pi, where="pi"):
+def check_physically_consistent(pi: ArrayLike, where: str = "pi") -> np.ndarray:
     """``pi`` as a float array, or an error that says why no rigid body has it.
 
     Parameters

@@ -6,6 +6,7 @@ import warnings
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .build import compile_library, find_compiler
 from .compiled import external
@@ -171,22 +172,76 @@ class Model:
         [force at O in ground axes (N), moment in body axes (N m)]."""
         return self._call("truth_dynamics", (x, U, p, I_products, wrench), out)
 
-    def inertial_regressor(self, x, nu_dot, g, out=None):
-        """Y (6, 10) with Y pi = M nu_dot + C(nu) nu + g_G for any inertial parameters pi
-        (docs/model.md sec. 7); x (12,), nu_dot (6,) a generalized acceleration (m/s^2,
-        rad/s^2), g (m/s^2, a number or (1,)). Drag is not in Y."""
+    def inertial_regressor(self, x: ArrayLike, nu_dot: ArrayLike, g: float | ArrayLike,
+                           out: np.ndarray | None = None) -> np.ndarray:
+        """The regressor of the model in the ten inertial parameters (docs/model.md sec. 7.1).
+
+        Parameters
+        ----------
+        x : array_like, shape (12,)
+            State.
+        nu_dot : array_like, shape (6,)
+            A generalized acceleration [u_dot, v_dot, w_dot] (m/s^2), [p_dot, q_dot, r_dot]
+            (rad/s^2).
+        g : float or array_like, shape (1,)
+            Gravitational acceleration (m/s^2), > 0.
+        out : numpy.ndarray, shape (6, 10), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 10)
+            Y with ``Y pi = M nu_dot + C(nu) nu + g_G`` (N, N m) for any inertial parameters
+            pi (``quadcog.inertial``); drag is not in Y.
+        """
         g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
         return self._call("inertial_regressor", (x, nu_dot, g), out)
 
-    def inertial_mass_matrix(self, pi, out=None):
-        """M (6, 6) about O of the rigid body with inertial parameters pi (10,: kg, kg m,
-        kg m^2), which must be physically consistent (quadcog.inertial)."""
+    def inertial_mass_matrix(self, pi: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """M about O of the rigid body with inertial parameters ``pi``.
+
+        Parameters
+        ----------
+        pi : array_like, shape (10,)
+            ``[m, m r_G, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` (kg, kg m, kg m^2), physically
+            consistent (else PhysicalConsistencyError).
+        out : numpy.ndarray, shape (6, 6), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            M (kg, kg m, kg m^2).
+        """
         return self._call("inertial_mass_matrix", (pi,), out)
 
-    def inertial_dynamics(self, x, U, pi, g, c, out=None):
-        """x_dot (12,) of the rigid body with inertial parameters pi (10,), physically
-        consistent; gravity g (m/s^2, a number or (1,)), drag c (6,). Equals
-        dynamics(x, U, p) for (pi, g, c) = quadcog.inertial.inertial_arguments(p)."""
+    def inertial_dynamics(self, x: ArrayLike, U: ArrayLike, pi: ArrayLike, g: float | ArrayLike,
+                          c: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The state derivative of the rigid body with inertial parameters ``pi``.
+
+        Parameters
+        ----------
+        x : array_like, shape (12,)
+            State.
+        U : array_like, shape (4,)
+            Thrust (N) and body moments about O (N m).
+        pi : array_like, shape (10,)
+            Inertial parameters about O (kg, kg m, kg m^2), physically consistent (else
+            PhysicalConsistencyError).
+        g : float or array_like, shape (1,)
+            Gravitational acceleration (m/s^2), > 0.
+        c : array_like, shape (6,)
+            Drag coefficients [c_x, c_y, c_z] (N s/m), [c_phi, c_theta, c_psi] (N m s/rad),
+            >= 0.
+        out : numpy.ndarray, shape (12,), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (12,)
+            x_dot; equals ``dynamics(x, U, p)`` for ``(pi, g, c) =
+            quadcog.inertial.inertial_arguments(p)``.
+        """
         g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
         return self._call("inertial_dynamics", (x, U, pi, g, c), out)
 

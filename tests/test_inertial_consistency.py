@@ -152,8 +152,8 @@ def test_combine_is_the_parallel_axis_theorem():
         np.testing.assert_allclose(inertia_about_cog(pi),
                                    sum(I + shift(mi, ri - r_c) for I, mi, ri in zip(own, ms, rs)),
                                    rtol=1e-10, atol=1e-15)
-        np.testing.assert_allclose(parallel_axis(own[0], ms[0], rs[0]), own[0] + shift(ms[0], rs[0]),
-                                   rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(parallel_axis(own[0], ms[0], rs[0]),
+                                   own[0] + shift(ms[0], rs[0]), rtol=1e-12, atol=1e-15)
 
 
 def test_box_is_a_grid_of_point_masses():
