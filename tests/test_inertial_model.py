@@ -110,3 +110,16 @@ def test_Y_is_the_jacobian_in_pi(model, points):
             fd[:, j] = (_lhs(model, x, U, v, pi + e, g, c)
                         - _lhs(model, x, U, v, pi - e, g, c)) / (2 * step[j])
         assert_close(fd, Y, 1e-8, "central differences vs Y", k)
+
+
+def test_truth_model_flies_the_same_body(model, points):
+    """truth_dynamics (full I_O through p and I_products, no wrench) of the body pi is
+    inertial_dynamics: the same rigid body, reached once through r_G and once through h."""
+    rng = np.random.default_rng(11)
+    for k, (x, U, p, _) in enumerate(points[:40]):
+        pi, g, c = _random_pi(rng), p[IDX["g"]], p[IDX["c_x"]:IDX["c_psi"] + 1]
+        m, h = pi[0], pi[1:4]
+        Ixx, Ixy, Iyy, Ixz, Iyz, Izz = pi[4:]
+        p_truth = np.array([m, g, Ixx, Iyy, Izz, *c, *(h / m)])
+        assert_close(model.truth_dynamics(x, U, p_truth, [Ixy, Ixz, Iyz], np.zeros(6)),
+                     model.inertial_dynamics(x, U, pi, g, c), 1e-11, "truth vs inertial", k)
