@@ -382,7 +382,8 @@ def check_physically_consistent(pi: ArrayLike, where: str = "pi") -> np.ndarray:
     if not principal[0] > 0:
         raise PhysicalConsistencyError(
             f"{head}: the inertia about the CoG has a principal inertia {principal[0]:.6g} "
-            f"kg m^2 <= 0 (principal inertias {_g(principal)} kg m^2)")
+            f"kg m^2 <= 0 (principal inertias {_g(principal)} kg m^2; a point mass or a rod "
+            f"alone has zero ones: combine it with a body of positive volume)")
     a, b, c = principal
     if not c < a + b:
         raise PhysicalConsistencyError(
