@@ -29,6 +29,15 @@ def _as_vector(name, value, n):
     return vector(value, name, n)
 
 
+def _key(value):
+    """The bytes of ``value`` as floats, or None when it is not numbers (a string, a ragged
+    list): the check that follows then says what is wrong, as a typed error."""
+    try:
+        return np.asarray(value, dtype=float).tobytes()
+    except (TypeError, ValueError):
+        return None
+
+
 class Model:
     """The derived model: one method per generated function.
 
@@ -114,17 +123,13 @@ class Model:
         return Linearization(*results) if name == "linearization" else tuple(results)
 
     def _check_p(self, p):
-        p = np.asarray(p, dtype=float)
-        key = p.tobytes()
-        if key != self._last_p:       # admissibility once per distinct p, not per call
+        key = _key(p)
+        if key is None or key != self._last_p:   # admissibility once per distinct p
             check_parameters(p)
             self._last_p = key
 
     def _check_pi(self, pi):
-        try:
-            key = np.asarray(pi, dtype=float).tobytes()
-        except (TypeError, ValueError):
-            key = None                  # check_physically_consistent says what is wrong
+        key = _key(pi)
         if key is None or key != self._last_pi:    # consistency once per distinct pi
             check_physically_consistent(pi, "pi")
             self._last_pi = key

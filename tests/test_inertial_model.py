@@ -123,3 +123,14 @@ def test_truth_model_flies_the_same_body(model, points):
         p_truth = np.array([m, g, Ixx, Iyy, Izz, *c, *(h / m)])
         assert_close(model.truth_dynamics(x, U, p_truth, [Ixy, Ixz, Iyz], np.zeros(6)),
                      model.inertial_dynamics(x, U, pi, g, c), 1e-11, "truth vs inertial", k)
+
+
+def test_bad_p_and_pi_are_typed_errors(model):
+    """A string or a ragged list as p or pi: quadcog's InputError naming the argument, not
+    numpy's ValueError from converting it."""
+    x, U = np.zeros(12), np.zeros(4)
+    for bad in ("abc", [1.0, "a"] + [1.0] * 12, [[1.0, 2.0], [3.0]]):
+        with pytest.raises(quadcog.InputError, match=r"^p\b"):
+            model.dynamics(x, U, bad)
+        with pytest.raises(quadcog.InputError, match=r"^pi\b"):
+            model.inertial_mass_matrix(bad)
