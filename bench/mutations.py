@@ -47,7 +47,8 @@ DEFAULT_TESTS = [
     "tests/test_physics.py", "tests/test_vehicle.py", "tests/test_identities.py",
     "tests/test_independent_mechanics.py", "tests/test_hover.py", "tests/test_kinematics.py",
     "tests/test_regressor.py", "tests/test_lie.py", "tests/test_bad_input.py",
-    "tests/test_simulate.py", "tests/test_controllers.py",
+    "tests/test_simulate.py", "tests/test_controllers.py", "tests/test_inertial_pinocchio.py",
+    "tests/test_inertial_model.py", "tests/test_inertial_consistency.py",
 ]
 
 
@@ -74,16 +75,20 @@ MUTATIONS = [
              "return p_eff, -m * ca.vertcat(x * y, x * z, y * z)",
              "return p_eff, m * ca.vertcat(x * y, x * z, y * z)",
              "sign of the products of inertia of the truth model's parallel-axis I_O"),
-    Mutation("products_of_inertia_derive", "derive/model.py",
-             "I_O = sp.Matrix([[sym.Ixx, Ixy, Ixz], [Ixy, sym.Iyy, Iyz], [Ixz, Iyz, sym.Izz]])",
-             "I_O = sp.Matrix([[sym.Ixx, -Ixy, -Ixz], [-Ixy, sym.Iyy, -Iyz], "
-             "[-Ixz, -Iyz, sym.Izz]])",
-             "sign of the products of inertia in the derived truth model (tensor vs. product "
-             "convention)"),
+    Mutation("products_of_inertia_derive", "derive/symbols.py",
+             "I_O_full = sp.Matrix([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])",
+             "I_O_full = sp.Matrix([[Ixx, -Ixy, -Ixz], [-Ixy, Iyy, -Iyz], [-Ixz, -Iyz, Izz]])",
+             "sign of the products of inertia in the derived truth model and the model in pi "
+             "(tensor vs. product convention)"),
     Mutation("products_of_inertia_admissibility", "quadcog/model/parameters.py",
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) + np.outer(r, r)))",
              "sign of the products r r^T in the admissibility check's I_G"),
+    Mutation("pseudo_inertia_trace", "quadcog/model/inertial.py",
+             "J[:3, :3] = 0.5 * np.trace(I) * np.eye(3) - I",
+             "J[:3, :3] = np.trace(I) * np.eye(3) - I",
+             "the pseudo-inertia built with tr(I_O) instead of tr(I_O) / 2 (I_O in place of "
+             "the second moment Sigma)"),
     Mutation("mixer_yaw_sign", "quadcog/vehicles/vehicle.py",
              "self.moment_constant * np.asarray(self.rotor_directions, float)])",
              "-self.moment_constant * np.asarray(self.rotor_directions, float)])",

@@ -5,6 +5,8 @@ into generated/manifest.json (with the output shapes), and the runtime reads it 
 (``quadcog.model.conventions``); nothing else spells it out."""
 from dataclasses import dataclass
 
+import sympy as sp
+
 from derive import symbols as sym
 
 # argument name -> (entry names, SymPy symbols), in order.
@@ -16,6 +18,13 @@ VECTORS = {
     "vartheta": (tuple(f"vartheta{k}" for k in range(1, 7)), sym.vartheta),
     "I_products": (("Ixy", "Ixz", "Iyz"), sym.I_products),
     "wrench": (("F_x", "F_y", "F_z", "M_x", "M_y", "M_z"), sym.wrench),
+    # The model in the ten inertial parameters (docs/model.md sec. 7): pi about O, and what
+    # p holds besides (gravity, drag), so that m, r_G and I_O are given once, by pi.
+    "nu_dot": (("udot", "vdot", "wdot", "pdot", "qdot", "rdot"), sym.NU_DOT),
+    "pi": (("m", "mx_G", "my_G", "mz_G", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz"),
+           sym.inertial),
+    "g": (("g",), sp.Matrix([sym.g])),
+    "c": (("c_x", "c_y", "c_z", "c_phi", "c_theta", "c_psi"), sym.drag),
 }
 # The outputs y = h(x) of the feedback linearization: state entries, by name.
 OUTPUT_NAMES = ("z", "phi", "theta", "psi")
@@ -66,6 +75,18 @@ FUNCTIONS = (
                  "x_dot with I_O = [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] and an "
                  "external wrench (truth model: parallel-axis I_O, disturbances)",
                  lambda d: d.I_G_inv_general),
+    FunctionSpec("inertial_regressor", ("x", "nu_dot", "g"), (("Y", lambda d: d.inertial.Y),),
+                 "Y = d/dpi [M nu_dot + C nu + g_G], 6x10: Y pi = M nu_dot + C nu + g_G for "
+                 "pi = [m, m r_G, Ixx, Ixy, Iyy, Ixz, Iyz, Izz] about O",
+                 lambda d: {}),
+    FunctionSpec("inertial_mass_matrix", ("pi",), (("M", lambda d: d.inertial.body.M),),
+                 "M of the rigid body with inertial parameters pi, 6x6",
+                 lambda d: {}),
+    FunctionSpec("inertial_dynamics", ("x", "U", "pi", "g", "c"),
+                 (("xdot", lambda d: d.inertial.xdot),),
+                 "x_dot of the rigid body with inertial parameters pi about O, gravity g and "
+                 "drag c; equals dynamics(x, U, p) at pi = [m, m r_G, Ixx, 0, Iyy, 0, 0, Izz]",
+                 lambda d: d.inertial.I_G_inv),
 )
 
 

@@ -12,15 +12,14 @@ C_BASENAME = "quadcog_gen"
 
 
 def build_function(spec, model):
-    """One CasADi Function from its spec; I_G^{-1} placeholders become SX of p."""
+    """One CasADi Function from its spec; I_G^{-1} placeholders become SX of p (or pi)."""
     args = {name: ca.SX.sym(name, len(VECTORS[name][1])) for name in spec.inputs}
     tr = Translator({})
     for name in spec.inputs:
         for k, s in enumerate(VECTORS[name][1]):
             tr.bind(s, args[name][k])
-    if "p" in args:
-        for placeholder, definition in spec.placeholders(model).items():
-            tr.bind(placeholder, tr.expr(definition, f"{spec.name} (I_G^-1)"))
+    for placeholder, definition in spec.placeholders(model).items():
+        tr.bind(placeholder, tr.expr(definition, f"{spec.name} (I_G^-1)"))
     outs = [ca.densify(tr.matrix(getter(model), spec.name)) for _, getter in spec.outputs]
     outs = ca.cse(outs)   # CasADi's CSE finds what the SymPy memo misses (10-20 % fewer ops)
     return ca.Function(spec.name, [args[n] for n in spec.inputs], outs,

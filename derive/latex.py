@@ -410,6 +410,9 @@ _FUNCTION_TEXT = {
     "drift": r"$b = L_f^2 h$",
     "linearization": r"$\partial\dot x/\partial x$, $\partial\dot x/\partial U$",
     "truth_dynamics": r"$\dot x$ of the truth model",
+    "inertial_regressor": r"$Y$: $Y\pi = M\dot\nu + C\nu + g_G$",
+    "inertial_mass_matrix": r"$M$ of the body $\pi$",
+    "inertial_dynamics": r"$\dot x$ of the body $\pi$",
 }
 
 
@@ -485,6 +488,35 @@ def _hover(model):
                 dg_deta=_tex(dg[:, 3:5].T))
 
 
+def _inertial(model):
+    """Y in its blocks [[a_O, Y_h, 0], [0, -S(a_O), Y_I]] (each block checked here), and the
+    inertia about the CoG in pi."""
+    Y = model.inertial.Y
+    a_O = Y[:3, 0]
+    if Y[3:, 0] != sp.zeros(3, 1) or Y[:3, 4:] != sp.zeros(3, 6):
+        raise AssertionError("Y is not block triangular: m in the moments or I_O in the forces")
+    if (Y[3:, 1:4] + sym.skew(a_O)).applyfunc(sp.expand) != sp.zeros(3, 3):
+        raise AssertionError("the h columns of the moment rows of Y are not -S(a_O)")
+    return dict(
+        pi=_vec(sym.inertial), h=_vec(sym.h), paper_pi=_vec(model.inertial.paper_pi),
+        Y_a=_tex(a_O), Y_hf=_tex(Y[:3, 1:4]), Y_I=_tex(Y[3:, 4:]),
+        I_G_pi=_inertia_about_cog_in_pi(model.inertial.body),
+    )
+
+
+def _inertia_about_cog_in_pi(body):
+    """I_G = I_O - (|h|^2 I - h h^T) / m, checked against the body's, printed as m I_G."""
+    h = sym.h
+    expected = sym.I_O_full - ((h.T * h)[0] * sp.eye(3) - h * h.T) / sym.m
+    if (body.I_G - expected).applyfunc(sp.expand) != sp.zeros(3, 3):
+        raise AssertionError("I_G in pi is not I_O - (|h|^2 I - h h^T) / m")
+    mI_G = (sym.m * body.I_G).applyfunc(sp.expand)
+    formula = r"I_G = I_O - \frac{1}{m}\left(\lVert h\rVert^2 I - h h^T\right)"
+    if _fits(formula + " = \\frac{1}{m}", mI_G):
+        return f"\\begin{{align*}}\n{formula} = \\frac{{1}}{{m}}{_tex(mI_G)}.\n\\end{{align*}}"
+    return f"\\begin{{align*}}\n{formula}.\n\\end{{align*}}"
+
+
 def render(model):
     """The report text (header included)."""
     body, out = model.body, model.outputs
@@ -507,6 +539,6 @@ def render(model):
         alpha=_display(entries[:16]),
         b=_display(entries[16:]),
         n_kappa=str(len(definitions)),
-        **_zero_dynamics(model), **_hover(model), **_comparison(model),
+        **_zero_dynamics(model), **_hover(model), **_comparison(model), **_inertial(model),
     )
     return tex_header() + _TexTemplate(TEMPLATE.read_text()).substitute(fields)

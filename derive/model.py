@@ -5,15 +5,11 @@ import time
 import sympy as sp
 
 from derive import symbols as sym
+from derive.inertial import InertialModel, inertial_model
 from derive.kinematics import kinematics
 from derive.lie import OutputDerivatives, output_derivatives
 from derive.linearization import linearization
-from derive.newton_euler import (
-    RigidBody,
-    inverse_inertia_definition,
-    rigid_body,
-    solve_accelerations,
-)
+from derive.newton_euler import RigidBody, inverse_inertia_definition, rigid_body, solve_accelerations
 from derive.regressor import regressor
 from derive.vector_field import dynamics, vector_field
 
@@ -37,6 +33,7 @@ class DerivedModel:
     M_inv: sp.Matrix                       # 6x6 inverse mass matrix by block elimination
     xdot_general: sp.Matrix                # truth model: products of inertia, external wrench
     I_G_inv_general: dict                  # placeholders for that model
+    inertial: InertialModel                # the model linear in the ten inertial parameters
     timings: dict = field(default_factory=dict)
 
     def substituted(self, expr):
@@ -61,13 +58,15 @@ def derive_model(log=None):
     placeholders = _placeholders(body)
     f, G = stage("vector field", vector_field, R, Q, body)
     xdot = dynamics(f, G)
-    general = stage("truth model (full I_O)", _general_inertia_dynamics, R, Q)
+    general_body, *general = stage("truth model (full I_O)", _general_inertia_dynamics, R, Q)
     Phi = stage("regressor", regressor, body)
+    inertial = stage("inertial parameters", inertial_model, R, Q, general_body, body, Phi,
+                     xdot, _placeholders)
     outputs = stage("lie derivatives", output_derivatives, f, G, placeholders)
     A, B = stage("linearization", linearization, xdot)
     M_inv = solve_accelerations(body, sp.eye(6))
     return DerivedModel(R, Q, J, body, f, G, xdot, Phi, outputs, A, B, placeholders, M_inv,
-                        *general, timings)
+                        *general, inertial, timings)
 
 
 def _placeholders(body):
@@ -79,11 +78,10 @@ def _placeholders(body):
 
 def _general_inertia_dynamics(R, Q):
     """The truth model: the same derivation with a full symmetric I_O (diagonal from p,
-    products extra) and an external wrench [F (ground axes, at O); M (body axes)]."""
-    Ixy, Ixz, Iyz = sym.I_products
-    I_O = sp.Matrix([[sym.Ixx, Ixy, Ixz], [Ixy, sym.Iyy, Iyz], [Ixz, Iyz, sym.Izz]])
-    body = rigid_body(R, I_O)
+    products extra) and an external wrench [F (ground axes, at O); M (body axes)]; returns
+    (the rigid body, x_dot, its I_G^{-1} placeholders)."""
+    body = rigid_body(R, sym.I_O_full)
     f, G = vector_field(R, Q, body)
     tau_ext = sp.Matrix.vstack(R.T * sym.wrench[:3, :], sym.wrench[3:, :])
     f_ext = sp.Matrix.vstack(sp.zeros(6, 1), solve_accelerations(body, tau_ext))
-    return dynamics(f, G) + f_ext, _placeholders(body)
+    return body, dynamics(f, G) + f_ext, _placeholders(body)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from derive.symbols import (
+    NU_DOT,
     I_G_inv,
     Ixx,
     Iyy,
@@ -28,8 +29,6 @@ from derive.symbols import (
     r_G,
     skew,
 )
-
-NU_DOT = sp.Matrix(sp.symbols("udot vdot wdot pdot qdot rdot", real=True))
 
 
 @dataclass(frozen=True)

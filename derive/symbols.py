@@ -30,12 +30,26 @@ params = sp.Matrix([m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x
 # sec. 5); the controller's model keeps I_O diagonal.
 Ixy, Ixz, Iyz = sp.symbols("I_xy I_xz I_yz", real=True)
 I_products = sp.Matrix([Ixy, Ixz, Iyz])
+# The full symmetric inertia about O (entries of the matrix, not negated products).
+I_O_full = sp.Matrix([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
+
+# The ten inertial parameters of the rigid body about O (docs/model.md sec. 7), in the order
+# of Pinocchio's Inertia.toDynamicParameters: pi = [m, h, Ixx, Ixy, Iyy, Ixz, Iyz, Izz] with
+# the first moment of mass h = m r_G; m and the inertia entries are the symbols above.
+h_x, h_y, h_z = sp.symbols("h_x h_y h_z", real=True)
+h = sp.Matrix([h_x, h_y, h_z])
+inertial = sp.Matrix([m, h_x, h_y, h_z, Ixx, Ixy, Iyy, Ixz, Iyz, Izz])
+drag = sp.Matrix([c_x, c_y, c_z, c_phi, c_theta, c_psi])
 
 # External wrench for the truth model: force at O in ground axes (N), moment in body axes (N m).
 wrench = sp.Matrix(sp.symbols("F_x F_y F_z M_x M_y M_z", real=True))
 
 # Commanded generalized acceleration (argument of the regressor).
 vartheta = sp.Matrix(sp.symbols("vartheta1:7", real=True))
+
+# The generalized acceleration nu_dot (argument of the inertial regressor, and the unknowns
+# of the Newton-Euler equations).
+NU_DOT = sp.Matrix(sp.symbols("udot vdot wdot pdot qdot rdot", real=True))
 
 # Placeholders for the inverse of the inertia about the CoG, I_G^{-1} (symmetric).
 # They depend on parameters only, so derivatives with respect to the state never

@@ -6,33 +6,34 @@
 """
 from quadcog import config
 from quadcog.controllers import (
-                                       AdaptiveFeedbackLinearization,
-                                       CascadePD,
-                                       CompositeAdaptive,
-                                       Controller,
-                                       FeedbackLinearization,
-                                       FeedbackLinearizationIntegral,
-                                       make_controller,
+    AdaptiveFeedbackLinearization,
+    CascadePD,
+    CompositeAdaptive,
+    Controller,
+    FeedbackLinearization,
+    FeedbackLinearizationIntegral,
+    make_controller,
 )
 from quadcog.errors import (
-                                       CompileError,
-                                       EulerSingularityError,
-                                       GeneratedFilesError,
-                                       InputError,
-                                       ParameterError,
-                                       QuadcogError,
-                                       QuadcogWarning,
+    CompileError,
+    EulerSingularityError,
+    GeneratedFilesError,
+    InputError,
+    ParameterError,
+    PhysicalConsistencyError,
+    QuadcogError,
+    QuadcogWarning,
 )
 from quadcog.model.conventions import (
-                                       B_U,
-                                       FUNCTIONS,
-                                       INPUT_NAMES,
-                                       OUTPUT_NAMES,
-                                       OUTPUT_ROWS,
-                                       PARAM_NAMES,
-                                       STATE_NAMES,
-                                       hover_trim,
-                                       rotation_matrix,
+    B_U,
+    FUNCTIONS,
+    INPUT_NAMES,
+    OUTPUT_NAMES,
+    OUTPUT_ROWS,
+    PARAM_NAMES,
+    STATE_NAMES,
+    hover_trim,
+    rotation_matrix,
 )
 from quadcog.model.functions import Linearization, Model, load
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
@@ -46,14 +47,7 @@ from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
 from quadcog.sweeps import sweep
 from quadcog.trajectories.analytic import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
-from quadcog.vehicles.vehicle import (
-                                       CRAZYFLIE,
-                                       HUMMINGBIRD,
-                                       Vehicle,
-                                       default_parameters,
-                                       plus_layout,
-                                       x_layout,
-)
+from quadcog.vehicles.vehicle import CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters, plus_layout, x_layout
 
 __version__ = "0.1.0"
 
@@ -61,7 +55,8 @@ __all__ = [
     "config", "scenario_names", "scenario_path", "shipped_scenarios", "B_U", "FUNCTIONS",
     "INPUT_NAMES", "OUTPUT_NAMES", "OUTPUT_ROWS", "PARAM_NAMES", "STATE_NAMES", "hover_trim",
     "rotation_matrix", "CompileError", "EulerSingularityError", "GeneratedFilesError",
-    "InputError", "ParameterError", "QuadcogError", "QuadcogWarning", "Linearization", "Model",
+    "InputError", "ParameterError", "PhysicalConsistencyError", "QuadcogError", "QuadcogWarning",
+    "Linearization", "Model",
     "load", "check_parameters", "inertia_about_cog", "with_cog", "CRAZYFLIE", "HUMMINGBIRD",
     "Vehicle", "default_parameters", "plus_layout", "x_layout", "AdaptiveFeedbackLinearization",
     "CascadePD", "CompositeAdaptive", "Controller", "FeedbackLinearization",

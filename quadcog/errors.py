@@ -56,3 +56,9 @@ class KernelError(QuadcogError):
 
 class SweepError(InputError):
     """A sweep file is malformed: the message names the file, the key and what was expected."""
+
+
+class PhysicalConsistencyError(ParameterError):
+    """Ten inertial parameters pi that no rigid body has: the pseudo-inertia matrix is not
+    positive definite (m <= 0, or the principal inertias about the CoG are not positive or
+    break the triangle inequality; docs/model.md sec. 7.2)."""

@@ -14,6 +14,7 @@ import numpy as np
 
 import quadcog
 from quadcog.model.conventions import B_U, FUNCTIONS, IDX, OUTPUT_ROWS, hover_trim, rotation_matrix
+from quadcog.model.inertial import box, inertial_arguments
 from quadcog.model.sampling import random_points
 
 SEED = 20110828
@@ -169,6 +170,26 @@ def _truth_axioms(c, pt):
     return max(first, second)
 
 
+def _phi_from_Y(c, pt):
+    """Phi = m [Y_2, Y_3, Y_4]: with m and I_O held, pi depends on r_G only through m r_G."""
+    x, U, p, v = pt
+    Y = c.model.inertial_regressor(x, v, p[IDX["g"]])
+    return relative_error(p[IDX["m"]] * Y[:, 1:4], c.model.regressor(x, v, p))
+
+
+def _Y_paper(c, pt):
+    x, U, p, v = pt
+    pi, g, _ = inertial_arguments(p)
+    return relative_error(c.model.inertial_regressor(x, v, g) @ pi, _lhs(c.model, x, v, p))
+
+
+def _inertial_special_case(c, pt):
+    """Through the CasADi function: the paper's pi need not be physically consistent."""
+    x, U, p, _ = pt
+    xdot = c.vm["inertial_dynamics"](x, U, *inertial_arguments(p))
+    return relative_error(np.array(xdot).ravel(), c.model.dynamics(x, U, p))
+
+
 def _hover_trim(c, pt):
     x, U, p, _ = pt
     x0 = np.zeros(12)
@@ -196,7 +217,9 @@ def _backends(c, pt):
     """The compiled C against CasADi's virtual machine, every function."""
     x, U, p, v = pt
     inputs = {"x": x, "U": U, "p": p, "vartheta": v, "I_products": 0.1 * p[2:5] * np.sin(x[:3]),
-              "wrench": np.concatenate([v[:3], 0.1 * v[3:]])}
+              "wrench": np.concatenate([v[:3], 0.1 * v[3:]]), "nu_dot": v,
+              "pi": box(p[IDX["m"]], 10 * p[2:5], p[IDX["x_G"]:]),     # consistent
+              "g": p[IDX["g"]:IDX["g"] + 1], "c": p[IDX["c_x"]:IDX["c_psi"] + 1]}
     worst = 0.0
     for name, (spec_in, _) in FUNCTIONS.items():
         args = [inputs[n] for n, _ in spec_in]
@@ -244,6 +267,12 @@ CHECKS = (
     Check("Truth model", r"\code{truth\_dynamics} with no products, no wrench = \code{dynamics}",
           1e-13, _truth_reduces),
     Check("Truth model", r"Euler's axioms, full $I_O$, external wrench", 1e-11, _truth_axioms),
+    Check("Inertial parameters", r"$\Phi = m\,[Y_2, Y_3, Y_4]$ (columns of $m r_G$)", 1e-12,
+          _phi_from_Y),
+    Check("Inertial parameters", r"$Y\pi = M\vartheta + C\nu + g_G$ at $\pi = [m, m r_G, "
+          r"I_{xx}, 0, I_{yy}, 0, 0, I_{zz}]$", 1e-12, _Y_paper),
+    Check("Inertial parameters", r"\code{inertial\_dynamics} at that $\pi$ = \code{dynamics}",
+          1e-11, _inertial_special_case),
     Check("Paper items", r"Hover trim $U^* = [mg, mgy_G, -mgx_G, 0]$ gives $\dot x = 0$ (item 7)",
           1e-12, _hover_trim),
     Check("Paper items", r"Zero dynamics on $y = 0$ with $U^*$ (item 8)", 1e-12, _zero_dynamics),

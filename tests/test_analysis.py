@@ -9,18 +9,10 @@ from quadcog.model.conventions import IDX
 from quadcog.studies.analysis.adaptive_design import design_checks, lyapunov_study
 from quadcog.studies.analysis.analysis_files import jsonable
 from quadcog.studies.analysis.failure_map import failure_map, plot_failure_map, save_failure_map
-from quadcog.studies.analysis.frequency import (
-    channel_loop,
-    channel_margins,
-    gain_range_by_eigenvalues,
-)
+from quadcog.studies.analysis.frequency import channel_loop, channel_margins, gain_range_by_eigenvalues
 from quadcog.studies.analysis.linear import hover_statespace
 from quadcog.studies.analysis.pd_design import pd_design
-from quadcog.studies.analysis.zero_dynamics import (
-    nonlinear_check,
-    rg_sensitivity,
-    zero_dynamics_eigenvalues,
-)
+from quadcog.studies.analysis.zero_dynamics import nonlinear_check, rg_sensitivity, zero_dynamics_eigenvalues
 
 
 @pytest.fixture(scope="module")

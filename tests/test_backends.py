@@ -8,6 +8,7 @@ from derive import symbols as sym
 from derive.contract import FUNCTIONS as SPECS
 from derive.contract import VECTORS
 from quadcog.model.conventions import FUNCTIONS
+from quadcog.model.inertial import box
 
 RTOL = 1e-12
 
@@ -22,8 +23,8 @@ def lambdified(derived):
     out = {}
     for spec in SPECS:
         inputs = [list(VECTORS[name][1]) for name in spec.inputs]
-        definitions = spec.placeholders(derived)
-        gamma_fn = sp.lambdify(inputs, [definitions[s] for s in gammas], "numpy")
+        definitions = spec.placeholders(derived)     # {} for a function without I_G^{-1}
+        gamma_fn = sp.lambdify(inputs, [definitions.get(s, 0) for s in gammas], "numpy")
         fns = [sp.lambdify(inputs + [gammas], getter(derived), "numpy", cse=True)
                for _, getter in spec.outputs]
         names = list(spec.inputs)
@@ -34,8 +35,10 @@ def lambdified(derived):
 def _args(names, x, U, p, v):
     products = 0.1 * p[2:5] * np.sin(x[:3])      # small products of inertia, I_G stays > 0
     wrench = np.concatenate([v[:3], 0.1 * v[3:]])
+    pi = box(p[0], 10 * p[2:5], p[11:14])          # a box of positive volume: consistent
     return [{"x": x, "U": U, "p": p, "vartheta": v, "I_products": products,
-             "wrench": wrench}[n] for n in names]
+             "wrench": wrench, "nu_dot": v, "pi": pi, "g": p[1:2], "c": p[5:11]}[n]
+            for n in names]
 
 
 @pytest.mark.slow

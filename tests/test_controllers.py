@@ -5,13 +5,7 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog import (
-    AdaptiveFeedbackLinearization,
-    CascadePD,
-    CogProfile,
-    FeedbackLinearization,
-    simulate,
-)
+from quadcog import AdaptiveFeedbackLinearization, CascadePD, CogProfile, FeedbackLinearization, simulate
 from quadcog.model.conventions import B_U
 
 

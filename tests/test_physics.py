@@ -7,15 +7,7 @@ from conftest import assert_close
 import numpy as np
 import pytest
 
-from quadcog import (
-    HUMMINGBIRD,
-    Circle,
-    FeedbackLinearization,
-    Figure8,
-    Helix,
-    TruthOptions,
-    simulate,
-)
+from quadcog import HUMMINGBIRD, Circle, FeedbackLinearization, Figure8, Helix, TruthOptions, simulate
 from quadcog.sim.plant import truth_arguments
 
 

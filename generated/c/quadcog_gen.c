@@ -33,6 +33,9 @@ extern "C" {
 #define casadi_f0 CASADI_PREFIX(f0)
 #define casadi_f1 CASADI_PREFIX(f1)
 #define casadi_f10 CASADI_PREFIX(f10)
+#define casadi_f11 CASADI_PREFIX(f11)
+#define casadi_f12 CASADI_PREFIX(f12)
+#define casadi_f13 CASADI_PREFIX(f13)
 #define casadi_f2 CASADI_PREFIX(f2)
 #define casadi_f3 CASADI_PREFIX(f3)
 #define casadi_f4 CASADI_PREFIX(f4)
@@ -43,6 +46,9 @@ extern "C" {
 #define casadi_f9 CASADI_PREFIX(f9)
 #define casadi_s0 CASADI_PREFIX(s0)
 #define casadi_s1 CASADI_PREFIX(s1)
+#define casadi_s10 CASADI_PREFIX(s10)
+#define casadi_s11 CASADI_PREFIX(s11)
+#define casadi_s12 CASADI_PREFIX(s12)
 #define casadi_s2 CASADI_PREFIX(s2)
 #define casadi_s3 CASADI_PREFIX(s3)
 #define casadi_s4 CASADI_PREFIX(s4)
@@ -89,6 +95,9 @@ static const casadi_int casadi_s6[3] = {4, 4, 1};
 static const casadi_int casadi_s7[3] = {12, 12, 1};
 static const casadi_int casadi_s8[3] = {12, 4, 1};
 static const casadi_int casadi_s9[3] = {3, 1, 1};
+static const casadi_int casadi_s10[3] = {1, 1, 1};
+static const casadi_int casadi_s11[3] = {6, 10, 1};
+static const casadi_int casadi_s12[3] = {10, 1, 1};
 
 /* dynamics:(x[12],U[4],p[14])->(xdot[12]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
@@ -4756,6 +4765,1105 @@ CASADI_SYMBOL_EXPORT int truth_dynamics_work(casadi_int *sz_arg, casadi_int* sz_
 }
 
 CASADI_SYMBOL_EXPORT int truth_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* inertial_regressor:(x[12],nu_dot[6],g)->(Y[6x10]) */
+static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=arg[0]? arg[0][10] : 0;
+  a02=arg[0]? arg[0][8] : 0;
+  a03=(a01*a02);
+  a04=(a00+a03);
+  a05=arg[0]? arg[0][11] : 0;
+  a06=arg[0]? arg[0][7] : 0;
+  a07=(a05*a06);
+  a04=(a04-a07);
+  a08=arg[2]? arg[2][0] : 0;
+  a09=arg[0]? arg[0][4] : 0;
+  a10=sin(a09);
+  a10=(a08*a10);
+  a04=(a04-a10);
+  if (res[0]!=0) res[0][0]=a04;
+  a11=arg[1]? arg[1][1] : 0;
+  a12=arg[0]? arg[0][6] : 0;
+  a13=(a05*a12);
+  a14=(a11+a13);
+  a15=arg[0]? arg[0][9] : 0;
+  a02=(a15*a02);
+  a14=(a14-a02);
+  a09=cos(a09);
+  a16=(a08*a09);
+  a17=arg[0]? arg[0][3] : 0;
+  a18=sin(a17);
+  a16=(a16*a18);
+  a14=(a14+a16);
+  if (res[0]!=0) res[0][1]=a14;
+  a18=arg[1]? arg[1][2] : 0;
+  a06=(a15*a06);
+  a19=(a18+a06);
+  a12=(a01*a12);
+  a19=(a19-a12);
+  a17=cos(a17);
+  a08=(a08*a17);
+  a08=(a08*a09);
+  a19=(a19+a08);
+  if (res[0]!=0) res[0][2]=a19;
+  a09=0.;
+  if (res[0]!=0) res[0][3]=a09;
+  if (res[0]!=0) res[0][4]=a09;
+  if (res[0]!=0) res[0][5]=a09;
+  a17=casadi_sq(a01);
+  a20=casadi_sq(a05);
+  a21=(a17+a20);
+  a21=(-a21);
+  if (res[0]!=0) res[0][6]=a21;
+  a21=arg[1]? arg[1][5] : 0;
+  a22=(a15*a01);
+  a23=(a21+a22);
+  if (res[0]!=0) res[0][7]=a23;
+  a24=(a15*a05);
+  a25=arg[1]? arg[1][4] : 0;
+  a26=(a24-a25);
+  if (res[0]!=0) res[0][8]=a26;
+  if (res[0]!=0) res[0][9]=a09;
+  a12=(a12-a18);
+  a12=(a12-a06);
+  a12=(a12-a08);
+  if (res[0]!=0) res[0][10]=a12;
+  if (res[0]!=0) res[0][11]=a14;
+  a14=(a22-a21);
+  if (res[0]!=0) res[0][12]=a14;
+  a15=casadi_sq(a15);
+  a14=(a15+a20);
+  a14=(-a14);
+  if (res[0]!=0) res[0][13]=a14;
+  a14=arg[1]? arg[1][3] : 0;
+  a01=(a01*a05);
+  a05=(a14+a01);
+  if (res[0]!=0) res[0][14]=a05;
+  if (res[0]!=0) res[0][15]=a19;
+  if (res[0]!=0) res[0][16]=a09;
+  a07=(a07-a00);
+  a07=(a07+a10);
+  a07=(a07-a03);
+  if (res[0]!=0) res[0][17]=a07;
+  a07=(a25+a24);
+  if (res[0]!=0) res[0][18]=a07;
+  a03=(a01-a14);
+  if (res[0]!=0) res[0][19]=a03;
+  a03=(a15+a17);
+  a03=(-a03);
+  if (res[0]!=0) res[0][20]=a03;
+  a02=(a02-a11);
+  a02=(a02-a13);
+  a02=(a02-a16);
+  if (res[0]!=0) res[0][21]=a02;
+  if (res[0]!=0) res[0][22]=a04;
+  if (res[0]!=0) res[0][23]=a09;
+  if (res[0]!=0) res[0][24]=a09;
+  if (res[0]!=0) res[0][25]=a09;
+  if (res[0]!=0) res[0][26]=a09;
+  if (res[0]!=0) res[0][27]=a14;
+  if (res[0]!=0) res[0][28]=a24;
+  a04=(-a22);
+  if (res[0]!=0) res[0][29]=a04;
+  if (res[0]!=0) res[0][30]=a09;
+  if (res[0]!=0) res[0][31]=a09;
+  if (res[0]!=0) res[0][32]=a09;
+  a04=(a25-a24);
+  if (res[0]!=0) res[0][33]=a04;
+  if (res[0]!=0) res[0][34]=a05;
+  a05=(a15-a17);
+  if (res[0]!=0) res[0][35]=a05;
+  if (res[0]!=0) res[0][36]=a09;
+  if (res[0]!=0) res[0][37]=a09;
+  if (res[0]!=0) res[0][38]=a09;
+  a05=(-a01);
+  if (res[0]!=0) res[0][39]=a05;
+  if (res[0]!=0) res[0][40]=a25;
+  if (res[0]!=0) res[0][41]=a22;
+  if (res[0]!=0) res[0][42]=a09;
+  if (res[0]!=0) res[0][43]=a09;
+  if (res[0]!=0) res[0][44]=a09;
+  if (res[0]!=0) res[0][45]=a23;
+  a15=(a20-a15);
+  if (res[0]!=0) res[0][46]=a15;
+  a14=(a14-a01);
+  if (res[0]!=0) res[0][47]=a14;
+  if (res[0]!=0) res[0][48]=a09;
+  if (res[0]!=0) res[0][49]=a09;
+  if (res[0]!=0) res[0][50]=a09;
+  a17=(a17-a20);
+  if (res[0]!=0) res[0][51]=a17;
+  a22=(a21-a22);
+  if (res[0]!=0) res[0][52]=a22;
+  if (res[0]!=0) res[0][53]=a07;
+  if (res[0]!=0) res[0][54]=a09;
+  if (res[0]!=0) res[0][55]=a09;
+  if (res[0]!=0) res[0][56]=a09;
+  if (res[0]!=0) res[0][57]=a01;
+  a24=(-a24);
+  if (res[0]!=0) res[0][58]=a24;
+  if (res[0]!=0) res[0][59]=a21;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inertial_regressor(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f11(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int inertial_regressor_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void inertial_regressor_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void inertial_regressor_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void inertial_regressor_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int inertial_regressor_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int inertial_regressor_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real inertial_regressor_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inertial_regressor_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "x";
+    case 1: return "nu_dot";
+    case 2: return "g";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inertial_regressor_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "Y";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inertial_regressor_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s4;
+    case 2: return casadi_s10;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inertial_regressor_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s11;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int inertial_regressor_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inertial_regressor_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* inertial_mass_matrix:(pi[10])->(M[6x6]) */
+static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a0, a1, a2, a3, a4, a5, a6;
+  a0=arg[0]? arg[0][0] : 0;
+  if (res[0]!=0) res[0][0]=a0;
+  a1=0.;
+  if (res[0]!=0) res[0][1]=a1;
+  if (res[0]!=0) res[0][2]=a1;
+  if (res[0]!=0) res[0][3]=a1;
+  a2=arg[0]? arg[0][3] : 0;
+  if (res[0]!=0) res[0][4]=a2;
+  a3=arg[0]? arg[0][2] : 0;
+  a4=(-a3);
+  if (res[0]!=0) res[0][5]=a4;
+  if (res[0]!=0) res[0][6]=a1;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a1;
+  a5=(-a2);
+  if (res[0]!=0) res[0][9]=a5;
+  if (res[0]!=0) res[0][10]=a1;
+  a6=arg[0]? arg[0][1] : 0;
+  if (res[0]!=0) res[0][11]=a6;
+  if (res[0]!=0) res[0][12]=a1;
+  if (res[0]!=0) res[0][13]=a1;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a3;
+  a0=(-a6);
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a1;
+  if (res[0]!=0) res[0][18]=a1;
+  if (res[0]!=0) res[0][19]=a5;
+  if (res[0]!=0) res[0][20]=a3;
+  a3=arg[0]? arg[0][4] : 0;
+  if (res[0]!=0) res[0][21]=a3;
+  a3=arg[0]? arg[0][5] : 0;
+  if (res[0]!=0) res[0][22]=a3;
+  a5=arg[0]? arg[0][7] : 0;
+  if (res[0]!=0) res[0][23]=a5;
+  if (res[0]!=0) res[0][24]=a2;
+  if (res[0]!=0) res[0][25]=a1;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a3;
+  a3=arg[0]? arg[0][6] : 0;
+  if (res[0]!=0) res[0][28]=a3;
+  a3=arg[0]? arg[0][8] : 0;
+  if (res[0]!=0) res[0][29]=a3;
+  if (res[0]!=0) res[0][30]=a4;
+  if (res[0]!=0) res[0][31]=a6;
+  if (res[0]!=0) res[0][32]=a1;
+  if (res[0]!=0) res[0][33]=a5;
+  if (res[0]!=0) res[0][34]=a3;
+  a3=arg[0]? arg[0][9] : 0;
+  if (res[0]!=0) res[0][35]=a3;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inertial_mass_matrix(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f12(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int inertial_mass_matrix_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void inertial_mass_matrix_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void inertial_mass_matrix_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void inertial_mass_matrix_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int inertial_mass_matrix_n_in(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_int inertial_mass_matrix_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real inertial_mass_matrix_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inertial_mass_matrix_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "pi";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inertial_mass_matrix_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "M";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inertial_mass_matrix_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s12;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inertial_mass_matrix_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s3;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int inertial_mass_matrix_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inertial_mass_matrix_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* inertial_dynamics:(x[12],U[4],pi[10],g,c[6])->(xdot[12]) */
+static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70;
+  a00=arg[0]? arg[0][7] : 0;
+  a01=arg[0]? arg[0][5] : 0;
+  a02=cos(a01);
+  a03=arg[0]? arg[0][3] : 0;
+  a04=sin(a03);
+  a05=(a02*a04);
+  a06=arg[0]? arg[0][4] : 0;
+  a07=sin(a06);
+  a08=(a05*a07);
+  a03=cos(a03);
+  a01=sin(a01);
+  a09=(a03*a01);
+  a08=(a08-a09);
+  a08=(a00*a08);
+  a10=arg[0]? arg[0][8] : 0;
+  a11=(a04*a01);
+  a12=(a03*a02);
+  a13=(a12*a07);
+  a13=(a11+a13);
+  a13=(a10*a13);
+  a08=(a08+a13);
+  a13=arg[0]? arg[0][6] : 0;
+  a02=(a13*a02);
+  a14=cos(a06);
+  a02=(a02*a14);
+  a08=(a08+a02);
+  if (res[0]!=0) res[0][0]=a08;
+  a11=(a11*a07);
+  a12=(a12+a11);
+  a12=(a00*a12);
+  a09=(a09*a07);
+  a09=(a09-a05);
+  a09=(a10*a09);
+  a12=(a12+a09);
+  a09=(a13*a14);
+  a09=(a09*a01);
+  a12=(a12+a09);
+  if (res[0]!=0) res[0][1]=a12;
+  a12=(a00*a14);
+  a12=(a12*a04);
+  a09=(a13*a07);
+  a12=(a12-a09);
+  a09=(a10*a03);
+  a09=(a09*a14);
+  a12=(a12+a09);
+  if (res[0]!=0) res[0][2]=a12;
+  a12=arg[0]? arg[0][9] : 0;
+  a09=arg[0]? arg[0][10] : 0;
+  a01=(a09*a04);
+  a06=tan(a06);
+  a01=(a01*a06);
+  a01=(a12+a01);
+  a05=arg[0]? arg[0][11] : 0;
+  a11=(a05*a03);
+  a11=(a11*a06);
+  a01=(a01+a11);
+  if (res[0]!=0) res[0][3]=a01;
+  a01=(a09*a03);
+  a11=(a05*a04);
+  a01=(a01-a11);
+  if (res[0]!=0) res[0][4]=a01;
+  a01=(a09/a14);
+  a01=(a01*a04);
+  a11=(a05/a14);
+  a11=(a11*a03);
+  a01=(a01+a11);
+  if (res[0]!=0) res[0][5]=a01;
+  a01=arg[3]? arg[3][0] : 0;
+  a11=arg[2]? arg[2][0] : 0;
+  a06=(a01*a11);
+  a08=(a06*a07);
+  a02=arg[2]? arg[2][2] : 0;
+  a15=(a02*a12);
+  a16=(a10*a11);
+  a17=(a15+a16);
+  a18=arg[2]? arg[2][1] : 0;
+  a19=(a18*a09);
+  a17=(a17-a19);
+  a20=(a09*a17);
+  a21=arg[2]? arg[2][3] : 0;
+  a22=(a21*a12);
+  a23=(a18*a05);
+  a24=(a22-a23);
+  a25=(a00*a11);
+  a24=(a24-a25);
+  a26=(a05*a24);
+  a20=(a20+a26);
+  a26=arg[4]? arg[4][0] : 0;
+  a26=(a13*a26);
+  a20=(a20+a26);
+  a08=(a08-a20);
+  a20=(a08/a11);
+  a26=casadi_sq(a02);
+  a27=casadi_sq(a26);
+  a28=casadi_sq(a18);
+  a29=(a28*a26);
+  a30=(a27+a29);
+  a31=casadi_sq(a21);
+  a32=(a26*a31);
+  a30=(a30+a32);
+  a33=arg[2]? arg[2][7] : 0;
+  a34=casadi_sq(a33);
+  a35=casadi_sq(a11);
+  a36=(a34*a35);
+  a30=(a30-a36);
+  a36=arg[2]? arg[2][4] : 0;
+  a37=arg[2]? arg[2][9] : 0;
+  a38=(a36*a37);
+  a39=(a38*a35);
+  a30=(a30+a39);
+  a39=(a36*a11);
+  a40=(a39*a28);
+  a30=(a30-a40);
+  a41=(a39*a26);
+  a30=(a30-a41);
+  a41=(a37*a11);
+  a42=(a41*a26);
+  a30=(a30-a42);
+  a42=(a41*a31);
+  a30=(a30-a42);
+  a43=-2.;
+  a44=(a43*a33);
+  a44=(a44*a18);
+  a44=(a44*a21);
+  a45=(a44*a11);
+  a30=(a30+a45);
+  a45=casadi_sq(a28);
+  a46=(a36*a45);
+  a47=arg[2]? arg[2][6] : 0;
+  a27=(a47*a27);
+  a46=(a46+a27);
+  a27=casadi_sq(a31);
+  a48=(a37*a27);
+  a46=(a46+a48);
+  a48=(a36*a28);
+  a49=(a48*a26);
+  a46=(a46+a49);
+  a48=(a48*a31);
+  a46=(a46+a48);
+  a48=(a47*a28);
+  a48=(a48*a26);
+  a46=(a46+a48);
+  a48=(a47*a26);
+  a48=(a48*a31);
+  a46=(a46+a48);
+  a48=(a37*a28);
+  a48=(a48*a31);
+  a46=(a46+a48);
+  a48=(a37*a26);
+  a48=(a48*a31);
+  a46=(a46+a48);
+  a48=arg[2]? arg[2][5] : 0;
+  a49=casadi_sq(a48);
+  a50=(a11*a49);
+  a51=(a50*a28);
+  a46=(a46+a51);
+  a50=(a50*a26);
+  a46=(a46+a50);
+  a50=(a11*a34);
+  a51=(a50*a28);
+  a46=(a46+a51);
+  a50=(a50*a31);
+  a46=(a46+a50);
+  a50=arg[2]? arg[2][8] : 0;
+  a51=casadi_sq(a50);
+  a52=(a11*a51);
+  a53=(a52*a26);
+  a46=(a46+a53);
+  a52=(a52*a31);
+  a46=(a46+a52);
+  a52=(a36*a51);
+  a52=(a52*a35);
+  a46=(a46-a52);
+  a34=(a47*a34);
+  a34=(a34*a35);
+  a46=(a46-a34);
+  a34=(a37*a49);
+  a34=(a34*a35);
+  a46=(a46-a34);
+  a34=(2.*a48);
+  a52=(a34*a18);
+  a53=(a02*a26);
+  a54=(a52*a53);
+  a46=(a46+a54);
+  a54=(a34*a02);
+  a55=(a18*a28);
+  a54=(a54*a55);
+  a46=(a46+a54);
+  a54=(2.*a33);
+  a56=(a54*a18);
+  a57=(a21*a31);
+  a58=(a56*a57);
+  a46=(a46+a58);
+  a58=(a54*a21);
+  a58=(a58*a55);
+  a46=(a46+a58);
+  a58=(2.*a50);
+  a59=(a58*a02);
+  a60=(a59*a57);
+  a46=(a46+a60);
+  a58=(a58*a21);
+  a58=(a58*a53);
+  a46=(a46+a58);
+  a58=(a36*a47);
+  a60=(a58*a37);
+  a60=(a60*a35);
+  a46=(a46+a60);
+  a60=(a58*a11);
+  a61=(a60*a28);
+  a46=(a46-a61);
+  a60=(a60*a26);
+  a46=(a46-a60);
+  a38=(a38*a11);
+  a60=(a38*a28);
+  a46=(a46-a60);
+  a38=(a38*a31);
+  a46=(a46-a38);
+  a38=(a47*a37);
+  a60=(a38*a11);
+  a61=(a60*a26);
+  a46=(a46-a61);
+  a60=(a60*a31);
+  a46=(a46-a60);
+  a60=(a34*a33);
+  a61=(a60*a50);
+  a61=(a61*a35);
+  a46=(a46+a61);
+  a52=(a52*a02);
+  a52=(a52*a31);
+  a46=(a46+a52);
+  a56=(a56*a21);
+  a56=(a56*a26);
+  a46=(a46+a56);
+  a59=(a59*a21);
+  a59=(a59*a28);
+  a46=(a46+a59);
+  a59=(a43*a48);
+  a59=(a59*a18);
+  a59=(a59*a02);
+  a56=(a59*a37);
+  a56=(a56*a11);
+  a46=(a46+a56);
+  a44=(a44*a47);
+  a44=(a44*a11);
+  a46=(a46+a44);
+  a43=(a43*a50);
+  a43=(a43*a02);
+  a43=(a43*a21);
+  a44=(a43*a36);
+  a44=(a44*a11);
+  a46=(a46+a44);
+  a60=(a60*a02);
+  a60=(a60*a21);
+  a60=(a60*a11);
+  a46=(a46+a60);
+  a34=(a34*a50);
+  a34=(a34*a18);
+  a34=(a34*a21);
+  a34=(a34*a11);
+  a46=(a46+a34);
+  a54=(a54*a50);
+  a54=(a54*a18);
+  a54=(a54*a02);
+  a54=(a54*a11);
+  a46=(a46+a54);
+  a30=(a30/a46);
+  a54=(a21*a01);
+  a34=(a54*a07);
+  a60=(a02*a13);
+  a44=(a33*a12);
+  a56=(a60-a44);
+  a52=(a50*a09);
+  a56=(a56-a52);
+  a61=(a18*a00);
+  a56=(a56-a61);
+  a62=(a05*a37);
+  a56=(a56-a62);
+  a56=(a12*a56);
+  a63=arg[4]? arg[4][4] : 0;
+  a63=(a09*a63);
+  a56=(a56+a63);
+  a63=(a48*a09);
+  a64=(a33*a05);
+  a65=(a63+a64);
+  a66=(a02*a10);
+  a65=(a65+a66);
+  a67=(a12*a36);
+  a65=(a65+a67);
+  a68=(a21*a00);
+  a65=(a65-a68);
+  a65=(a05*a65);
+  a56=(a56+a65);
+  a19=(a19-a15);
+  a19=(a19-a16);
+  a16=(a13*a19);
+  a56=(a56+a16);
+  a16=(a21*a09);
+  a15=(a13*a11);
+  a65=(a16+a15);
+  a69=(a02*a05);
+  a65=(a65-a69);
+  a70=(a10*a65);
+  a56=(a56+a70);
+  a70=(a21*a08);
+  a23=(a23+a25);
+  a23=(a23-a22);
+  a22=(a12*a23);
+  a69=(a69-a16);
+  a69=(a69-a15);
+  a15=(a09*a69);
+  a22=(a22+a15);
+  a15=arg[4]? arg[4][2] : 0;
+  a15=(a10*a15);
+  a22=(a22+a15);
+  a15=(a06*a03);
+  a15=(a15*a14);
+  a22=(a22+a15);
+  a15=(a18*a22);
+  a70=(a70+a15);
+  a70=(a70/a11);
+  a56=(a56+a70);
+  a34=(a34-a56);
+  a56=(a18*a01);
+  a70=(a56*a03);
+  a70=(a70*a14);
+  a34=(a34+a70);
+  a70=(a30*a34);
+  a15=(a48*a37);
+  a15=(a15*a35);
+  a16=(a18*a53);
+  a25=(a02*a55);
+  a16=(a16+a25);
+  a15=(a15-a16);
+  a16=(a48*a11);
+  a25=(a16*a28);
+  a15=(a15-a25);
+  a16=(a16*a26);
+  a15=(a15-a16);
+  a16=(a33*a50);
+  a16=(a16*a35);
+  a15=(a15-a16);
+  a16=(a18*a02);
+  a25=(a16*a31);
+  a15=(a15-a25);
+  a16=(a16*a37);
+  a16=(a16*a11);
+  a15=(a15+a16);
+  a16=(a33*a02);
+  a16=(a16*a21);
+  a16=(a16*a11);
+  a15=(a15-a16);
+  a16=(a50*a18);
+  a37=(a16*a21);
+  a37=(a37*a11);
+  a15=(a15-a37);
+  a15=(a15/a46);
+  a54=(a54*a14);
+  a54=(a54*a04);
+  a37=arg[4]? arg[4][3] : 0;
+  a37=(a12*a37);
+  a44=(a44+a52);
+  a44=(a44+a61);
+  a44=(a44+a62);
+  a44=(a44-a60);
+  a44=(a09*a44);
+  a37=(a37+a44);
+  a44=(a18*a10);
+  a60=(a48*a12);
+  a62=(a44-a60);
+  a61=(a50*a05);
+  a62=(a62-a61);
+  a52=(a21*a13);
+  a62=(a62-a52);
+  a25=(a09*a47);
+  a62=(a62-a25);
+  a62=(a05*a62);
+  a37=(a37+a62);
+  a17=(a00*a17);
+  a37=(a37+a17);
+  a10=(a10*a24);
+  a37=(a37+a10);
+  a19=(a12*a19);
+  a65=(a05*a65);
+  a19=(a19+a65);
+  a65=arg[4]? arg[4][1] : 0;
+  a65=(a00*a65);
+  a19=(a19+a65);
+  a06=(a06*a14);
+  a06=(a06*a04);
+  a19=(a19+a06);
+  a06=(a21*a19);
+  a65=(a02*a22);
+  a06=(a06-a65);
+  a06=(a06/a11);
+  a37=(a37+a06);
+  a54=(a54-a37);
+  a01=(a02*a01);
+  a03=(a01*a03);
+  a03=(a03*a14);
+  a54=(a54-a03);
+  a03=(a15*a54);
+  a37=(a70-a03);
+  a06=(a50*a36);
+  a06=(a06*a35);
+  a65=(a02*a57);
+  a53=(a21*a53);
+  a65=(a65+a53);
+  a06=(a06-a65);
+  a65=(a48*a33);
+  a65=(a65*a35);
+  a06=(a06-a65);
+  a65=(a50*a11);
+  a53=(a65*a26);
+  a06=(a06-a53);
+  a65=(a65*a31);
+  a06=(a06-a65);
+  a65=(a02*a21);
+  a53=(a65*a28);
+  a06=(a06-a53);
+  a65=(a65*a36);
+  a65=(a65*a11);
+  a06=(a06+a65);
+  a65=(a48*a18);
+  a65=(a65*a21);
+  a65=(a65*a11);
+  a06=(a06-a65);
+  a65=(a33*a18);
+  a65=(a65*a02);
+  a65=(a65*a11);
+  a06=(a06-a65);
+  a06=(a06/a46);
+  a65=(a18*a19);
+  a08=(a02*a08);
+  a65=(a65+a08);
+  a65=(a65/a11);
+  a60=(a60+a61);
+  a60=(a60+a52);
+  a60=(a60+a25);
+  a60=(a60-a44);
+  a12=(a12*a60);
+  a68=(a68-a63);
+  a68=(a68-a64);
+  a68=(a68-a66);
+  a68=(a68-a67);
+  a09=(a09*a68);
+  a12=(a12+a09);
+  a09=arg[4]? arg[4][5] : 0;
+  a05=(a05*a09);
+  a12=(a12+a05);
+  a13=(a13*a23);
+  a12=(a12+a13);
+  a00=(a00*a69);
+  a12=(a12+a00);
+  a65=(a65-a12);
+  a01=(a01*a07);
+  a65=(a65-a01);
+  a56=(a56*a14);
+  a56=(a56*a04);
+  a65=(a65-a56);
+  a56=(a06*a65);
+  a37=(a37-a56);
+  a04=(a21*a37);
+  a57=(a18*a57);
+  a55=(a21*a55);
+  a57=(a57+a55);
+  a50=(a48*a50);
+  a50=(a50*a35);
+  a57=(a57+a50);
+  a50=(a33*a11);
+  a55=(a50*a28);
+  a57=(a57+a55);
+  a50=(a50*a31);
+  a57=(a57+a50);
+  a50=(a18*a21);
+  a55=(a50*a26);
+  a57=(a57+a55);
+  a33=(a33*a47);
+  a33=(a33*a35);
+  a57=(a57-a33);
+  a48=(a48*a02);
+  a48=(a48*a21);
+  a48=(a48*a11);
+  a57=(a57+a48);
+  a16=(a16*a02);
+  a16=(a16*a11);
+  a57=(a57+a16);
+  a50=(a50*a47);
+  a50=(a50*a11);
+  a57=(a57-a50);
+  a57=(a57/a46);
+  a50=(a57*a54);
+  a16=(a06*a34);
+  a48=(a50-a16);
+  a33=(a28*a31);
+  a27=(a27+a33);
+  a27=(a27+a32);
+  a49=(a49*a35);
+  a27=(a27-a49);
+  a58=(a58*a35);
+  a27=(a27+a58);
+  a27=(a27-a40);
+  a39=(a39*a31);
+  a27=(a27-a39);
+  a47=(a47*a11);
+  a26=(a47*a26);
+  a27=(a27-a26);
+  a31=(a47*a31);
+  a27=(a27-a31);
+  a59=(a59*a11);
+  a27=(a27+a59);
+  a27=(a27/a46);
+  a59=(a27*a65);
+  a48=(a48+a59);
+  a31=(a02*a48);
+  a04=(a04-a31);
+  a04=(a04/a11);
+  a20=(a20-a04);
+  a04=arg[1]? arg[1][0] : 0;
+  a31=(a04/a11);
+  a39=(a30*a18);
+  a40=(a39/a11);
+  a58=(a15*a02);
+  a49=(a58/a11);
+  a40=(a40+a49);
+  a49=(a21*a40);
+  a32=(a06*a18);
+  a55=(a32/a11);
+  a14=(a57*a02);
+  a01=(a14/a11);
+  a55=(a55+a01);
+  a01=(a02*a55);
+  a49=(a49+a01);
+  a49=(a31*a49);
+  a20=(a20-a49);
+  a49=arg[1]? arg[1][1] : 0;
+  a01=(a49/a11);
+  a07=(a15*a21);
+  a12=(a07+a14);
+  a12=(a01*a12);
+  a20=(a20+a12);
+  a12=arg[1]? arg[1][2] : 0;
+  a00=(a12/a11);
+  a69=(a30*a21);
+  a13=(a06*a02);
+  a69=(a69+a13);
+  a69=(a00*a69);
+  a20=(a20-a69);
+  a69=arg[1]? arg[1][3] : 0;
+  a13=(a69/a11);
+  a23=(a06*a21);
+  a05=(a27*a02);
+  a23=(a23+a05);
+  a23=(a13*a23);
+  a20=(a20+a23);
+  if (res[0]!=0) res[0][6]=a20;
+  a19=(a19/a11);
+  a48=(a18*a48);
+  a45=(a45+a29);
+  a45=(a45+a33);
+  a51=(a51*a35);
+  a45=(a45-a51);
+  a38=(a38*a35);
+  a45=(a45+a38);
+  a47=(a47*a28);
+  a45=(a45-a47);
+  a45=(a45-a26);
+  a41=(a41*a28);
+  a45=(a45-a41);
+  a45=(a45-a42);
+  a43=(a43*a11);
+  a45=(a45+a43);
+  a45=(a45/a46);
+  a54=(a45*a54);
+  a34=(a15*a34);
+  a46=(a54-a34);
+  a65=(a57*a65);
+  a46=(a46+a65);
+  a43=(a21*a46);
+  a48=(a48-a43);
+  a48=(a48/a11);
+  a19=(a19+a48);
+  a48=(a15*a18);
+  a43=(a48/a11);
+  a42=(a45*a02);
+  a41=(a42/a11);
+  a43=(a43+a41);
+  a41=(a21*a43);
+  a28=(a18*a55);
+  a41=(a41-a28);
+  a31=(a31*a41);
+  a19=(a19+a31);
+  a31=(a57*a18);
+  a41=(a45*a21);
+  a31=(a31-a41);
+  a31=(a01*a31);
+  a19=(a19+a31);
+  a07=(a07-a32);
+  a07=(a00*a07);
+  a19=(a19+a07);
+  a07=(a27*a18);
+  a21=(a57*a21);
+  a07=(a07-a21);
+  a07=(a13*a07);
+  a19=(a19+a07);
+  a19=(-a19);
+  if (res[0]!=0) res[0][7]=a19;
+  a19=(1./a11);
+  a07=(a02*a43);
+  a21=(a18*a40);
+  a07=(a07+a21);
+  a07=(a07/a11);
+  a19=(a19+a07);
+  a19=(a04*a19);
+  a22=(a22/a11);
+  a19=(a19-a22);
+  a02=(a02*a46);
+  a18=(a18*a37);
+  a02=(a02-a18);
+  a02=(a02/a11);
+  a19=(a19-a02);
+  a42=(a42+a48);
+  a01=(a01*a42);
+  a19=(a19-a01);
+  a58=(a58+a39);
+  a00=(a00*a58);
+  a19=(a19+a00);
+  a14=(a14+a32);
+  a13=(a13*a14);
+  a19=(a19-a13);
+  if (res[0]!=0) res[0][8]=a19;
+  a45=(a45*a49);
+  a45=(a45+a54);
+  a54=(a15*a12);
+  a45=(a45-a54);
+  a45=(a45-a34);
+  a34=(a57*a69);
+  a45=(a45+a34);
+  a45=(a45+a65);
+  a43=(a04*a43);
+  a45=(a45-a43);
+  if (res[0]!=0) res[0][9]=a45;
+  a30=(a30*a12);
+  a15=(a15*a49);
+  a15=(a15+a03);
+  a30=(a30-a15);
+  a30=(a30+a70);
+  a70=(a06*a69);
+  a30=(a30-a70);
+  a30=(a30-a56);
+  a40=(a04*a40);
+  a30=(a30+a40);
+  if (res[0]!=0) res[0][10]=a30;
+  a57=(a57*a49);
+  a57=(a57+a50);
+  a06=(a06*a12);
+  a57=(a57-a06);
+  a57=(a57-a16);
+  a27=(a27*a69);
+  a57=(a57+a27);
+  a57=(a57+a59);
+  a04=(a04*a55);
+  a57=(a57-a04);
+  if (res[0]!=0) res[0][11]=a57;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inertial_dynamics(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f13(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int inertial_dynamics_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void inertial_dynamics_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void inertial_dynamics_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void inertial_dynamics_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int inertial_dynamics_n_in(void) { return 5;}
+
+CASADI_SYMBOL_EXPORT casadi_int inertial_dynamics_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real inertial_dynamics_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inertial_dynamics_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "x";
+    case 1: return "U";
+    case 2: return "pi";
+    case 3: return "g";
+    case 4: return "c";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* inertial_dynamics_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "xdot";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inertial_dynamics_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s12;
+    case 3: return casadi_s10;
+    case 4: return casadi_s4;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* inertial_dynamics_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int inertial_dynamics_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 5;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int inertial_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);

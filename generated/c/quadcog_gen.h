@@ -216,6 +216,60 @@ int truth_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define truth_dynamics_SZ_RES 1
 #define truth_dynamics_SZ_IW 0
 #define truth_dynamics_SZ_W 0
+int inertial_regressor(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int inertial_regressor_checkout(void);
+void inertial_regressor_release(int mem);
+void inertial_regressor_incref(void);
+void inertial_regressor_decref(void);
+casadi_int inertial_regressor_n_in(void);
+casadi_int inertial_regressor_n_out(void);
+casadi_real inertial_regressor_default_in(casadi_int i);
+const char* inertial_regressor_name_in(casadi_int i);
+const char* inertial_regressor_name_out(casadi_int i);
+const casadi_int* inertial_regressor_sparsity_in(casadi_int i);
+const casadi_int* inertial_regressor_sparsity_out(casadi_int i);
+int inertial_regressor_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int inertial_regressor_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define inertial_regressor_SZ_ARG 3
+#define inertial_regressor_SZ_RES 1
+#define inertial_regressor_SZ_IW 0
+#define inertial_regressor_SZ_W 0
+int inertial_mass_matrix(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int inertial_mass_matrix_checkout(void);
+void inertial_mass_matrix_release(int mem);
+void inertial_mass_matrix_incref(void);
+void inertial_mass_matrix_decref(void);
+casadi_int inertial_mass_matrix_n_in(void);
+casadi_int inertial_mass_matrix_n_out(void);
+casadi_real inertial_mass_matrix_default_in(casadi_int i);
+const char* inertial_mass_matrix_name_in(casadi_int i);
+const char* inertial_mass_matrix_name_out(casadi_int i);
+const casadi_int* inertial_mass_matrix_sparsity_in(casadi_int i);
+const casadi_int* inertial_mass_matrix_sparsity_out(casadi_int i);
+int inertial_mass_matrix_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int inertial_mass_matrix_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define inertial_mass_matrix_SZ_ARG 1
+#define inertial_mass_matrix_SZ_RES 1
+#define inertial_mass_matrix_SZ_IW 0
+#define inertial_mass_matrix_SZ_W 0
+int inertial_dynamics(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int inertial_dynamics_checkout(void);
+void inertial_dynamics_release(int mem);
+void inertial_dynamics_incref(void);
+void inertial_dynamics_decref(void);
+casadi_int inertial_dynamics_n_in(void);
+casadi_int inertial_dynamics_n_out(void);
+casadi_real inertial_dynamics_default_in(casadi_int i);
+const char* inertial_dynamics_name_in(casadi_int i);
+const char* inertial_dynamics_name_out(casadi_int i);
+const casadi_int* inertial_dynamics_sparsity_in(casadi_int i);
+const casadi_int* inertial_dynamics_sparsity_out(casadi_int i);
+int inertial_dynamics_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int inertial_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define inertial_dynamics_SZ_ARG 5
+#define inertial_dynamics_SZ_RES 1
+#define inertial_dynamics_SZ_IW 0
+#define inertial_dynamics_SZ_W 0
 void quadcog_gen_casadi_version(int* major, int* minor, int* patch);
 int quadcog_gen_casadi_int_size(void);
 int quadcog_gen_casadi_real_size(void);

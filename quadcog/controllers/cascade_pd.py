@@ -12,13 +12,7 @@ import numpy as np
 
 from quadcog import validate
 from quadcog.controllers.base import Controller
-from quadcog.controllers.shaping import (
-    drag_over_mass,
-    kinematics,
-    tilt_limit,
-    wrap_angle,
-    yaw_rotation_T,
-)
+from quadcog.controllers.shaping import drag_over_mass, kinematics, tilt_limit, wrap_angle, yaw_rotation_T
 from quadcog.errors import InputError
 from quadcog.kinds import Number, Poles
 from quadcog.model.conventions import IDX, N_STATE

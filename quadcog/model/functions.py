@@ -5,15 +5,17 @@ import threading
 import warnings
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from quadcog.codegen.compiled import external
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.fastcall import FastCall
-from quadcog.errors import InputError, QuadcogWarning
+from quadcog.errors import InputError, ParameterError, QuadcogWarning
 from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
+from quadcog.model.inertial import check_physically_consistent
 from quadcog.model.parameters import check_parameters
 from quadcog.paths import generated_dir
-from quadcog.validate import vector
+from quadcog.validate import nonnegative, positive, vector
 
 Linearization = namedtuple("Linearization", "A B")
 _warned_no_compiler = False
@@ -23,6 +25,15 @@ _cache_lock = threading.Lock()
 
 def _as_vector(name, value, n):
     return vector(value, name, n)
+
+
+def _key(value):
+    """The bytes of ``value`` as floats, or None when it is not numbers (a string, a ragged
+    list): the check that follows then says what is wrong, as a typed error."""
+    try:
+        return np.asarray(value, dtype=float).tobytes()
+    except (TypeError, ValueError):
+        return None
 
 
 class Model:
@@ -43,6 +54,7 @@ class Model:
         self.backend = library.backend
         self._calls = {}
         self._last_p = None
+        self._last_pi = None
 
     @property
     def functions(self):
@@ -85,7 +97,14 @@ class Model:
         for buf, (arg_name, n), value in zip(call.inputs, spec_in, args):
             if arg_name == "p":
                 self._check_p(value)
+            elif arg_name == "pi":
+                self._check_pi(value)
             buf[:] = _as_vector(arg_name, value, n)
+            if arg_name == "g":          # the model in pi: g > 0, drag >= 0 (as in p)
+                positive(buf[0], "g", unit="m/s^2", error=ParameterError)
+            elif arg_name == "c":
+                for k, v in enumerate(buf):
+                    nonnegative(v, f"c[{k}]", error=ParameterError)
         call()
         if out is None:
             results = [o.copy() for o in call.outputs]
@@ -102,11 +121,16 @@ class Model:
         return Linearization(*results) if name == "linearization" else tuple(results)
 
     def _check_p(self, p):
-        p = np.asarray(p, dtype=float)
-        key = p.tobytes()
-        if key != self._last_p:       # admissibility once per distinct p, not per call
+        key = _key(p)
+        if key is None or key != self._last_p:   # admissibility once per distinct p
             check_parameters(p)
             self._last_p = key
+
+    def _check_pi(self, pi):
+        key = _key(pi)
+        if key is None or key != self._last_pi:    # consistency once per distinct pi
+            check_physically_consistent(pi, "pi")
+            self._last_pi = key
 
     def dynamics(self, x, U, p, out=None):
         """x_dot (12,) of the state x (12,) under inputs U (4,: N, N m, N m, N m) and p (14,)."""
@@ -150,6 +174,79 @@ class Model:
         entries I_products = [Ixy, Ixz, Iyz], kg m^2) and an external wrench (6,) =
         [force at O in ground axes (N), moment in body axes (N m)]."""
         return self._call("truth_dynamics", (x, U, p, I_products, wrench), out)
+
+    def inertial_regressor(self, x: ArrayLike, nu_dot: ArrayLike, g: float | ArrayLike,
+                           out: np.ndarray | None = None) -> np.ndarray:
+        """The regressor of the model in the ten inertial parameters (docs/model.md sec. 7.1).
+
+        Parameters
+        ----------
+        x : array_like, shape (12,)
+            State.
+        nu_dot : array_like, shape (6,)
+            A generalized acceleration [u_dot, v_dot, w_dot] (m/s^2), [p_dot, q_dot, r_dot]
+            (rad/s^2).
+        g : float or array_like, shape (1,)
+            Gravitational acceleration (m/s^2), > 0.
+        out : numpy.ndarray, shape (6, 10), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 10)
+            Y with ``Y pi = M nu_dot + C(nu) nu + g_G`` (N, N m) for any inertial parameters
+            pi (``quadcog.model.inertial``); drag is not in Y.
+        """
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
+        return self._call("inertial_regressor", (x, nu_dot, g), out)
+
+    def inertial_mass_matrix(self, pi: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """M about O of the rigid body with inertial parameters ``pi``.
+
+        Parameters
+        ----------
+        pi : array_like, shape (10,)
+            ``[m, m r_G, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` (kg, kg m, kg m^2), physically
+            consistent (else PhysicalConsistencyError).
+        out : numpy.ndarray, shape (6, 6), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            M (kg, kg m, kg m^2).
+        """
+        return self._call("inertial_mass_matrix", (pi,), out)
+
+    def inertial_dynamics(self, x: ArrayLike, U: ArrayLike, pi: ArrayLike, g: float | ArrayLike,
+                          c: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The state derivative of the rigid body with inertial parameters ``pi``.
+
+        Parameters
+        ----------
+        x : array_like, shape (12,)
+            State.
+        U : array_like, shape (4,)
+            Thrust (N) and body moments about O (N m).
+        pi : array_like, shape (10,)
+            Inertial parameters about O (kg, kg m, kg m^2), physically consistent (else
+            PhysicalConsistencyError).
+        g : float or array_like, shape (1,)
+            Gravitational acceleration (m/s^2), > 0.
+        c : array_like, shape (6,)
+            Drag coefficients [c_x, c_y, c_z] (N s/m), [c_phi, c_theta, c_psi] (N m s/rad),
+            >= 0.
+        out : numpy.ndarray, shape (12,), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (12,)
+            x_dot; equals ``dynamics(x, U, p)`` for ``(pi, g, c) =
+            quadcog.model.inertial.inertial_arguments(p)``.
+        """
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
+        return self._call("inertial_dynamics", (x, U, pi, g, c), out)
 
     def linearization(self, x, U, p, out=None):
         """Linearization(A (12, 12), B (12, 4)) of the dynamics at x (12,), U (4,), p (14,)."""

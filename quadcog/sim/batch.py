@@ -12,13 +12,7 @@ from quadcog.codegen.vector_kernel import kernel_for
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_STATE, R_G
-from quadcog.sim.closed_loop import (
-    ACCUMULATORS,
-    CHUNK,
-    monitored_chunk_function,
-    monitored_step,
-    packed,
-)
+from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, monitored_chunk_function, monitored_step, packed
 from quadcog.sim.divergence import DivergenceCause, divergence_rule, magnitude
 from quadcog.sim.plant import Actuation
 from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference

@@ -5,12 +5,7 @@ import time
 import numpy as np
 
 from quadcog import config
-from quadcog.controllers import (
-    AdaptiveFeedbackLinearization,
-    CascadePD,
-    FeedbackLinearization,
-    make_controller,
-)
+from quadcog.controllers import AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization, make_controller
 from quadcog.controllers.adaptive import admissible_estimate_radius
 from quadcog.errors import ParameterError
 from quadcog.model.conventions import N_STATE

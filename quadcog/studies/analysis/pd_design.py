@@ -4,11 +4,7 @@ through python-control (``control.singular_values_response``, ``control.stabilit
 import numpy as np
 
 from quadcog.controllers import CascadePD
-from quadcog.studies.analysis.frequency import (
-    channel_loop,
-    channel_margins,
-    gain_range_by_eigenvalues,
-)
+from quadcog.studies.analysis.frequency import channel_loop, channel_margins, gain_range_by_eigenvalues
 from quadcog.studies.analysis.linear import loop_statespace
 
 CHANNELS = ("U1 thrust (z loop)", "U2 roll moment (y-phi loop)",
