@@ -221,3 +221,16 @@ def test_write_log_refuses_what_is_not_a_log(tmp_path):
     with pytest.raises(InputError, match="format 'xls'"):
         write_log(synthetic(), tmp_path / "x.xls", "xls")
     assert set(LOG_FORMATS) == {"crazyflie-usd", "ulog", "csv", "parquet"}
+
+
+def test_docs_table_lists_every_signal_with_its_unit():
+    """docs/logs.md's table of signals is SIGNALS (names, shapes and units)."""
+    import re
+    from pathlib import Path
+    doc = (Path(__file__).resolve().parent.parent / "docs" / "logs.md").read_text()
+    rows = dict(re.findall(r"^\| `(\w+)` \| \(N,(?: \d)?\) \| ([^|]+) \|", doc, flags=re.M))
+    assert set(rows) == set(SIGNALS)
+    for name, spec in SIGNALS.items():
+        assert rows[name].strip() == spec.unit, name
+        assert f"(N,{' ' + str(spec.shape[0]) if spec.shape else ''})" in \
+            re.search(rf"^\| `{name}` \|[^|]+\|", doc, flags=re.M).group(0), name
