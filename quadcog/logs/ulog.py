@@ -41,6 +41,7 @@ import struct
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from quadcog.errors import LogFormatError, LogSignalError
 from quadcog.logs.flightlog import FlightLog
@@ -66,7 +67,7 @@ _PARAMS = ("THR_MDL_FAC", "MPC_THR_HOVER", "SYS_AUTOSTART", "CA_AIRFRAME", "CA_R
 _INFO = ("sys_name", "ver_hw", "ver_sw", "ver_sw_release", "sys_os_name", "sys_uuid")
 
 
-def px4_to_quadcog_quaternion(q):
+def px4_to_quadcog_quaternion(q: ArrayLike) -> np.ndarray:
     """PX4's attitude quaternion (FRD body -> NED) as quadcog's (FLU body -> NWU ground).
 
     Parameters
@@ -83,7 +84,7 @@ def px4_to_quadcog_quaternion(q):
     return q * np.array([1.0, 1.0, -1.0, -1.0])
 
 
-def quaternion_to_euler(q):
+def quaternion_to_euler(q: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ZYX Euler angles of a unit quaternion, ``R(q) = Rz(yaw) Ry(pitch) Rx(roll)``.
 
     Parameters
@@ -103,7 +104,7 @@ def quaternion_to_euler(q):
     return roll, pitch, yaw
 
 
-def euler_to_quaternion(roll, pitch, yaw):
+def euler_to_quaternion(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np.ndarray:
     """The unit quaternion of ``Rz(yaw) Ry(pitch) Rx(roll)``.
 
     Parameters
@@ -176,6 +177,11 @@ def _rotor_map(params):
     return tuple(order), flu[order], -np.sign(km[order]), "from CA_ROTOR{i}_PX/PY"
 
 
+def _rate_hz(stamps_us):
+    """Mean rate (Hz) of a topic's time stamps (us)."""
+    return (stamps_us.size - 1) / ((float(stamps_us[-1]) - float(stamps_us[0])) * 1e-6)
+
+
 def _interp(t_base, ts, values, is_float):
     if is_float:
         return np.interp(t_base, ts, values)
@@ -183,7 +189,7 @@ def _interp(t_base, ts, values, is_float):
     return values[np.clip(idx, 0, ts.size - 1)].astype(np.float64)
 
 
-def read_ulog(path):
+def read_ulog(path: str | os.PathLike) -> FlightLog:
     """Read a PX4 ULog (see the module docstring for topics, frames and the time base).
 
     Parameters
@@ -284,7 +290,7 @@ def read_ulog(path):
                 trimmed_s=f"{(tb[0] - ts_base[0]) * 1e-6:.6g} at the start, "
                           f"{(ts_base[-1] - tb[-1]) * 1e-6:.6g} at the end",
                 raw_dropped=str(dropped),
-                rates_hz=", ".join(f"{n}: {(d['timestamp'].size - 1) / ((float(d['timestamp'][-1]) - float(d['timestamp'][0])) * 1e-6):.4g}"
+                rates_hz=", ".join(f"{n}: {_rate_hz(d['timestamp']):.4g}"
                                    for n, d in topics.items()))
     if positions is not None and directions is not None:
         meta["rotor_positions_m"] = "; ".join(f"{float(x)!r} {float(y)!r}"
@@ -339,7 +345,7 @@ def _nominal_positions(log):
     return np.array(x_layout(0.25))
 
 
-def write_ulog(log, path):
+def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
     """Write a log's signals as a minimal valid ULog (version 1) that PX4's tools and
     ``read_ulog`` read.
 
