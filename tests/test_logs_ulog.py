@@ -248,3 +248,19 @@ def test_ulog_without_a_time_base_topic(tmp_path):
                      tmp_path / "bat.ulg", "ulog")
     with pytest.raises(LogSignalError, match="none of the topics"):
         read_log(path)
+
+
+def test_a_signal_with_nan_samples_is_left_out_and_said_so(tmp_path):
+    """PX4 publishes NaN for an estimate that is not valid yet: that signal is left out, the
+    rest of the log is read, and asking for it quotes why."""
+    path = _small(tmp_path)
+    data = bytearray(path.read_bytes())
+    first = next(i for i in range(len(data) - 12) if data[i] == ord("D")
+                 and data[i + 1:i + 3] == b"\x00\x00")
+    data[first + 11:first + 15] = struct.pack("<f", float("nan"))     # its x after timestamp
+    path.write_bytes(bytes(data))
+    log = read_log(path)
+    assert not log.has("position") and log.has("battery_voltage")
+    assert log.meta["signals_dropped"] == "position (1 of 6 samples not finite)"
+    with pytest.raises(LogSignalError, match=r"left out position \(1 of 6 samples"):
+        log.signal("position")

@@ -98,6 +98,16 @@ def _read_csv(path):
     dup = sorted({c for c in header if header.count(c) > 1})
     if dup:
         raise LogFormatError(f"{path}: repeated column names {dup}")
+    try:                                  # fast path; the loop below names a bad cell
+        data = np.array(rows[1:], dtype=np.float64).reshape(len(rows) - 1, len(header))
+    except ValueError:
+        data = _cells(path, header, rows)
+    cols = {h: data[:, j].copy() for j, h in enumerate(header)}
+    return _from_columns(path, "csv", cols, {"columns": str(len(header))})
+
+
+def _cells(path, header, rows):
+    """The data rows as floats, cell by cell: the first bad cell raises with its place."""
     data = np.empty((len(rows) - 1, len(header)))
     for i, row in enumerate(rows[1:]):
         if len(row) != len(header):
@@ -110,8 +120,7 @@ def _read_csv(path):
             except ValueError:
                 raise LogFormatError(f"{path}: line {i + 2}, column {header[j]!r}: {text!r} "
                                      "is not a number") from None
-    cols = {h: data[:, j].copy() for j, h in enumerate(header)}
-    return _from_columns(path, "csv", cols, {"columns": str(len(header))})
+    return data
 
 
 def _read_parquet(path):

@@ -37,7 +37,9 @@ sample for integer fields. ``raw`` holds every numeric field of the topics read 
 counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``, ``ver_sw``,
 ...), its rotor geometry in quadcog's order (``rotor_positions_m``, ``rotor_directions``:
 ``-sign(CA_ROTOR{i}_KM)``, KM being positive for a counter-clockwise rotor) and parameters
-of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...) when logged.
+of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...) when logged. A signal with a NaN or
+infinite sample (an estimate not valid yet) is left out and named in
+``meta["signals_dropped"]``, which ``FlightLog.signal`` quotes when it is asked for.
 """
 import contextlib
 import io
@@ -344,6 +346,15 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     v = fields("vehicle_thrust_setpoint", ("xyz[2]",))
     if v is not None:
         signals["thrust_command"] = -v[:, 0]
+    # an estimate that is not valid yet is NaN in PX4's topics: leave such a signal out, say so
+    dropped = []
+    for name in list(signals):
+        bad = ~np.isfinite(signals[name]).reshape(t_us.size, -1).all(axis=1)
+        if bad.any():
+            del signals[name]
+            dropped.append(f"{name} ({int(bad.sum())} of {t_us.size} samples not finite)")
+    if dropped:
+        meta["signals_dropped"] = "; ".join(dropped)
     return FlightLog(path, "ulog", (tb - tb[0]) * 1e-6, signals, raw, meta)
 
 
