@@ -62,3 +62,35 @@ class PhysicalConsistencyError(ParameterError):
     """Ten inertial parameters pi that no rigid body has: the pseudo-inertia matrix is not
     positive definite (m <= 0, or the principal inertias about the CoG are not positive or
     break the triangle inequality; docs/model.md sec. 7.2)."""
+
+
+class MissingDependencyError(QuadcogError, ImportError):
+    """An optional package is not installed; the message gives the install command."""
+
+
+class LogError(InputError):
+    """A flight log cannot be read or written (quadcog.logs); the message names the file."""
+
+
+class LogFormatError(LogError):
+    """A flight log's content is damaged or unsupported: wrong magic, truncated, unknown type,
+    a non-numeric or NaN cell, time not strictly increasing."""
+
+
+class LogCRCError(LogFormatError):
+    """A Crazyflie uSD log whose CRC-32 does not match; ``path``, ``expected`` (stored in the
+    file) and ``found`` (computed) are attributes."""
+
+    def __init__(self, path, expected, found):
+        self.path, self.expected, self.found = str(path), int(expected), int(found)
+        super().__init__(f"{self.path}: CRC-32 mismatch: the file stores 0x{self.expected:08x}, "
+                         f"its content gives 0x{self.found:08x} (damaged or truncated file)")
+
+
+class LogSignalError(LogError):
+    """A flight log lacks a signal that was asked for; ``signal``, ``source`` and ``available``
+    (the signals it has) are attributes."""
+
+    def __init__(self, message, signal=None, source=None, available=()):
+        self.signal, self.source, self.available = signal, source, tuple(available)
+        super().__init__(message)
