@@ -27,3 +27,8 @@ class QuadcogWarning(UserWarning):
 
 class EulerSingularityError(QuadcogError):
     """|theta| reached pi/2, where the ZYX Euler-angle kinematics are singular."""
+
+
+class IdentificationError(InputError):
+    """A CoG/mass identification cannot run on the logs given (quadcog.identification): a
+    missing signal, too few hover samples, no rotor model; the message names the log."""

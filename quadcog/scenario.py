@@ -65,7 +65,8 @@ TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "
        "initial_offset": "vec3"}
 # every Vehicle field, and a preset to start from
 VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
-                  "name": str}.get(name, NUMBER) for name in FIELD_NAMES}
+                  "name": str}.get(name, NUMBER) for name in FIELD_NAMES
+           if name != "rotor_model"}
 VEHICLE["preset"] = str
 TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
 SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,

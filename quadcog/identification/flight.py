@@ -1,0 +1,244 @@
+"""What the estimators take from a flight log: the hover window, the rotor thrusts, the
+vertical acceleration, and block statistics for samples that are not independent.
+
+The hover window (take-off and landing removed) is found from the height alone, so that it
+works with every log: the plateau height h is the median of the heights above half the
+largest one; the window is the longest run of samples within ``HOVER_BAND`` of h, shortened by
+``HOVER_TRIM`` seconds at each end (the climb and the descent settle there).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from quadcog.errors import IdentificationError
+from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
+
+__all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "HoverWindow", "hover_window",
+           "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95",
+           "t_quantile"]
+
+HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
+HOVER_TRIM = 1.0         # s cut at both ends of the plateau (the climb and descent settle)
+BLOCK_SECONDS = 1.0      # samples of one flight are correlated; 1 s blocks are nearly not
+MIN_BLOCKS = 3           # fewer 1 s blocks than this: too few hover samples for an interval
+
+
+@dataclass(frozen=True)
+class HoverWindow:
+    """The take-off and landing free part of one log.
+
+    Parameters
+    ----------
+    t0, t1 : float
+        Start and end (s) on the log's time.
+    height : float
+        The plateau height h (m).
+    mask : numpy.ndarray, shape (N,), bool
+        The log's samples inside the window.
+
+    Returns
+    -------
+    HoverWindow
+    """
+    t0: float
+    t1: float
+    height: float
+    mask: np.ndarray
+
+    @property
+    def samples(self) -> int:
+        """Number of samples in the window."""
+        return int(self.mask.sum())
+
+
+def hover_window(log, band: float = HOVER_BAND, trim: float = HOVER_TRIM) -> HoverWindow:
+    """The hover window of ``log`` (module docstring: plateau of the height, trimmed).
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+        With the signal ``"position"`` (m, ground frame, z up).
+    band : float
+        Half-width of the plateau band as a fraction of its height.
+    trim : float
+        Seconds removed at each end of the plateau.
+
+    Returns
+    -------
+    HoverWindow
+
+    Raises
+    ------
+    IdentificationError
+        The log has no position, never leaves the ground, or its plateau is shorter than
+        ``2 trim + MIN_BLOCKS * BLOCK_SECONDS``.
+    """
+    if not log.has("position"):
+        raise IdentificationError(f"{log.source}: no 'position' signal, so the hover (take-off "
+                                  "and landing free) part cannot be found from the height")
+    z = log.signal("position")[:, 2]
+    t = log.t
+    top = np.max(z)
+    if not top > 0.05:
+        raise IdentificationError(f"{log.source}: the height never exceeds 5 cm (largest "
+                                  f"{top:.3f} m): no flight to identify from")
+    h = float(np.median(z[z > 0.5 * top]))
+    inside = np.abs(z - h) < band * h
+    # the longest run of consecutive samples inside the band
+    edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
+    starts, ends = edges[0::2], edges[1::2]
+    k = int(np.argmax(ends - starts))
+    t0, t1 = t[starts[k]] + trim, t[ends[k] - 1] - trim
+    mask = (t >= t0) & (t <= t1)
+    if not t1 - t0 >= MIN_BLOCKS * BLOCK_SECONDS:
+        raise IdentificationError(
+            f"{log.source}: too few hover samples: the plateau near {h:.2f} m lasts "
+            f"{t[ends[k] - 1] - t[starts[k]]:.2f} s, less than the {MIN_BLOCKS * BLOCK_SECONDS:g}"
+            f" s needed after cutting {trim:g} s at each end")
+    return HoverWindow(float(t0), float(t1), h, mask)
+
+
+def _commands_from_mixer(log, vehicle):
+    """Rotor commands (N, 4) from thrust_command and moment_command, by the mixer the signals
+    are defined with (quadcog.logs.SIGNALS['moment_command'])."""
+    pos = np.asarray(vehicle.rotor_positions)
+    d = np.asarray(vehicle.rotor_directions, float)
+    T = log.signal("thrust_command")[:, None]
+    m = log.signal("moment_command")
+    u = T + np.sign(pos[:, 1])[None] * m[:, :1] - np.sign(pos[:, 0])[None] * m[:, 1:2] \
+        + d[None] * m[:, 2:3]
+    return np.clip(u, 0.0, 1.0)
+
+
+def rotor_thrusts(log, vehicle, rotor_model=None):
+    """The thrust of each rotor (N) over the whole log, and how it was obtained.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+    vehicle : quadcog.Vehicle
+        Its ``rotor_model`` is used unless ``rotor_model`` is given.
+    rotor_model : RotorModel or str, optional
+        A model or a name of ``ROTOR_MODELS``.
+
+    Returns
+    -------
+    (numpy.ndarray of shape (N, 4), str, RotorModel)
+        Thrusts (N), a sentence saying which signals and model gave them, the model used.
+
+    Raises
+    ------
+    IdentificationError
+        No rotor model, or the log lacks the signals it needs and no fallback applies (the
+        message names the signals).
+    """
+    model = vehicle.rotor_model if rotor_model is None else rotor_model
+    if isinstance(model, str):
+        if model not in ROTOR_MODELS:
+            raise IdentificationError(f"rotor model {model!r} is unknown; expected one of "
+                                      f"{', '.join(ROTOR_MODELS)}")
+        model = ROTOR_MODELS[model]
+    if not isinstance(model, RotorModel):
+        raise IdentificationError(f"vehicle {vehicle.name!r} has no rotor_model, so motor "
+                                  "outputs cannot be turned into thrust; pass rotor_model=")
+    missing = [s for s in model.signals if not log.has(s)]
+    if not missing:
+        u = log.signal(model.signal)
+        v = log.signal("battery_voltage") if model.uses_voltage else None
+        return model.thrust(u, v), f"{model.name} from {' and '.join(model.signals)}", model
+    # A Crazyflie log without the PWM (the controller logs): with battery compensation the
+    # firmware's command is linear in thrust, so the command is the next best input.
+    crazyflie = model.name in ROTOR_MODELS
+    fallback = CRAZYFLIE_FIRMWARE_COMMAND if crazyflie else None
+    if fallback is not None and log.has("motor_command"):
+        return (fallback.thrust(log.signal("motor_command")),
+                f"{fallback.name} from motor_command (the log has no {', '.join(missing)})",
+                fallback)
+    if fallback is not None and log.has("thrust_command") and log.has("moment_command"):
+        u = _commands_from_mixer(log, vehicle)
+        return (fallback.thrust(u), f"{fallback.name} from thrust_command and moment_command "
+                "through the firmware's mixer (the log has no motor outputs)", fallback)
+    raise IdentificationError(
+        f"{log.source}: rotor model {model.name!r} needs the signal(s) "
+        f"{', '.join(missing)}, which the log lacks (it has "
+        f"{', '.join(log.signals) or 'no standard signals'})")
+
+
+def vertical_acceleration(log):
+    """Kinematic vertical acceleration (N,) (m/s^2, z up) and where it came from: the
+    ``"acceleration"`` signal, else the derivative of the vertical velocity, else zero.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+
+    Returns
+    -------
+    (numpy.ndarray of shape (N,), str)
+    """
+    if log.has("acceleration"):
+        return log.signal("acceleration")[:, 2], "the logged acceleration"
+    if log.has("velocity"):
+        return np.gradient(log.signal("velocity")[:, 2], log.t), "the derivative of velocity"
+    return np.zeros(log.n_samples), "none logged (taken as 0)"
+
+
+def block_means(t, values, seconds: float = BLOCK_SECONDS):
+    """Means of ``values`` over consecutive blocks of ``seconds`` of the times ``t``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Times (s) of the samples (one window of one flight).
+    values : numpy.ndarray, shape (N, ...) 
+        Samples.
+    seconds : float
+        Block length (s); a last partial block shorter than half of it is dropped.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, ...)
+        One mean per block.
+    """
+    index = np.floor((t - t[0]) / seconds).astype(int)
+    out = []
+    for b in range(index.max() + 1):
+        sel = index == b
+        if sel.sum() and t[sel][-1] - t[sel][0] >= 0.5 * seconds - 1e-9:
+            out.append(values[sel].mean(axis=0))
+    return np.asarray(out)
+
+
+def t_quantile(dof: int) -> float:
+    """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom (two-sided 95 %).
+
+    Parameters
+    ----------
+    dof : int
+        Degrees of freedom, >= 1.
+
+    Returns
+    -------
+    float
+    """
+    return float(stats.t.ppf(0.975, max(int(dof), 1)))
+
+
+def block_mean_ci95(blocks):
+    """Mean of block means and the half-width of its 95 % interval (Student t on the blocks).
+
+    Parameters
+    ----------
+    blocks : numpy.ndarray, shape (B, ...)
+        Block means (``block_means``), B >= 2.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        Mean and half-width, each of shape (...).
+    """
+    b = np.asarray(blocks, dtype=float)
+    n = b.shape[0]
+    half = t_quantile(n - 1) * b.std(axis=0, ddof=1) / np.sqrt(n)
+    return b.mean(axis=0), half
