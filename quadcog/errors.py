@@ -32,3 +32,33 @@ class EulerSingularityError(QuadcogError):
 class IdentificationError(InputError):
     """A CoG/mass identification cannot run on the logs given (quadcog.identification): a
     missing signal, too few hover samples, no rotor model; the message names the log."""
+class MissingDependencyError(QuadcogError, ImportError):
+    """An optional package is not installed; the message gives the install command."""
+
+
+class LogError(InputError):
+    """A flight log cannot be read or written (quadcog.logs); the message names the file."""
+
+
+class LogFormatError(LogError):
+    """A flight log's content is damaged or unsupported: wrong magic, truncated, unknown type,
+    a non-numeric or NaN cell, time not strictly increasing."""
+
+
+class LogCRCError(LogFormatError):
+    """A Crazyflie uSD log whose CRC-32 does not match; ``path``, ``expected`` (stored in the
+    file) and ``found`` (computed) are attributes."""
+
+    def __init__(self, path, expected, found):
+        self.path, self.expected, self.found = str(path), int(expected), int(found)
+        super().__init__(f"{self.path}: CRC-32 mismatch: the file stores 0x{self.expected:08x}, "
+                         f"its content gives 0x{self.found:08x} (damaged or truncated file)")
+
+
+class LogSignalError(LogError):
+    """A flight log lacks a signal that was asked for; ``signal``, ``source`` and ``available``
+    (the signals it has) are attributes."""
+
+    def __init__(self, message, signal=None, source=None, available=()):
+        self.signal, self.source, self.available = signal, source, tuple(available)
+        super().__init__(message)

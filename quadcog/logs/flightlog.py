@@ -1,0 +1,198 @@
+"""``FlightLog``: one flight's signals on one time base, as every reader of quadcog.logs
+returns them, checked once here (shapes, finite values, strictly increasing time)."""
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Mapping
+
+import numpy as np
+
+from quadcog.errors import InputError, LogFormatError, LogSignalError
+from quadcog.logs.signals import LOG_FORMATS, SIGNALS
+
+__all__ = ["FlightLog"]
+
+
+def _frozen(a):
+    a = np.array(a, dtype=np.float64)        # a copy: the log owns its arrays
+    a.setflags(write=False)
+    return a
+
+
+def _first_bad(a):
+    """Index (sample, ...) of the first non-finite entry of ``a``."""
+    return tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
+
+
+@dataclass(frozen=True)
+class FlightLog:
+    """One flight log: standard signals (``SIGNALS``) in SI units and quadcog's frames, and
+    every logged variable under its source name, all on one time base.
+
+    Arrays are float64 copies and read-only; ``signals``, ``raw`` and ``meta`` are read-only
+    mappings.
+
+    Parameters
+    ----------
+    source : str
+        The file (or a name) the log came from; used in messages.
+    format : str
+        One of ``LOG_FORMATS``.
+    t : array_like, (N,)
+        Time (s) from the log's first sample (a ``window`` keeps its parent's origin);
+        finite and strictly increasing, N >= 2.
+    signals : mapping of str to array_like
+        Standard signals on ``t``: keys of ``SIGNALS``, each of shape (N,) + its
+        ``SIGNALS[name].shape``, finite.
+    raw : mapping of str to array_like
+        Every logged variable under its source name, in source units, on ``t``, each (N,).
+    meta : mapping of str to str
+        What the log says about itself (vehicle, firmware, time base, ...).
+
+    Returns
+    -------
+    FlightLog
+
+    Raises
+    ------
+    LogFormatError
+        A signal or raw variable of the wrong shape, a non-finite entry (named with its
+        sample), ``t`` not strictly increasing; ``InputError`` for an unknown format or signal
+        name.
+    """
+    source: str
+    format: str
+    t: np.ndarray
+    signals: Mapping[str, np.ndarray]
+    raw: Mapping[str, np.ndarray]
+    meta: Mapping[str, str]
+
+    def __post_init__(self):
+        src = str(self.source)
+        object.__setattr__(self, "source", src)
+        if self.format not in LOG_FORMATS:
+            raise InputError(f"{src}: format {self.format!r} is not one of {LOG_FORMATS}")
+        try:
+            t = _frozen(self.t)
+        except (TypeError, ValueError) as e:
+            raise LogFormatError(f"{src}: time is not numeric ({e})") from None
+        if t.ndim != 1 or t.size < 2:
+            raise LogFormatError(f"{src}: time must be (N,) with N >= 2 samples, got shape "
+                                 f"{t.shape}")
+        if not np.isfinite(t).all():
+            raise LogFormatError(f"{src}: time is not finite at sample {_first_bad(t)[0]}")
+        steps = np.diff(t)
+        if not (steps > 0).all():
+            i = int(np.argmax(steps <= 0))
+            raise LogFormatError(f"{src}: time is not strictly increasing: sample {i + 1} at "
+                                 f"{t[i + 1]!r} s follows {t[i]!r} s")
+        object.__setattr__(self, "t", t)
+        n = t.size
+        signals = {}
+        for name, value in dict(self.signals).items():
+            if name not in SIGNALS:
+                raise InputError(f"{src}: {name!r} is not a standard signal; expected one of "
+                                 f"{tuple(SIGNALS)}")
+            a = self._array(value, f"signal {name!r}", (n,) + SIGNALS[name].shape)
+            signals[name] = a
+        raw = {str(k): self._array(v, f"variable {k!r}", (n,)) for k, v in dict(self.raw).items()}
+        object.__setattr__(self, "signals", MappingProxyType(signals))
+        object.__setattr__(self, "raw", MappingProxyType(raw))
+        object.__setattr__(self, "meta", MappingProxyType({str(k): str(v) for k, v in
+                                                           dict(self.meta).items()}))
+
+    def _array(self, value, what, shape):
+        try:
+            a = _frozen(value)
+        except (TypeError, ValueError) as e:
+            raise LogFormatError(f"{self.source}: {what} is not numeric ({e})") from None
+        if a.shape != shape:
+            raise LogFormatError(f"{self.source}: {what} has shape {a.shape}, expected {shape} "
+                                 "(one row per sample of t)")
+        if not np.isfinite(a).all():
+            i = _first_bad(a)
+            raise LogFormatError(f"{self.source}: {what} is {a[i]!r} at sample {i[0]} "
+                                 f"(t = {self.t[i[0]]!r} s); expected finite values")
+        return a
+
+    @property
+    def n_samples(self):
+        """Number of samples N (int)."""
+        return int(self.t.size)
+
+    def has(self, name: str) -> bool:
+        """Whether the log carries the standard signal ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A key of ``SIGNALS``.
+
+        Returns
+        -------
+        bool
+        """
+        return name in self.signals
+
+    def signal(self, name: str) -> np.ndarray:
+        """The standard signal ``name`` (read-only float64 array on ``t``).
+
+        Parameters
+        ----------
+        name : str
+            A key of ``SIGNALS``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (N,) + ``SIGNALS[name].shape``, in ``SIGNALS[name].unit``.
+
+        Raises
+        ------
+        LogSignalError
+            The log lacks the signal (or it is not a standard signal); the message names the
+            signal, the log and the signals it has.
+        """
+        if name in self.signals:
+            return self.signals[name]
+        has = tuple(self.signals)
+        what = ("is not a standard signal (quadcog.logs.SIGNALS: "
+                f"{', '.join(SIGNALS)})" if name not in SIGNALS else "is not in this log")
+        raise LogSignalError(
+            f"signal {name!r} {what}: {self.format} log {self.source} has "
+            f"{', '.join(has) if has else 'no standard signals'}"
+            + (f" (and the raw variables {', '.join(list(self.raw)[:30])}"
+               f"{', ...' if len(self.raw) > 30 else ''})" if self.raw else ""),
+            signal=name, source=self.source, available=has)
+
+    def window(self, t0: float, t1: float) -> "FlightLog":
+        """The samples with ``t0 <= t <= t1``, as a new log (times keep this log's origin).
+
+        Parameters
+        ----------
+        t0, t1 : float
+            Start and end (s), on this log's ``t``; ``t0 < t1``.
+
+        Returns
+        -------
+        FlightLog
+            Same source, format and meta (``meta["window"]`` added).
+
+        Raises
+        ------
+        InputError
+            ``t0``, ``t1`` not finite numbers, ``t0 >= t1``, or fewer than 2 samples in the
+            window (the message gives the log's time span).
+        """
+        from quadcog.validate import real
+        t0 = real(t0, "window t0 (s)")
+        t1 = real(t1, "window t1 (s)")
+        keep = (self.t >= t0) & (self.t <= t1)
+        if not t0 < t1 or keep.sum() < 2:
+            raise InputError(
+                f"{self.source}: window [{t0!r}, {t1!r}] s holds {int(keep.sum())} samples; "
+                f"expected t0 < t1 and at least 2 samples of the log's "
+                f"[{self.t[0]!r}, {self.t[-1]!r}] s")
+        meta = dict(self.meta, window=f"{t0!r} {t1!r}")
+        return FlightLog(self.source, self.format, self.t[keep],
+                         {k: v[keep] for k, v in self.signals.items()},
+                         {k: v[keep] for k, v in self.raw.items()}, meta)

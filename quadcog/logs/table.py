@@ -1,0 +1,194 @@
+"""Flight logs as tables with named columns: CSV and Parquet.
+
+The columns are ``t_s`` (s) and, for each standard signal, its columns
+(``quadcog.logs.signals.signal_columns``: ``position_x_m``, ``roll_rad``,
+``motor_command_m1``, ...), already in SI units and quadcog's frames. A signal is read when all
+its columns are there; every column (signal or not) is also kept under its name in ``raw``.
+Time is taken as written, shifted to start at 0 (``meta["time_offset_s"]`` is the first
+``t_s``); rows are not resampled. An empty cell, ``nan``, text, or time that does not increase
+is refused with the row and column named.
+"""
+import csv
+import os
+from pathlib import Path
+
+import numpy as np
+
+from quadcog.errors import LogFormatError, MissingDependencyError
+from quadcog.logs.flightlog import FlightLog
+from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns, table_columns
+
+__all__ = ["read_table", "write_table", "require_pyarrow"]
+
+_PYARROW_HINT = "pip install pyarrow (or pip install 'quadcog[sweep]')"
+
+
+def require_pyarrow():
+    """The ``pyarrow.parquet`` module, or a typed error giving the install command.
+
+    Returns
+    -------
+    module
+        ``pyarrow.parquet``.
+
+    Raises
+    ------
+    MissingDependencyError
+        pyarrow is not installed.
+    """
+    try:
+        import pyarrow  # noqa: F401
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise MissingDependencyError(f"Parquet flight logs need pyarrow: {_PYARROW_HINT}") \
+            from None
+    return pq
+
+
+def _from_columns(path, fmt, columns, meta):
+    """A FlightLog of {column name: float64 array} (checked: time column, finite cells)."""
+    if TIME_COLUMN not in columns:
+        raise LogFormatError(f"{path}: no time column {TIME_COLUMN!r}; columns are "
+                             f"{', '.join(columns) or 'none'}")
+    for name, a in columns.items():
+        bad = ~np.isfinite(a)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: {a[i]!r} is not "
+                                 "a finite number")
+    t_abs = columns[TIME_COLUMN]
+    if t_abs.size < 2:
+        raise LogFormatError(f"{path}: {t_abs.size} data rows; a flight log needs at least 2")
+    steps = np.diff(t_abs)
+    if not (steps > 0).all():
+        i = int(np.argmax(steps <= 0))
+        raise LogFormatError(f"{path}: column {TIME_COLUMN!r} is not strictly increasing: data "
+                             f"row {i + 2} has {t_abs[i + 1]!r} s after {t_abs[i]!r} s")
+    signals = {}
+    for name in SIGNALS:
+        cols = signal_columns(name)
+        present = [c for c in cols if c in columns]
+        if not present:
+            continue
+        if len(present) < len(cols):
+            missing = [c for c in cols if c not in columns]
+            raise LogFormatError(f"{path}: signal {name!r} has columns {present} but lacks "
+                                 f"{missing}; expected all of {list(cols)}")
+        a = np.column_stack([columns[c] for c in cols])
+        signals[name] = a[:, 0] if not SIGNALS[name].shape else a
+    raw = {k: v for k, v in columns.items() if k != TIME_COLUMN}
+    meta = dict(meta, time_offset_s=repr(float(t_abs[0])))
+    return FlightLog(str(path), fmt, t_abs - t_abs[0], signals, raw, meta)
+
+
+def _read_csv(path):
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+    except UnicodeDecodeError as e:
+        raise LogFormatError(f"{path}: not a text (UTF-8) CSV file ({e.reason} at byte "
+                             f"{e.start})") from None
+    rows = [r for r in rows if r and any(c.strip() for c in r)]
+    if not rows:
+        raise LogFormatError(f"{path}: empty CSV file; expected a header row with "
+                             f"{TIME_COLUMN!r} and signal columns")
+    header = [c.strip() for c in rows[0]]
+    dup = sorted({c for c in header if header.count(c) > 1})
+    if dup:
+        raise LogFormatError(f"{path}: repeated column names {dup}")
+    data = np.empty((len(rows) - 1, len(header)))
+    for i, row in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise LogFormatError(f"{path}: line {i + 2} has {len(row)} cells, the header "
+                                 f"{len(header)}")
+        for j, cell in enumerate(row):
+            text = cell.strip()
+            try:
+                data[i, j] = float(text)
+            except ValueError:
+                raise LogFormatError(f"{path}: line {i + 2}, column {header[j]!r}: {text!r} "
+                                     "is not a number") from None
+    cols = {h: data[:, j].copy() for j, h in enumerate(header)}
+    return _from_columns(path, "csv", cols, {"columns": str(len(header))})
+
+
+def _read_parquet(path):
+    pq = require_pyarrow()
+    import pyarrow as pa
+    try:
+        table = pq.read_table(path)
+    except (pa.ArrowException, OSError) as e:
+        raise LogFormatError(f"{path}: not a readable Parquet file ({e})") from None
+    cols = {}
+    for name in table.column_names:
+        col = table.column(name)
+        if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
+            raise LogFormatError(f"{path}: column {name!r} has type {col.type}; expected "
+                                 "numbers")
+        if col.null_count:
+            i = int(np.flatnonzero(np.asarray(col.is_null()))[0])
+            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1} is empty (null)")
+        cols[name] = np.asarray(col.to_numpy(), dtype=np.float64)
+    return _from_columns(path, "parquet", cols, {"columns": str(len(cols))})
+
+
+def read_table(path, fmt):
+    """Read a CSV or Parquet flight log.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    fmt : str
+        ``"csv"`` or ``"parquet"``.
+
+    Returns
+    -------
+    FlightLog
+
+    Raises
+    ------
+    LogFormatError
+        No ``t_s`` column, a cell that is not a finite number, time not strictly increasing,
+        a signal with only some of its columns, a damaged file.
+    MissingDependencyError
+        Parquet without pyarrow.
+    """
+    return _read_csv(path) if fmt == "csv" else _read_parquet(path)
+
+
+def write_table(log, path, fmt):
+    """Write a log's ``t`` and standard signals as a CSV or Parquet table.
+
+    Parameters
+    ----------
+    log : FlightLog
+        The log; its raw variables are not written.
+    path : str or os.PathLike
+        The file to write (replaced if it exists).
+    fmt : str
+        ``"csv"`` (numbers written with every digit: read back exactly) or ``"parquet"``
+        (float64 columns).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    path = Path(path)
+    names = table_columns(log.signals)
+    blocks = [log.t[:, None]] + [log.signals[n].reshape(log.n_samples, -1)
+                                for n in SIGNALS if n in log.signals]
+    data = np.hstack(blocks)
+    tmp = path.with_name(path.name + ".part")
+    if fmt == "csv":
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            w = csv.writer(f, lineterminator="\n")
+            w.writerow(names)
+            w.writerows([[repr(float(x)) for x in row] for row in data])
+    else:
+        pq = require_pyarrow()
+        import pyarrow as pa
+        pq.write_table(pa.table({n: data[:, j] for j, n in enumerate(names)}), tmp)
+    os.replace(tmp, path)
+    return path
