@@ -29,9 +29,6 @@ class EulerSingularityError(QuadcogError):
     """|theta| reached pi/2, where the ZYX Euler-angle kinematics are singular."""
 
 
-class IdentificationError(InputError):
-    """A CoG/mass identification cannot run on the logs given (quadcog.identification): a
-    missing signal, too few hover samples, no rotor model; the message names the log."""
 class MissingDependencyError(QuadcogError, ImportError):
     """An optional package is not installed; the message gives the install command."""
 
@@ -62,3 +59,8 @@ class LogSignalError(LogError):
     def __init__(self, message, signal=None, source=None, available=()):
         self.signal, self.source, self.available = signal, source, tuple(available)
         super().__init__(message)
+
+
+class IdentificationError(InputError):
+    """A CoG/mass identification cannot run on the logs given (quadcog.identification): a
+    missing signal, too few hover samples, no rotor model; the message names the log."""
