@@ -26,5 +26,6 @@ from .simulation import simulate
 from .sweeps import sweep
 from .timeline import CogChange, CogProfile, Disturbance
 from .trajectory import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
+from .identification import Identification, identify
 
 __version__ = "0.1.0"

@@ -263,8 +263,7 @@ def identify(logs, vehicle="crazyflie", baseline=None, method="auto",
     ok = tuple(n for n, h in zip(R_G_NAMES, half) if np.isfinite(h) and h < limit)
     conditions = [e.condition for e in flights + list(base_est) if e.condition is not None]
     condition = max(conditions) if conditions else None
-    verdict = _verdict(vehicle, chosen, half, ok, limit, condition, base is not None,
-                       flights[0].rotor)
+    verdict = _verdict(vehicle, flights, half, ok, limit, condition, base is not None)
     return Identification(
         r_G=tuple(float(v) for v in r),
         r_G_ci95=tuple(None if not np.isfinite(h) else float(h) for h in half),
@@ -273,7 +272,7 @@ def identify(logs, vehicle="crazyflie", baseline=None, method="auto",
         verdict=verdict, flights=tuple(flights), baseline=base_est, condition=condition)
 
 
-def _verdict(vehicle, method, half, ok, limit, condition, with_baseline, rotor):
+def _verdict(vehicle, flights, half, ok, limit, condition, with_baseline):
     out = []
     not_ok = [n for n in R_G_NAMES if n not in ok]
     if ok:
@@ -282,8 +281,9 @@ def _verdict(vehicle, method, half, ok, limit, condition, with_baseline, rotor):
     for n, h in zip(R_G_NAMES, half):
         if n in not_ok:
             if not np.isfinite(h):
-                out.append(f"{n} not estimated: it does not enter the moment balance of a "
-                           "level hover")
+                why = [note for e in flights for note in e.notes
+                       if note.startswith(f"{n} not estimated")]
+                out.append(why[0] if why else f"{n} not estimated")
             else:
                 out.append(f"{n} not determined by these flights (half-width "
                            f"{1e3 * h:.2f} mm): it needs tilt and angular acceleration")
@@ -298,5 +298,5 @@ def _verdict(vehicle, method, half, ok, limit, condition, with_baseline, rotor):
         out.append(f"a rotor {100 * ROTOR_ASYMMETRY:g} % weaker than the rotor model reads as a "
                    f"CoG shift of {1e3 * shift:.2f} mm toward it, indistinguishable in these "
                    "data; fly baseline flights without the payload (--baseline) to remove it")
-    out.append(f"thrust: {rotor}")
+    out.append(f"thrust: {flights[0].rotor}")
     return "; ".join(out)

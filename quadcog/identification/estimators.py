@@ -43,6 +43,11 @@ FILTER_RATE = inspect.signature(CompositeAdaptive.__init__).parameters["filter_r
 WARM_UP = 5.0 / FILTER_RATE            # s: the filter's start-up term has decayed by e^-5
 STATIC_SIGNALS = ("position",)         # + the rotor model's signals
 REGRESSION_SIGNALS = ("position", "velocity", "roll", "pitch", "yaw", "body_rates")
+# z_G enters the moments through m g z_G sin(tilt) and the linear accelerations: below this
+# RMS tilt about the mean the logged attitude noise dominates that column, and least squares
+# biases z_G toward 0 (errors in variables) with an interval that looks tight; z_G is then
+# not estimated
+Z_G_MIN_TILT = np.radians(2.0)
 
 
 def missing_for(log, names):
@@ -163,7 +168,7 @@ def static_balance(log, vehicle, rotor_model=None, window=None) -> FlightEstimat
     half[2] = np.nan
     m, m_half = block_mean_ci95(m_b)
     notes.append(f"vertical acceleration: {a_from}")
-    notes.append("z_G does not enter a level hover: not estimated")
+    notes.append("z_G not estimated: it does not enter the moment balance of a level hover")
     return FlightEstimate(log.source, "static", r_b, m_b, r, half, float(m), float(m_half),
                           int(sel.sum()), t, moment, m * g * np.ones(len(t)), None, rotor,
                           tuple(notes))
@@ -252,31 +257,40 @@ def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_R
     t, z, Y = t[keep], z[keep], Y[keep]
     scale = np.r_[[vehicle.arm_length / (m * vehicle.g)] * 3, [1.0 / (m * vehicle.g)] * 3]
     zn, Yn = z * scale, Y * scale[None, :, None]
-    A, b = Yn.reshape(-1, 3), zn.reshape(-1)
-    r, *_ = np.linalg.lstsq(A, b, rcond=None)
-    e = (b - A @ r).reshape(-1, 6)
+    eta = x[keep, 3:5]
+    tilt = float(np.sqrt(((eta - eta.mean(axis=0)) ** 2).sum(axis=1).mean()))
+    cols = [0, 1, 2] if tilt >= Z_G_MIN_TILT else [0, 1]
+    Yn = Yn[:, :, cols]
+    A, b = Yn.reshape(-1, len(cols)), zn.reshape(-1)
+    r = np.zeros(3)
+    r[cols], *_ = np.linalg.lstsq(A, b, rcond=None)
+    e = (b - A @ r[cols]).reshape(-1, 6)
     index = np.floor((t - t[0]) / BLOCK_SECONDS).astype(int)
     n_blocks = index.max() + 1
     if n_blocks < MIN_BLOCKS:
         raise IdentificationError(f"{log.source}: too few samples for the least squares "
                                   f"({len(t)} in {n_blocks} blocks of {BLOCK_SECONDS:g} s)")
     AtA_inv = np.linalg.inv(A.T @ A)
-    meat = np.zeros((3, 3))
-    blocks_r = []
+    meat = np.zeros((len(cols), len(cols)))
+    blocks_r = np.zeros((n_blocks, 3))
     for bl in range(n_blocks):
         s = index == bl
         gb = np.einsum("kij,ki->j", Yn[s], e[s])
         meat += np.outer(gb, gb)
-        Ab, bb = Yn[s].reshape(-1, 3), zn[s].reshape(-1)
-        blocks_r.append(np.linalg.lstsq(Ab, bb, rcond=None)[0])
+        Ab, bb = Yn[s].reshape(-1, len(cols)), zn[s].reshape(-1)
+        blocks_r[bl, cols] = np.linalg.lstsq(Ab, bb, rcond=None)[0]
     cov = AtA_inv @ meat @ AtA_inv * n_blocks / (n_blocks - 1)
-    half = t_quantile(n_blocks - 1) * np.sqrt(np.diag(cov))
+    half = np.full(3, np.nan)
+    half[cols] = t_quantile(n_blocks - 1) * np.sqrt(np.diag(cov))
     condition = float(np.linalg.cond(A))
     notes = list(static.notes[:-1]) + [
         f"filter F(s) = {lam:g} / (s + {lam:g}) as the composite law's; first {WARM_UP:g} s "
         "of the window are its warm-up",
         "the mass from the thrust balance of the same window"]
-    return FlightEstimate(log.source, "regression", np.asarray(blocks_r), static.blocks_m, r,
+    if len(cols) == 2:
+        notes.append(f"z_G not estimated: RMS tilt {np.degrees(tilt):.2f} deg is below "
+                     f"{np.degrees(Z_G_MIN_TILT):g} deg, too little for the attitude noise")
+    return FlightEstimate(log.source, "regression", blocks_r, static.blocks_m, r,
                           half, m if mass is not None else static.mass,
                           0.0 if mass is not None else static.mass_ci95, int(keep.sum()),
                           static.t, static.moment, static.weight, condition, rotor,

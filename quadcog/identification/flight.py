@@ -19,8 +19,9 @@ __all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "HoverWindow", "hover_wi
            "t_quantile"]
 
 HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
-HOVER_TRIM = 1.0         # s cut at both ends of the plateau (the climb and descent settle)
-BLOCK_SECONDS = 1.0      # samples of one flight are correlated; 1 s blocks are nearly not
+HOVER_TRIM = 2.0         # s cut at both ends of the plateau (the climb and descent settle)
+BLOCK_SECONDS = 4.0      # samples of one flight are correlated (slow integrators); 2 s
+                         # blocks nearly are not
 MIN_BLOCKS = 3           # fewer 1 s blocks than this: too few hover samples for an interval
 
 
