@@ -1,0 +1,445 @@
+"""PX4 ULog flight logs (``"ulog"``): a reader through pyulog and a minimal writer.
+
+Topics read (instance 0 of each), their fields and the conversions to quadcog's signals.
+PX4's ground frame is NED and its body frame FRD; both become z-up frames by the rotation
+``T = diag(1, -1, -1)`` (a half turn about x): NED -> x north, y west, z up; FRD -> FLU.
+
+- ``vehicle_local_position``: ``x, y, z``, ``vx, vy, vz``, ``ax, ay, az`` (NED, m, m/s,
+  m/s^2; ``a`` is the kinematic acceleration, without gravity) -> ``position``,
+  ``velocity``, ``acceleration`` = ``T @ v``, i.e. ``[x, -y, -z]``;
+- ``vehicle_attitude``: ``q[0..3]`` = (w, x, y, z), the rotation FRD body -> NED. The
+  rotation between quadcog's frames is ``R = T R_px4 T``, whose quaternion is
+  ``(w, x, -y, -z)``; its ZYX angles are ``roll = phi_px4``, ``pitch = -theta_px4``,
+  ``yaw = -psi_px4`` (tests/test_logs_ulog.py checks this on known rotations);
+- ``vehicle_angular_velocity``: ``xyz[0..2]`` (FRD, rad/s) -> ``body_rates`` = ``[p, -q, -r]``;
+- ``actuator_motors``: ``control[0..3]`` (0..1, PX4 motor order) -> ``motor_command`` in
+  quadcog's order, assigned by the rotor positions of the parameters ``CA_ROTOR{i}_PX``,
+  ``CA_ROTOR{i}_PY`` (FRD): one rotor per quadrant, front-right, back-right, back-left,
+  front-left. Without those parameters PX4's quad X numbering (1 front-right, 2 back-left,
+  3 front-left, 4 back-right) is assumed and ``meta["rotor_order"]`` says so. A NaN control
+  (PX4: motor stopped) is read as 0 and counted in ``meta["motor_command_nan_as_zero"]``;
+- ``battery_status``: ``voltage_v`` (V) -> ``battery_voltage``;
+- ``vehicle_thrust_setpoint``: ``xyz[2]`` (normalized, FRD: thrust along -z) ->
+  ``thrust_command`` = ``-xyz[2]``.
+
+Time base: the time stamps (``timestamp``, us) of the first of ``vehicle_local_position``,
+``vehicle_attitude``, ``vehicle_angular_velocity`` in the log, within the span that every
+topic read covers (so nothing is extrapolated; what is cut at either end is in
+``meta["trimmed_s"]``). Each topic is interpolated onto it: linearly for float fields (the
+quaternion component-wise with its sign kept continuous, then normalized), by the previous
+sample for integer fields. ``raw`` holds every numeric field of the topics read as
+``"topic.field"`` on that base (fields that are NaN anywhere are left out and counted in
+``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``, ``ver_sw``,
+...), its rotor geometry in quadcog's order (``rotor_positions_m``, ``rotor_directions``:
+``-sign(CA_ROTOR{i}_KM)``, KM being positive for a counter-clockwise rotor) and parameters
+of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...) when logged.
+"""
+import contextlib
+import io
+import os
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from quadcog.errors import LogFormatError, LogSignalError
+from quadcog.logs.flightlog import FlightLog
+
+__all__ = ["read_ulog", "write_ulog", "px4_to_quadcog_quaternion", "quaternion_to_euler",
+           "euler_to_quaternion", "TOPICS", "QUADX_ORDER"]
+
+ULOG_MAGIC = b"ULog\x01\x12\x35"
+# topic -> the fields the reader uses
+TOPICS = {
+    "vehicle_local_position": ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az"),
+    "vehicle_attitude": ("q[0]", "q[1]", "q[2]", "q[3]"),
+    "vehicle_angular_velocity": ("xyz[0]", "xyz[1]", "xyz[2]"),
+    "actuator_motors": ("control[0]", "control[1]", "control[2]", "control[3]"),
+    "battery_status": ("voltage_v",),
+    "vehicle_thrust_setpoint": ("xyz[0]", "xyz[1]", "xyz[2]"),
+}
+BASE_TOPICS = ("vehicle_local_position", "vehicle_attitude", "vehicle_angular_velocity")
+# PX4 motor index (0-based) of quadcog's rotors 1..4 in PX4's quad X numbering
+QUADX_ORDER = (0, 3, 1, 2)
+_FLIP = np.array([1.0, -1.0, -1.0])           # T = diag(1, -1, -1): NED <-> NWU, FRD <-> FLU
+_PARAMS = ("THR_MDL_FAC", "MPC_THR_HOVER", "SYS_AUTOSTART", "CA_AIRFRAME", "CA_ROTOR_COUNT")
+_INFO = ("sys_name", "ver_hw", "ver_sw", "ver_sw_release", "sys_os_name", "sys_uuid")
+
+
+def px4_to_quadcog_quaternion(q):
+    """PX4's attitude quaternion (FRD body -> NED) as quadcog's (FLU body -> NWU ground).
+
+    Parameters
+    ----------
+    q : array_like, (..., 4)
+        (w, x, y, z) of PX4's ``vehicle_attitude.q``.
+
+    Returns
+    -------
+    numpy.ndarray, (..., 4)
+        (w, x, -y, -z): the quaternion of ``T R T`` with ``T = diag(1, -1, -1)``.
+    """
+    q = np.asarray(q, dtype=np.float64)
+    return q * np.array([1.0, 1.0, -1.0, -1.0])
+
+
+def quaternion_to_euler(q):
+    """ZYX Euler angles of a unit quaternion, ``R(q) = Rz(yaw) Ry(pitch) Rx(roll)``.
+
+    Parameters
+    ----------
+    q : array_like, (..., 4)
+        (w, x, y, z), the rotation body -> ground.
+
+    Returns
+    -------
+    roll, pitch, yaw : numpy.ndarray, (...)
+        rad; yaw in (-pi, pi], pitch in [-pi/2, pi/2].
+    """
+    w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    roll = np.arctan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2.0 * (w * y - z * x), -1.0, 1.0))
+    yaw = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return roll, pitch, yaw
+
+
+def euler_to_quaternion(roll, pitch, yaw):
+    """The unit quaternion of ``Rz(yaw) Ry(pitch) Rx(roll)``.
+
+    Parameters
+    ----------
+    roll, pitch, yaw : array_like
+        ZYX Euler angles (rad), broadcast together.
+
+    Returns
+    -------
+    numpy.ndarray, (..., 4)
+        (w, x, y, z).
+    """
+    cr, sr = np.cos(np.asarray(roll) / 2), np.sin(np.asarray(roll) / 2)
+    cp, sp = np.cos(np.asarray(pitch) / 2), np.sin(np.asarray(pitch) / 2)
+    cy, sy = np.cos(np.asarray(yaw) / 2), np.sin(np.asarray(yaw) / 2)
+    return np.stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy], axis=-1)
+
+
+def _check_messages(path, data):
+    """Walk the message headers: a file cut inside a message is refused (pyulog would stop
+    there silently)."""
+    if len(data) < 16 or data[:7] != ULOG_MAGIC:
+        raise LogFormatError(f"{path}: not a ULog file (it does not start with the ULog magic "
+                             f"bytes {ULOG_MAGIC.hex(' ')})")
+    i, end = 16, len(data)
+    while i < end:
+        if i + 3 > end:
+            raise LogFormatError(f"{path}: truncated ULog: {end - i} bytes of a message "
+                                 f"header at byte {i}")
+        size = data[i] | (data[i + 1] << 8)
+        if i + 3 + size > end:
+            raise LogFormatError(f"{path}: truncated ULog: the message at byte {i} (type "
+                                 f"{chr(data[i + 2])!r}) needs {size} bytes, the file has "
+                                 f"{end - i - 3}")
+        i += 3 + size
+
+
+def _load(path):
+    from pyulog import ULog
+    from pyulog.exceptions import ULogException
+    data = Path(path).read_bytes()
+    _check_messages(path, data)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):      # pyulog prints its warnings
+            u = ULog(str(path), message_name_filter_list=list(TOPICS))
+    except (ULogException, struct.error, ValueError, IndexError, KeyError, OverflowError,
+            UnicodeDecodeError) as e:
+        raise LogFormatError(f"{path}: pyulog cannot read the ULog ({e})") from None
+    if u.file_corruption:
+        raise LogFormatError(f"{path}: the ULog is corrupt (pyulog found damaged messages)")
+    return u
+
+
+def _rotor_map(params):
+    """(PX4 motor index of quadcog's rotors 1..4, positions FLU (4, 2), directions, note)."""
+    keys = [(f"CA_ROTOR{i}_PX", f"CA_ROTOR{i}_PY", f"CA_ROTOR{i}_KM") for i in range(4)]
+    if params.get("CA_ROTOR_COUNT") != 4 or not all(k in params for ks in keys for k in ks):
+        return QUADX_ORDER, None, None, "assumed PX4 quad X (no CA_ROTOR parameters of 4 rotors)"
+    flu = np.array([[params[px], -params[py]] for px, py, _ in keys])
+    slot = {(1, -1): 0, (-1, -1): 1, (-1, 1): 2, (1, 1): 3}   # quadcog rotors 1..4
+    order = [None] * 4
+    for i, (x, y) in enumerate(flu):
+        s = slot.get((int(np.sign(x)), int(np.sign(y))))
+        if s is None or order[s] is not None:
+            return None, flu, None, (f"not a quad X: CA_ROTOR positions (FLU) {flu.tolist()} "
+                                     "do not put one rotor in each quadrant")
+        order[s] = i
+    km = np.array([params[k] for _, _, k in keys])
+    return tuple(order), flu[order], -np.sign(km[order]), "from CA_ROTOR{i}_PX/PY"
+
+
+def _interp(t_base, ts, values, is_float):
+    if is_float:
+        return np.interp(t_base, ts, values)
+    idx = np.searchsorted(ts, t_base, side="right") - 1
+    return values[np.clip(idx, 0, ts.size - 1)].astype(np.float64)
+
+
+def read_ulog(path):
+    """Read a PX4 ULog (see the module docstring for topics, frames and the time base).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file.
+
+    Returns
+    -------
+    FlightLog
+        Format ``"ulog"``.
+
+    Raises
+    ------
+    LogFormatError
+        Not a ULog, truncated or corrupt, a topic whose time stamps do not increase, no
+        overlap of the topics' spans.
+    LogSignalError
+        None of the time-base topics (``vehicle_local_position``, ``vehicle_attitude``,
+        ``vehicle_angular_velocity``) is in the log.
+    """
+    path = str(path)
+    u = _load(path)
+    topics = {}
+    for d in u.data_list:
+        if d.multi_id == 0 and d.name in TOPICS and d.data["timestamp"].size >= 2:
+            topics[d.name] = d.data
+    base = next((n for n in BASE_TOPICS if n in topics), None)
+    if base is None:
+        raise LogSignalError(f"{path}: the ULog has none of the topics {BASE_TOPICS} that "
+                             f"give the time base (it has {sorted(topics) or 'none of'} "
+                             f"{'' if topics else list(TOPICS)})", source=path)
+    for name, d in topics.items():
+        steps = np.diff(d["timestamp"].astype(np.int64))
+        if not (steps > 0).all():
+            k = int(np.argmax(steps <= 0))
+            raise LogFormatError(f"{path}: topic {name}: time stamp of sample {k + 1} "
+                                 f"({int(d['timestamp'][k + 1])} us) does not follow "
+                                 f"{int(d['timestamp'][k])} us; expected increasing")
+    ts_base = topics[base]["timestamp"].astype(np.int64)
+    lo = max(int(d["timestamp"][0]) for d in topics.values())
+    hi = min(int(d["timestamp"][-1]) for d in topics.values())
+    keep = (ts_base >= lo) & (ts_base <= hi)
+    if keep.sum() < 2:
+        raise LogFormatError(f"{path}: the topics {sorted(topics)} overlap in fewer than 2 "
+                             f"samples of {base}")
+    tb = ts_base[keep]
+    t_us = tb.astype(np.float64)
+    raw, dropped = {}, 0
+    for name, d in topics.items():
+        ts = d["timestamp"].astype(np.float64)
+        for field, values in d.items():
+            if field.startswith("timestamp") or values.dtype.kind not in "biuf":
+                continue
+            v = _interp(t_us, ts, values, values.dtype.kind == "f")
+            if np.isfinite(v).all():
+                raw[f"{name}.{field}"] = v
+            else:
+                dropped += 1
+    signals = {}
+
+    def fields(topic, names):
+        d = topics.get(topic)
+        if d is None or not all(n in d for n in names):
+            return None
+        ts = d["timestamp"].astype(np.float64)
+        return np.column_stack([np.interp(t_us, ts, d[n].astype(np.float64)) for n in names])
+
+    lp = "vehicle_local_position"
+    for signal, names in (("position", ("x", "y", "z")), ("velocity", ("vx", "vy", "vz")),
+                          ("acceleration", ("ax", "ay", "az"))):
+        v = fields(lp, names)
+        if v is not None:
+            signals[signal] = v * _FLIP
+    if "vehicle_attitude" in topics:
+        d = topics["vehicle_attitude"]
+        q = np.column_stack([d[f"q[{i}]"].astype(np.float64) for i in range(4)])
+        # q and -q are one rotation: keep the sign continuous before interpolating
+        flips = np.cumprod(np.where(np.einsum("ij,ij->i", q[1:], q[:-1]) < 0, -1.0, 1.0))
+        q[1:] *= flips[:, None]
+        ts = d["timestamp"].astype(np.float64)
+        qi = np.column_stack([np.interp(t_us, ts, q[:, i]) for i in range(4)])
+        norm = np.linalg.norm(qi, axis=1)
+        if not (norm > 0.5).all():
+            raise LogFormatError(f"{path}: vehicle_attitude.q is not a unit quaternion "
+                                 f"(norm {norm.min():.3g} after interpolation)")
+        roll, pitch, yaw = quaternion_to_euler(px4_to_quadcog_quaternion(qi / norm[:, None]))
+        signals.update(roll=roll, pitch=pitch, yaw=yaw)
+    v = fields("vehicle_angular_velocity", ("xyz[0]", "xyz[1]", "xyz[2]"))
+    if v is not None:
+        signals["body_rates"] = v * _FLIP
+    params = dict(u.initial_parameters)
+    order, positions, directions, note = _rotor_map(params)
+    meta = {str(k): str(u.msg_info_dict[k]) for k in _INFO if k in u.msg_info_dict}
+    meta.update({f"param.{k}": repr(params[k]) for k in _PARAMS if k in params})
+    meta.update(vehicle=meta.get("sys_name", "PX4"), time_base=base,
+                start_timestamp_us=str(int(tb[0])), rotor_order=note,
+                trimmed_s=f"{(tb[0] - ts_base[0]) * 1e-6:.6g} at the start, "
+                          f"{(ts_base[-1] - tb[-1]) * 1e-6:.6g} at the end",
+                raw_dropped=str(dropped),
+                rates_hz=", ".join(f"{n}: {(d['timestamp'].size - 1) / ((float(d['timestamp'][-1]) - float(d['timestamp'][0])) * 1e-6):.4g}"
+                                   for n, d in topics.items()))
+    if positions is not None and directions is not None:
+        meta["rotor_positions_m"] = "; ".join(f"{float(x)!r} {float(y)!r}"
+                                              for x, y in positions)
+        meta["rotor_directions"] = " ".join(str(int(d)) for d in directions)
+    if order is not None and "actuator_motors" in topics:
+        d = topics["actuator_motors"]
+        ts = d["timestamp"].astype(np.float64)
+        cols = []
+        nan = 0
+        for i in order:
+            c = d[f"control[{i}]"].astype(np.float64)
+            nan += int(np.isnan(c).sum())
+            cols.append(np.interp(t_us, ts, np.nan_to_num(c, nan=0.0)))
+        signals["motor_command"] = np.column_stack(cols)
+        meta["motor_command_nan_as_zero"] = str(nan)
+    v = fields("battery_status", ("voltage_v",))
+    if v is not None:
+        signals["battery_voltage"] = v[:, 0]
+    v = fields("vehicle_thrust_setpoint", ("xyz[2]",))
+    if v is not None:
+        signals["thrust_command"] = -v[:, 0]
+    return FlightLog(path, "ulog", (tb - tb[0]) * 1e-6, signals, raw, meta)
+
+
+# -- writer -------------------------------------------------------------------------------
+_CARRIED = ("position", "velocity", "acceleration", "roll", "pitch", "yaw", "body_rates",
+            "motor_command", "battery_voltage", "thrust_command")
+_START_US = 1_000_000          # a log starts some time after boot
+
+
+def _message(kind, payload):
+    return struct.pack("<HB", len(payload), ord(kind)) + payload
+
+
+def _key_value(ctype, key, value):
+    name = f"{ctype} {key}".encode()
+    return bytes([len(name)]) + name + value
+
+
+def _nominal_positions(log):
+    """Rotor positions (FLU, quadcog order) to write: the log's own, else a nominal X."""
+    text = log.meta.get("rotor_positions_m")
+    if text:
+        try:
+            pos = np.array([[float(v) for v in pair.split()] for pair in text.split(";")])
+            if pos.shape == (4, 2):
+                return pos
+        except ValueError:
+            pass
+    from quadcog.vehicle import x_layout
+    return np.array(x_layout(0.25))
+
+
+def write_ulog(log, path):
+    """Write a log's signals as a minimal valid ULog (version 1) that PX4's tools and
+    ``read_ulog`` read.
+
+    It holds the header, the flag-bits message, info (``sys_name`` = "quadcog"), the rotor
+    parameters (``CA_ROTOR_COUNT``, ``CA_ROTOR{i}_PX/PY/KM``: PX4's quad X numbering, the
+    log's rotor positions or a nominal X), one format and subscription per topic and one
+    data message per topic and sample (float32 fields, ``timestamp`` in integer us), in
+    PX4's frames and units (the inverse of the reader's conversions).
+
+    Parameters
+    ----------
+    log : FlightLog
+        The log to write.
+    path : str or os.PathLike
+        The file (replaced if it exists).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    LogSignalError
+        The log has a signal ULog does not carry here (``motor_pwm``, ``moment_command``),
+        only some of roll, pitch and yaw (an attitude quaternion needs all three), or no
+        signal at all.
+    """
+    path = Path(path)
+    s = log.signals
+    extra = [n for n in s if n not in _CARRIED]
+    angles = [n for n in ("roll", "pitch", "yaw") if n in s]
+    if extra or 0 < len(angles) < 3 or not s:
+        why = (f"ULog does not carry {extra} here" if extra else
+               f"it has {angles} but a ULog attitude needs roll, pitch and yaw" if angles else
+               "it has no standard signal")
+        raise LogSignalError(f"{log.source}: cannot write as ULog: {why}; write a FlightLog "
+                             "without them (dataclasses.replace(log, signals=...))",
+                             source=log.source, available=tuple(s))
+    n = log.n_samples
+    ts = np.round(log.t * 1e6).astype(np.int64) + _START_US
+    if not (np.diff(ts) > 0).all():
+        raise LogSignalError(f"{log.source}: samples closer than 1 us cannot be written as "
+                             "ULog time stamps (integer us)", source=log.source)
+    topics = {}          # name -> [(field name, ctype, values (n,) or (n, k))]
+    lp = [(f, s[sig] * _FLIP) for f, sig in (("p", "position"), ("v", "velocity"),
+                                             ("a", "acceleration")) if sig in s]
+    if lp:
+        names = {"p": ("x", "y", "z"), "v": ("vx", "vy", "vz"), "a": ("ax", "ay", "az")}
+        topics["vehicle_local_position"] = [(c, "float", v[:, j]) for f, v in lp
+                                            for j, c in enumerate(names[f])]
+    if angles:
+        q = euler_to_quaternion(s["roll"], s["pitch"], s["yaw"])
+        topics["vehicle_attitude"] = [("q", "float[4]", px4_to_quadcog_quaternion(q))]
+    if "body_rates" in s:
+        topics["vehicle_angular_velocity"] = [("xyz", "float[3]", s["body_rates"] * _FLIP)]
+    positions = _nominal_positions(log)
+    if "motor_command" in s:
+        control = np.full((n, 12), np.nan)
+        for rotor, i in enumerate(QUADX_ORDER):
+            control[:, i] = s["motor_command"][:, rotor]
+        topics["actuator_motors"] = [("control", "float[12]", control)]
+    if "battery_voltage" in s:
+        topics["battery_status"] = [("voltage_v", "float", s["battery_voltage"])]
+    if "thrust_command" in s:
+        xyz = np.column_stack([np.zeros(n), np.zeros(n), -s["thrust_command"]])
+        topics["vehicle_thrust_setpoint"] = [("xyz", "float[3]", xyz)]
+    out = bytearray(ULOG_MAGIC + bytes([1]) + struct.pack("<Q", _START_US))
+    out += _message("B", bytes(40))                   # no compat/incompat flags, no appends
+    for key, value in (("sys_name", "quadcog"), ("ver_hw", "quadcog.logs.write_log")):
+        out += _message("I", _key_value(f"char[{len(value)}]", key, value.encode()))
+    params = {"CA_ROTOR_COUNT": ("int32_t", struct.pack("<i", 4))}
+    directions = (-1, 1, -1, 1)            # quadcog order: the quad X's spins (KM > 0: CCW)
+    for rotor, i in enumerate(QUADX_ORDER):
+        x, y = positions[rotor]
+        for key, v in (("PX", x), ("PY", -y), ("KM", -0.05 * directions[rotor])):
+            params[f"CA_ROTOR{i}_{key}"] = ("float", struct.pack("<f", v))
+    for key, (ctype, value) in params.items():
+        out += _message("P", _key_value(ctype, key, value))
+    dtypes = {}
+    for msg_id, (name, flds) in enumerate(topics.items()):
+        spec = ";".join(["uint64_t timestamp"] + [f"{c} {f}" for f, c, _ in flds]) + ";"
+        out += _message("F", f"{name}:{spec}".encode())
+        dt = [("size", "<u2"), ("type", "u1"), ("id", "<u2"), ("timestamp", "<u8")]
+        dt += [(f, "<f4", v.shape[1:]) if v.ndim > 1 else (f, "<f4") for f, _, v in flds]
+        dtypes[name] = (msg_id, np.dtype(dt))
+    for name, (msg_id, _) in dtypes.items():
+        out += _message("A", bytes([0]) + struct.pack("<H", msg_id) + name.encode())
+    rows = []
+    for name, flds in topics.items():
+        msg_id, dt = dtypes[name]
+        rec = np.zeros(n, dtype=dt)
+        rec["size"], rec["type"], rec["id"], rec["timestamp"] = dt.itemsize - 3, ord("D"), \
+            msg_id, ts
+        for f, _, v in flds:
+            rec[f] = v
+        rows.append(rec.view(np.uint8).reshape(n, dt.itemsize))
+    # interleave the topics sample by sample, as a logger writes them
+    out += b"".join(r[k].tobytes() for k in range(n) for r in rows)
+    tmp = path.with_name(path.name + ".part")
+    tmp.write_bytes(bytes(out))
+    os.replace(tmp, path)
+    return path
