@@ -156,7 +156,7 @@ def static_balance(log, vehicle, rotor_model=None, window=None) -> FlightEstimat
     thrust_up = f.sum(axis=1) * cos_tilt[sel]
     moment = np.column_stack([f @ pos[:, 1], -(f @ pos[:, 0])])      # [U2, U3] (N m)
     lift = g + a_z[sel]
-    blocks = block_means(t, np.column_stack([thrust_up, lift, moment]))
+    blocks = block_means(window.blocks(t), np.column_stack([thrust_up, lift, moment]))
     if len(blocks) < MIN_BLOCKS:
         raise IdentificationError(f"{log.source}: too few hover samples ({sel.sum()} in "
                                   f"{len(blocks)} blocks of {BLOCK_SECONDS:g} s)")
@@ -174,14 +174,15 @@ def static_balance(log, vehicle, rotor_model=None, window=None) -> FlightEstimat
                           tuple(notes))
 
 
-def _lowpass(u, t, lam):
+def _lowpass(u, t, lam, restart):
     """F(s) = lam / (s + lam) on samples u (N, ...) at times t (N,): the exact response to
-    a signal held over each step, starting in steady state (F[u](t0) = u(t0))."""
+    a signal held over each step, starting in steady state (F[u] = u) at every sample where
+    ``restart`` (N,) is True (the first one of each segment)."""
     a = np.exp(-lam * np.diff(t))
     y = np.empty_like(u)
     y[0] = u[0]
     for k in range(1, len(t)):
-        y[k] = a[k - 1] * y[k - 1] + (1.0 - a[k - 1]) * u[k]
+        y[k] = u[k] if restart[k] else a[k - 1] * y[k - 1] + (1.0 - a[k - 1]) * u[k]
     return y
 
 
@@ -250,11 +251,15 @@ def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_R
         Phi0[k] = model.regressor(x[k], zero, p0)
         W[k] = model.regressor(x[k], nu, p0) - Phi0[k]
     lam = float(filter_rate)
+    seg = np.searchsorted(np.array([a for a, _ in window.segments]), t, side="right") - 1
+    restart = np.r_[True, np.diff(seg) != 0]
+    seg_start = np.array([a for a, _ in window.segments])[seg]
     Mnu = x[:, 6:] @ M0.T
-    z = _lowpass(U @ B_U.T - n0, t, lam) - lam * (Mnu - _lowpass(Mnu, t, lam))
-    Y = _lowpass(Phi0, t, lam) + lam * (W - _lowpass(W, t, lam))
-    keep = t >= t[0] + WARM_UP
-    t, z, Y = t[keep], z[keep], Y[keep]
+    z = _lowpass(U @ B_U.T - n0, t, lam, restart) - lam * (Mnu - _lowpass(Mnu, t, lam, restart))
+    Y = _lowpass(Phi0, t, lam, restart) + lam * (W - _lowpass(W, t, lam, restart))
+    index_all = window.blocks(t)
+    keep = (t >= seg_start + WARM_UP) & (index_all >= 0)
+    t, z, Y, index = t[keep], z[keep], Y[keep], index_all[keep]
     scale = np.r_[[vehicle.arm_length / (m * vehicle.g)] * 3, [1.0 / (m * vehicle.g)] * 3]
     zn, Yn = z * scale, Y * scale[None, :, None]
     eta = x[keep, 3:5]
@@ -265,7 +270,6 @@ def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_R
     r = np.zeros(3)
     r[cols], *_ = np.linalg.lstsq(A, b, rcond=None)
     e = (b - A @ r[cols]).reshape(-1, 6)
-    index = np.floor((t - t[0]) / BLOCK_SECONDS).astype(int)
     n_blocks = index.max() + 1
     if n_blocks < MIN_BLOCKS:
         raise IdentificationError(f"{log.source}: too few samples for the least squares "

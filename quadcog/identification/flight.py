@@ -3,8 +3,11 @@ vertical acceleration, and block statistics for samples that are not independent
 
 The hover window (take-off and landing removed) is found from the height alone, so that it
 works with every log: the plateau height h is the median of the heights above half the
-largest one; the window is the longest run of samples within ``HOVER_BAND`` of h, shortened by
-``HOVER_TRIM`` seconds at each end (the climb and the descent settle there).
+largest one; the window is every run of samples within ``HOVER_BAND`` of h (a log may hold
+several flights), each shortened by ``HOVER_TRIM`` seconds at both ends (the climb and the
+descent settle there). Samples of one flight are correlated, so intervals come from the means
+of blocks of ``BLOCK_SECONDS`` (Student t over the blocks, widened for the blocks' remaining
+lag-one correlation).
 """
 from dataclasses import dataclass
 
@@ -15,24 +18,25 @@ from quadcog.errors import IdentificationError
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
 
 __all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "HoverWindow", "hover_window",
-           "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95",
+           "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95", "ar1_inflation",
            "t_quantile"]
 
 HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
-HOVER_TRIM = 2.0         # s cut at both ends of the plateau (the climb and descent settle)
-BLOCK_SECONDS = 4.0      # samples of one flight are correlated (slow integrators); 2 s
-                         # blocks nearly are not
-MIN_BLOCKS = 3           # fewer 1 s blocks than this: too few hover samples for an interval
+HOVER_TRIM = 1.5         # s cut at both ends of the plateau (the climb and descent settle)
+BLOCK_SECONDS = 1.0      # samples of one flight are correlated (slow integrators): blocks,
+                         # and the blocks' own lag-one correlation widens the interval
+MIN_BLOCKS = 3           # fewer blocks than this: too few hover samples for an interval
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class HoverWindow:
-    """The take-off and landing free part of one log.
+    """The take-off and landing free part of one log: one or more plateaus (a log may hold
+    several flights).
 
     Parameters
     ----------
-    t0, t1 : float
-        Start and end (s) on the log's time.
+    segments : tuple of (float, float)
+        Start and end (s, on the log's time) of each trimmed plateau.
     height : float
         The plateau height h (m).
     mask : numpy.ndarray, shape (N,), bool
@@ -42,8 +46,7 @@ class HoverWindow:
     -------
     HoverWindow
     """
-    t0: float
-    t1: float
+    segments: tuple
     height: float
     mask: np.ndarray
 
@@ -52,9 +55,47 @@ class HoverWindow:
         """Number of samples in the window."""
         return int(self.mask.sum())
 
+    @property
+    def t0(self) -> float:
+        """Start of the first segment (s)."""
+        return self.segments[0][0]
+
+    @property
+    def t1(self) -> float:
+        """End of the last segment (s)."""
+        return self.segments[-1][1]
+
+    def blocks(self, t, seconds: float = BLOCK_SECONDS) -> np.ndarray:
+        """Block number of each time in ``t`` (the window's samples): consecutive blocks of
+        ``seconds`` within each segment, -1 for the rest of a segment shorter than a block.
+
+        Parameters
+        ----------
+        t : numpy.ndarray, shape (n,)
+            Times (s) inside the window.
+        seconds : float
+            Block length (s).
+
+        Returns
+        -------
+        numpy.ndarray of int, shape (n,)
+        """
+        index = np.full(len(t), -1)
+        first = 0
+        for a, b in self.segments:
+            inside = (t >= a) & (t <= b)
+            n = int((b - a) // seconds)
+            if n == 0:
+                continue
+            # n equal blocks tile the segment, each at least ``seconds`` long
+            k = np.minimum(np.floor((t[inside] - a) / ((b - a) / n)).astype(int), n - 1)
+            index[inside] = k + first
+            first += n
+        return index
+
 
 def hover_window(log, band: float = HOVER_BAND, trim: float = HOVER_TRIM) -> HoverWindow:
-    """The hover window of ``log`` (module docstring: plateau of the height, trimmed).
+    """The hover window of ``log`` (module docstring: plateaus of the height, trimmed).
 
     Parameters
     ----------
@@ -63,7 +104,7 @@ def hover_window(log, band: float = HOVER_BAND, trim: float = HOVER_TRIM) -> Hov
     band : float
         Half-width of the plateau band as a fraction of its height.
     trim : float
-        Seconds removed at each end of the plateau.
+        Seconds removed at each end of each plateau.
 
     Returns
     -------
@@ -72,8 +113,8 @@ def hover_window(log, band: float = HOVER_BAND, trim: float = HOVER_TRIM) -> Hov
     Raises
     ------
     IdentificationError
-        The log has no position, never leaves the ground, or its plateau is shorter than
-        ``2 trim + MIN_BLOCKS * BLOCK_SECONDS``.
+        The log has no position, never leaves the ground, or its plateaus hold fewer than
+        ``MIN_BLOCKS`` blocks of ``BLOCK_SECONDS`` after the trim.
     """
     if not log.has("position"):
         raise IdentificationError(f"{log.source}: no 'position' signal, so the hover (take-off "
@@ -86,18 +127,23 @@ def hover_window(log, band: float = HOVER_BAND, trim: float = HOVER_TRIM) -> Hov
                                   f"{top:.3f} m): no flight to identify from")
     h = float(np.median(z[z > 0.5 * top]))
     inside = np.abs(z - h) < band * h
-    # the longest run of consecutive samples inside the band
     edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
-    starts, ends = edges[0::2], edges[1::2]
-    k = int(np.argmax(ends - starts))
-    t0, t1 = t[starts[k]] + trim, t[ends[k] - 1] - trim
-    mask = (t >= t0) & (t <= t1)
-    if not t1 - t0 >= MIN_BLOCKS * BLOCK_SECONDS:
+    segments = []
+    for i, j in zip(edges[0::2], edges[1::2]):
+        a, b = t[i] + trim, t[j - 1] - trim
+        if b - a >= BLOCK_SECONDS:
+            segments.append((float(a), float(b)))
+    mask = np.zeros(len(t), bool)
+    for a, b in segments:
+        mask |= (t >= a) & (t <= b)
+    window = HoverWindow(tuple(segments), h, mask)
+    n_blocks = window.blocks(t[mask]).max(initial=-1) + 1
+    if n_blocks < MIN_BLOCKS:
         raise IdentificationError(
-            f"{log.source}: too few hover samples: the plateau near {h:.2f} m lasts "
-            f"{t[ends[k] - 1] - t[starts[k]]:.2f} s, less than the {MIN_BLOCKS * BLOCK_SECONDS:g}"
-            f" s needed after cutting {trim:g} s at each end")
-    return HoverWindow(float(t0), float(t1), h, mask)
+            f"{log.source}: too few hover samples: the plateau(s) near {h:.2f} m give "
+            f"{n_blocks} block(s) of {BLOCK_SECONDS:g} s after cutting {trim:g} s at each end "
+            f"(at least {MIN_BLOCKS} needed)")
+    return window
 
 
 def _commands_from_mixer(log, vehicle):
@@ -185,30 +231,22 @@ def vertical_acceleration(log):
     return np.zeros(log.n_samples), "none logged (taken as 0)"
 
 
-def block_means(t, values, seconds: float = BLOCK_SECONDS):
-    """Means of ``values`` over consecutive blocks of ``seconds`` of the times ``t``.
+def block_means(index, values):
+    """Means of ``values`` per block number (``HoverWindow.blocks``; -1 is left out).
 
     Parameters
     ----------
-    t : numpy.ndarray, shape (N,)
-        Times (s) of the samples (one window of one flight).
-    values : numpy.ndarray, shape (N, ...) 
+    index : numpy.ndarray of int, shape (n,)
+        Block number of each sample.
+    values : numpy.ndarray, shape (n, ...)
         Samples.
-    seconds : float
-        Block length (s); a last partial block shorter than half of it is dropped.
 
     Returns
     -------
     numpy.ndarray, shape (B, ...)
-        One mean per block.
+        One mean per block, B = index.max() + 1.
     """
-    index = np.floor((t - t[0]) / seconds).astype(int)
-    out = []
-    for b in range(index.max() + 1):
-        sel = index == b
-        if sel.sum() and t[sel][-1] - t[sel][0] >= 0.5 * seconds - 1e-9:
-            out.append(values[sel].mean(axis=0))
-    return np.asarray(out)
+    return np.asarray([values[index == b].mean(axis=0) for b in range(index.max() + 1)])
 
 
 def t_quantile(dof: int) -> float:
@@ -241,5 +279,27 @@ def block_mean_ci95(blocks):
     """
     b = np.asarray(blocks, dtype=float)
     n = b.shape[0]
-    half = t_quantile(n - 1) * b.std(axis=0, ddof=1) / np.sqrt(n)
-    return b.mean(axis=0), half
+    return b.mean(axis=0), t_quantile(n - 1) * b.std(axis=0, ddof=1) / np.sqrt(n) \
+        * np.sqrt(ar1_inflation(b))
+
+
+def ar1_inflation(blocks):
+    """Variance factor (1 + rho) / (1 - rho) of the mean of block means whose neighbours
+    correlate with lag-one coefficient rho > 0 (AR(1)); 1 when rho <= 0 or too few blocks.
+
+    Parameters
+    ----------
+    blocks : numpy.ndarray, shape (B, ...)
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+    """
+    b = np.asarray(blocks, dtype=float)
+    if b.shape[0] < 4:
+        return np.ones(b.shape[1:])
+    d = b - b.mean(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rho = (d[1:] * d[:-1]).sum(axis=0) / (d * d).sum(axis=0)
+    rho = np.clip(np.nan_to_num(rho), 0.0, 0.9)
+    return (1 + rho) / (1 - rho)

@@ -6,8 +6,8 @@ the motor output a flight log records to the thrust of one rotor (N). Three form
 - ``"polynomial"``: ``f = c0 + c1 (s u) + c2 (s u)^2`` for the logged output u in 0..1 and
   the scale s of the source's command (65535 for the Crazyflie's 16-bit PWM);
 - ``"voltage"``: the voltage across the motor, ``u V_bat``, is a quadratic of the thrust,
-  ``u V_bat = c1 F + c2 F^2`` with F in the source's unit (``thrust_unit`` N per unit per
-  rotor); the model solves it for F;
+  ``u V_bat = c0 + c1 F + c2 F^2`` with F in the source's unit (``thrust_unit`` N per unit per
+  rotor); the model solves it for F (0 below ``c0``: the motor does not turn);
 - ``"thr_mdl_fac"``: PX4's thrust curve, ``f = T_max ((1 - k) u + k u^2)`` for the normalized
   motor output u in 0..1, k the vehicle's ``THR_MDL_FAC``.
 
@@ -44,8 +44,8 @@ class RotorModel:
     signal : str
         The log signal read: ``"motor_pwm"`` (the duty the motor sees) or ``"motor_command"``.
     coefficients : tuple of float
-        ``"polynomial"``: (c0, c1, c2) in N; ``"voltage"``: (c1, c2) in V per unit and V per
-        unit^2 of the source's thrust; ``"thr_mdl_fac"``: (k,), dimensionless in [0, 1].
+        ``"polynomial"``: (c0, c1, c2) in N; ``"voltage"``: (c0, c1, c2) in V, V per unit and
+        V per unit^2 of the source's thrust; ``"thr_mdl_fac"``: (k,), dimensionless in [0, 1].
     scale : float
         ``"polynomial"``: the source's command at u = 1 (65535 for a 16-bit PWM); else 1.
     thrust_unit : float
@@ -76,7 +76,7 @@ class RotorModel:
             validate.fail("RotorModel.name", "a non-empty string", self.name)
         validate.choice(self.kind, f"{where}: kind", KINDS)
         validate.choice(self.signal, f"{where}: signal", SIGNALS_READ)
-        n = {"polynomial": 3, "voltage": 2, "thr_mdl_fac": 1}[self.kind]
+        n = {"polynomial": 3, "voltage": 3, "thr_mdl_fac": 1}[self.kind]
         c = validate.array(self.coefficients, f"{where}: coefficients", (n,))
         object.__setattr__(self, "coefficients", tuple(float(v) for v in c))
         for field in ("scale", "thrust_unit"):
@@ -89,8 +89,9 @@ class RotorModel:
             if self.max_thrust <= 0:
                 validate.fail(f"{where}: max_thrust", "a thrust > 0 N at full output",
                               self.max_thrust)
-        if self.kind == "voltage" and not c[0] > 0:
-            validate.fail(f"{where}: coefficients[0]", "a positive slope (V per unit)", c[0])
+        if self.kind == "voltage" and not (c[1] > 0 and c[0] >= 0):
+            validate.fail(f"{where}: coefficients", "c0 >= 0 V and a positive slope c1",
+                          c.tolist())
         if not isinstance(self.source, str) or not self.source.strip():
             validate.fail(f"{where}: source", "the citation of the numbers", self.source)
 
@@ -142,10 +143,10 @@ class RotorModel:
         elif self.kind == "thr_mdl_fac":
             f = self.max_thrust * ((1.0 - c[0]) * u + c[0] * u * u)
         else:
-            volts = u * self._voltage(voltage, u.shape)
-            if c[1] < 0:        # beyond the parabola's vertex the fit means nothing: saturate
-                volts = np.minimum(volts, c[0] ** 2 / (-4.0 * c[1]))
-            f = self.thrust_unit * _quadratic_root(c[1], c[0], -volts)
+            volts = u * self._voltage(voltage, u.shape) - c[0]
+            if c[2] < 0:        # beyond the parabola's vertex the fit means nothing: saturate
+                volts = np.minimum(volts, c[1] ** 2 / (-4.0 * c[2]))
+            f = self.thrust_unit * _quadratic_root(c[2], c[1], -np.maximum(volts, 0.0))
         return np.maximum(f, 0.0)
 
     def command(self, f, voltage=None) -> np.ndarray:
@@ -174,7 +175,8 @@ class RotorModel:
             u = _quadratic_root(c[0], 1.0 - c[0], -f / self.max_thrust)
         else:
             F = f / self.thrust_unit
-            u = (c[0] * F + c[1] * F * F) / self._voltage(voltage, f.shape)
+            u = np.where(F > 0, c[0] + c[1] * F + c[2] * F * F, 0.0) \
+                / self._voltage(voltage, f.shape)
         u = np.maximum(u, 0.0)
         if u.max(initial=0.0) > 1.0 + 1e-9:
             raise InputError(f"rotor model {self.name!r}: a thrust of {f.max():.4g} N needs "
@@ -199,19 +201,19 @@ def _quadratic_root(a, b, c):
 
 
 # --- Crazyflie 2.x -----------------------------------------------------------------------
-# The firmware's own map (crazyflie-firmware src/drivers/src/motors.c, comment above
-# motorsCompensateBatteryVoltage, "Ithrust is thrust mapped for 65536 <==> 60 grams"): Bitcraze
-# measured the thrust of the whole Crazyflie 2.X on a scale at 16 PWM steps with the supply
-# voltage (wiki "PWM to Thrust", 2015 measurements) and fitted the voltage across the motors
-# against the total thrust F (g): V = 0.08835522 F - 0.00062390 F^2 (+ 0.0687, dropped so that
-# zero thrust is zero PWM); the firmware uses 0.088 and -0.0006239. Per rotor: F / 4 grams.
+# Bitcraze measured the thrust of the whole Crazyflie 2.X on a scale at 16 PWM steps with the
+# supply voltage (wiki "PWM to Thrust", 2015 measurements) and fitted the voltage across the
+# motors, PWM x supply, against the total thrust F (g) (crazyflie-firmware
+# src/drivers/src/motors.c, comment above motorsCompensateBatteryVoltage, GNU Octave polyfit):
+# V = 0.06865956 + 0.08835522 F - 0.00062390 F^2. Per rotor: F / 4 grams. The firmware's
+# compensation drops the constant (zero thrust = zero PWM): CRAZYFLIE_FIRMWARE_COMMAND.
 CRAZYFLIE_BITCRAZE_VOLTAGE = RotorModel(
     name="bitcraze-voltage", kind="voltage", signal="motor_pwm",
-    coefficients=(0.088, -0.0006239), thrust_unit=STANDARD_GRAVITY * 1e-3 / 4,
-    max_thrust=60 / 4 * STANDARD_GRAVITY * 1e-3,
-    source="Bitcraze, crazyflie-firmware motors.c (motorsCompensateBatteryVoltage) and wiki "
-           "'PWM to Thrust' (2015 thrust-stand table): motor voltage u*V_bat = 0.088 F - "
-           "0.0006239 F^2, F the Crazyflie 2.X total thrust (g), a quarter per rotor")
+    coefficients=(0.06865956, 0.08835522, -0.00062390),
+    thrust_unit=STANDARD_GRAVITY * 1e-3 / 4, max_thrust=60 / 4 * STANDARD_GRAVITY * 1e-3,
+    source="Bitcraze, wiki 'PWM to Thrust' (2015 thrust-stand table) and its fit in "
+           "crazyflie-firmware motors.c: motor voltage PWM * V_bat = 0.06865956 + 0.08835522 F "
+           "- 0.00062390 F^2, F the Crazyflie 2.X total thrust (g), a quarter per rotor")
 # J. Foerster, "System Identification of the Crazyflie 2.0 Nano Quadrocopter", BSc thesis,
 # ETH Zurich (IDSC), 2015: thrust of one rotor f = 2.130295e-11 c^2 + 1.032633e-6 c +
 # 5.484560e-4 N for the 16-bit PWM command c (0..65535), measured at a fixed supply: no
@@ -224,7 +226,10 @@ CRAZYFLIE_FOERSTER = RotorModel(
            "BSc thesis, ETH Zurich 2015: f = 2.130295e-11 c^2 + 1.032633e-6 c + 5.484560e-4 N "
            "per rotor, c the 16-bit PWM (0..65535), no voltage term")
 # The firmware's intent with battery compensation on: the thrust command (motor.m*) is linear
-# in thrust, 65536 <==> 60 g total, i.e. 15 g per rotor at full command (same motors.c).
+# in thrust, 65536 <==> 60 g total, i.e. 15 g per rotor at full command (same motors.c); the
+# PWM it sets is (0.088 F - 0.0006239 F^2) / V_bat, the fit above without its constant, so
+# this map reads about 0.0687 V / (dV/dF) more thrust than the measured fit (1.3 g of the
+# vehicle's at a 27 g hover).
 CRAZYFLIE_FIRMWARE_COMMAND = RotorModel(
     name="firmware-command", kind="polynomial", signal="motor_command",
     coefficients=(0.0, 60 / 4 * STANDARD_GRAVITY * 1e-3 / 65536, 0.0), scale=65535.0,
