@@ -12,7 +12,6 @@ lag-one correlation).
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from quadcog.errors import IdentificationError
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
@@ -261,6 +260,7 @@ def t_quantile(dof: int) -> float:
     -------
     float
     """
+    from scipy import stats         # here: slow to import
     return float(stats.t.ppf(0.975, max(int(dof), 1)))
 
 

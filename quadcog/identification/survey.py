@@ -1,6 +1,6 @@
 """The CrazyPAD survey: every flight's CoG shift against the same drone's normal flights.
 
-    python -m quadcog.identification.survey ../shared/data/crazypad [--out FILE] [--update MD]
+    python -m quadcog.identification.survey CRAZYPAD_FOLDER [--out FILE] [--update MD]
 
 The folder holds ``<kind>/<folder>/<drone>_logNN`` files (kind ``motor_data`` or
 ``controller_data``, folder ``normal_flight`` or ``add_weight_*``). For each flight the static

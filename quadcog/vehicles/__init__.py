@@ -1,0 +1,1 @@
+"""Vehicles: rotor models (``quadcog.vehicles.rotor_model``)."""
