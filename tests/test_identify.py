@@ -235,3 +235,21 @@ def test_rotor_thrusts_fall_back_to_the_commands():
     thrust, how, model = rotor_thrusts(_log(t, np.full_like(t, 0.5), f), CRAZYFLIE)
     assert model is CRAZYFLIE_FIRMWARE_COMMAND and "no motor_pwm" in how
     assert np.allclose(thrust, f)
+
+
+def test_speed_proportional_moment_is_not_taken_for_the_cog():
+    """Blocks flown forward at +0.47 m/s and back at -0.47 m/s (as the CrazyPAD flights) with
+    a rotor moment proportional to the speed, 2 mm of apparent x_G per m/s, and unequal time
+    each way: the mean of the blocks is biased, the zero-speed intercept is not."""
+    from quadcog.identification.flight import speed_corrected
+    r = np.array([-0.0012, 0.0005, 0.0])
+    v = np.r_[np.full(6, 0.47), np.full(3, -0.47)]
+    noise = 1e-5 * np.sin(np.arange(9.0))
+    blocks_r = np.column_stack([r[0] + 0.002 * v + noise, np.full(9, r[1]) + noise,
+                                np.zeros(9)])
+    blocks_v = np.column_stack([v, np.zeros(9)])
+    est, half, slopes = speed_corrected(blocks_r, blocks_v)
+    assert abs(blocks_r[:, 0].mean() - r[0]) > 3e-4          # the plain mean is 0.3 mm off
+    assert abs(est[0] - r[0]) < 2e-5 and abs(est[0] - r[0]) < half[0]
+    assert slopes[0] == pytest.approx(0.002, rel=0.02) and slopes[1] == 0.0
+    assert est[1] == pytest.approx(r[1], abs=1e-5)

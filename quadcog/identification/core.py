@@ -198,14 +198,16 @@ def _choose(method, logs):
 def _pool(estimates):
     """(r (3,), half (3,), m, m_half, samples) over several logs: the static balance's blocks
     pooled; the regression's per-log results combined by inverse variance."""
-    from quadcog.identification.flight import block_mean_ci95
+    from quadcog.identification.flight import block_mean_ci95, speed_corrected
     samples = sum(e.samples for e in estimates)
     m, m_half = block_mean_ci95(np.concatenate([e.blocks_m for e in estimates]))
     if estimates[0].method == "static":
-        r, half = block_mean_ci95(np.concatenate([e.blocks_r for e in estimates]))
-        half[2] = np.nan
         if len(estimates) == 1:
             r, half = estimates[0].r_G, estimates[0].r_G_ci95
+        else:
+            r, half, _ = speed_corrected(np.concatenate([e.blocks_r for e in estimates]),
+                                         np.concatenate([e.blocks_v for e in estimates]))
+            half[2] = np.nan
         return r, half, float(m), float(m_half), samples
     w = np.array([1.0 / np.maximum(e.r_G_ci95, 1e-300) ** 2 for e in estimates])
     r = (w * np.array([e.r_G for e in estimates])).sum(axis=0) / w.sum(axis=0)

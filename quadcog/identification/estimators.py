@@ -29,8 +29,9 @@ import numpy as np
 from quadcog.conventions import B_U, rotation_matrix
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.errors import IdentificationError
-from quadcog.identification.flight import (BLOCK_SECONDS, MIN_BLOCKS, block_mean_ci95,
-                                           block_means, hover_window, rotor_thrusts, t_quantile,
+from quadcog.identification.flight import (BLOCK_SECONDS, SPEED_SPREAD, MIN_BLOCKS, block_mean_ci95,
+                                           block_means, body_velocity, hover_window,
+                                           rotor_thrusts, speed_corrected, t_quantile,
                                            vertical_acceleration)
 from quadcog.model import load
 from quadcog.params import with_cog
@@ -80,6 +81,8 @@ class FlightEstimate:
         least-squares solutions, for the figure only.
     blocks_m : numpy.ndarray, shape (B,)
         Per-block masses (kg).
+    blocks_v : numpy.ndarray, shape (B, 2)
+        Per-block mean speeds forward and left (m/s), for ``speed_corrected``.
     r_G, r_G_ci95 : numpy.ndarray, shape (3,)
         Estimate and 95 % half-widths (m); NaN half-width where the method does not estimate.
     mass, mass_ci95 : float
@@ -100,6 +103,7 @@ class FlightEstimate:
     method: str
     blocks_r: np.ndarray
     blocks_m: np.ndarray
+    blocks_v: np.ndarray
     r_G: np.ndarray
     r_G_ci95: np.ndarray
     mass: float
@@ -156,7 +160,8 @@ def static_balance(log, vehicle, rotor_model=None, window=None) -> FlightEstimat
     thrust_up = f.sum(axis=1) * cos_tilt[sel]
     moment = np.column_stack([f @ pos[:, 1], -(f @ pos[:, 0])])      # [U2, U3] (N m)
     lift = g + a_z[sel]
-    blocks = block_means(window.blocks(t), np.column_stack([thrust_up, lift, moment]))
+    blocks = block_means(window.blocks(t), np.column_stack([thrust_up, lift, moment,
+                                                            body_velocity(log)[sel]]))
     if len(blocks) < MIN_BLOCKS:
         raise IdentificationError(f"{log.source}: too few hover samples ({sel.sum()} in "
                                   f"{len(blocks)} blocks of {BLOCK_SECONDS:g} s)")
@@ -164,12 +169,16 @@ def static_balance(log, vehicle, rotor_model=None, window=None) -> FlightEstimat
     # U2 = m g y_G, U3 = -m g x_G
     r_b = np.column_stack([-blocks[:, 3] / (m_b * g), blocks[:, 2] / (m_b * g),
                            np.zeros(len(m_b))])
-    r, half = block_mean_ci95(r_b)
+    v_b = blocks[:, 4:6]
+    r, half, slopes = speed_corrected(r_b, v_b)
     half[2] = np.nan
     m, m_half = block_mean_ci95(m_b)
     notes.append(f"vertical acceleration: {a_from}")
+    if slopes.any():
+        notes.append("moving at constant height (block speeds spread by more than "
+                     f"{SPEED_SPREAD:g} m/s): r_G is the zero-speed intercept of the blocks")
     notes.append("z_G not estimated: it does not enter the moment balance of a level hover")
-    return FlightEstimate(log.source, "static", r_b, m_b, r, half, float(m), float(m_half),
+    return FlightEstimate(log.source, "static", r_b, m_b, v_b, r, half, float(m), float(m_half),
                           int(sel.sum()), t, moment, m * g * np.ones(len(t)), None, rotor,
                           tuple(notes))
 
@@ -294,7 +303,7 @@ def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_R
     if len(cols) == 2:
         notes.append(f"z_G not estimated: RMS tilt {np.degrees(tilt):.2f} deg is below "
                      f"{np.degrees(Z_G_MIN_TILT):g} deg, too little for the attitude noise")
-    return FlightEstimate(log.source, "regression", blocks_r, static.blocks_m, r,
+    return FlightEstimate(log.source, "regression", blocks_r, static.blocks_m, static.blocks_v, r,
                           half, m if mass is not None else static.mass,
                           0.0 if mass is not None else static.mass_ci95, int(keep.sum()),
                           static.t, static.moment, static.weight, condition, rotor,

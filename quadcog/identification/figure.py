@@ -58,7 +58,9 @@ def plot_identification(result, path=None, title="quadcog identify"):
         e = result.flights[0]
         for i, (name, col, sign, j) in enumerate((("U2 (roll)", "C1", 1, 1),
                                                   ("U3 (pitch)", "C0", -1, 0))):
-            ax_m.plot(e.t, 1e3 * e.moment[:, i], color=col, lw=0.6, alpha=0.7,
+            gap = np.r_[np.diff(e.t) > 5 * np.median(np.diff(e.t)), False]
+            tt = np.where(gap, np.nan, e.t)          # no line across the gap between hops
+            ax_m.plot(tt, 1e3 * e.moment[:, i], color=col, lw=0.6, alpha=0.7,
                       label=f"{name} of the rotors")
             # the weight's moment m g [y_G, -x_G] of this log's own estimate
             ax_m.axhline(1e3 * sign * e.weight[0] * e.r_G[j], color=col, lw=1.5, ls="--",

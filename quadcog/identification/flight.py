@@ -18,6 +18,7 @@ from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODEL
 
 __all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "HoverWindow", "hover_window",
            "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95", "ar1_inflation",
+           "speed_corrected", "body_velocity", "SPEED_SPREAD",
            "t_quantile"]
 
 HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
@@ -25,6 +26,11 @@ HOVER_TRIM = 1.5         # s cut at both ends of the plateau (the climb and desc
 BLOCK_SECONDS = 1.0      # samples of one flight are correlated (slow integrators): blocks,
                          # and the blocks' own lag-one correlation widens the interval
 MIN_BLOCKS = 3           # fewer blocks than this: too few hover samples for an interval
+# Flown at constant height but moving (the CrazyPAD flights cross the room at 0.47 m/s, once
+# each way), the rotors' flapping and drag add a moment proportional to the speed, which reads
+# as a CoG shift along the motion. When the blocks' mean speeds spread by more than this along
+# a body axis, the CoG is the zero-speed intercept of a line fitted through the blocks.
+SPEED_SPREAD = 0.1       # m/s
 
 
 @dataclass(frozen=True, eq=False)
@@ -303,3 +309,66 @@ def ar1_inflation(blocks):
         rho = (d[1:] * d[:-1]).sum(axis=0) / (d * d).sum(axis=0)
     rho = np.clip(np.nan_to_num(rho), 0.0, 0.9)
     return (1 + rho) / (1 - rho)
+
+
+def body_velocity(log):
+    """Horizontal velocity in heading axes (N, 2) (m/s: forward, left), the ground velocity
+    (else the derivative of the position) turned by -yaw (when logged); zeros without either.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 2)
+    """
+    if log.has("velocity"):
+        v = log.signal("velocity")[:, :2]
+    elif log.has("position"):
+        v = np.gradient(log.signal("position")[:, :2], log.t, axis=0)
+    else:
+        return np.zeros((log.n_samples, 2))
+    if not log.has("yaw"):
+        return v.copy()
+    c, s = np.cos(log.signal("yaw")), np.sin(log.signal("yaw"))
+    return np.column_stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1]])
+
+
+def speed_corrected(blocks_r, blocks_v, spread: float = SPEED_SPREAD):
+    """x_G and y_G from block estimates, free of a moment proportional to the speed.
+
+    For each of x and y: when the blocks' speeds along that axis spread by more than
+    ``spread``, the zero-speed intercept of the least-squares line r_b = r + k v_b and the
+    95 % half-width of that intercept (Student t with B - 2 degrees of freedom, widened for the
+    residuals' lag-one correlation); otherwise the mean of the blocks (``block_mean_ci95``).
+
+    Parameters
+    ----------
+    blocks_r : numpy.ndarray, shape (B, 3)
+        Block estimates of r_G (m).
+    blocks_v : numpy.ndarray, shape (B, 2)
+        Block mean speeds forward and left (m/s).
+    spread : float
+        m/s.
+
+    Returns
+    -------
+    (numpy.ndarray (3,), numpy.ndarray (3,), numpy.ndarray (2,))
+        r_G, half-widths (the z entry as ``block_mean_ci95`` gives it) and the slopes k
+        (m per m/s; 0 where not fitted).
+    """
+    r, half = block_mean_ci95(blocks_r)
+    slopes = np.zeros(2)
+    n = len(blocks_r)
+    for i in (0, 1):
+        v = blocks_v[:, i]
+        if n < 4 or np.ptp(v) <= spread:
+            continue
+        A = np.column_stack([np.ones(n), v])
+        coef, *_ = np.linalg.lstsq(A, blocks_r[:, i], rcond=None)
+        e = blocks_r[:, i] - A @ coef
+        cov = np.linalg.inv(A.T @ A) * (e @ e) / (n - 2)
+        r[i], slopes[i] = coef
+        half[i] = t_quantile(n - 2) * np.sqrt(cov[0, 0] * ar1_inflation(e[:, None])[0])
+    return r, half, slopes
