@@ -266,7 +266,7 @@ def read_usd(path):
     if not (steps > 0).all():
         k = int(np.argmax(steps <= 0))
         raise LogFormatError(f"{path}: fixed-frequency record {k + 1} has time stamp "
-                             f"{ticks[k + 1]!r} s after {ticks[k]!r} s; expected increasing")
+                             f"{float(ticks[k + 1])!r} s after {float(ticks[k])!r} s; expected increasing")
     types = {k: v.dtype.str for k, v in variables.items()}
     raw = {k: v.astype(np.float64) for k, v in variables.items()}
     median = float(np.median(steps))

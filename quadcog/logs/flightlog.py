@@ -84,7 +84,7 @@ class FlightLog:
         if not (steps > 0).all():
             i = int(np.argmax(steps <= 0))
             raise LogFormatError(f"{src}: time is not strictly increasing: sample {i + 1} at "
-                                 f"{t[i + 1]!r} s follows {t[i]!r} s")
+                                 f"{float(t[i + 1])!r} s follows {float(t[i])!r} s")
         object.__setattr__(self, "t", t)
         n = t.size
         signals = {}
@@ -110,8 +110,8 @@ class FlightLog:
                                  "(one row per sample of t)")
         if not np.isfinite(a).all():
             i = _first_bad(a)
-            raise LogFormatError(f"{self.source}: {what} is {a[i]!r} at sample {i[0]} "
-                                 f"(t = {self.t[i[0]]!r} s); expected finite values")
+            raise LogFormatError(f"{self.source}: {what} is {float(a[i])!r} at sample {i[0]} "
+                                 f"(t = {float(self.t[i[0]])!r} s); expected finite values")
         return a
 
     @property
@@ -191,7 +191,7 @@ class FlightLog:
             raise InputError(
                 f"{self.source}: window [{t0!r}, {t1!r}] s holds {int(keep.sum())} samples; "
                 f"expected t0 < t1 and at least 2 samples of the log's "
-                f"[{self.t[0]!r}, {self.t[-1]!r}] s")
+                f"[{float(self.t[0])!r}, {float(self.t[-1])!r}] s")
         meta = dict(self.meta, window=f"{t0!r} {t1!r}")
         return FlightLog(self.source, self.format, self.t[keep],
                          {k: v[keep] for k, v in self.signals.items()},

@@ -54,7 +54,7 @@ def _from_columns(path, fmt, columns, meta):
         bad = ~np.isfinite(a)
         if bad.any():
             i = int(np.argmax(bad))
-            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: {a[i]!r} is not "
+            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: {float(a[i])!r} is not "
                                  "a finite number")
     t_abs = columns[TIME_COLUMN]
     if t_abs.size < 2:
@@ -63,7 +63,7 @@ def _from_columns(path, fmt, columns, meta):
     if not (steps > 0).all():
         i = int(np.argmax(steps <= 0))
         raise LogFormatError(f"{path}: column {TIME_COLUMN!r} is not strictly increasing: data "
-                             f"row {i + 2} has {t_abs[i + 1]!r} s after {t_abs[i]!r} s")
+                             f"row {i + 2} has {float(t_abs[i + 1])!r} s after {float(t_abs[i])!r} s")
     signals = {}
     for name in SIGNALS:
         cols = signal_columns(name)

@@ -28,8 +28,8 @@ topic read covers (so nothing is extrapolated; what is cut at either end is in
 ``meta["trimmed_s"]``). Each topic is interpolated onto it: linearly for float fields (the
 quaternion component-wise with its sign kept continuous, then normalized), by the previous
 sample for integer fields. ``raw`` holds every numeric field of the topics read as
-``"topic.field"`` on that base (fields that are NaN anywhere are left out and counted in
-``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``, ``ver_sw``,
+``"topic.field"`` on that base (fields not finite somewhere, NaN or infinite, are left out and
+counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``, ``ver_sw``,
 ...), its rotor geometry in quadcog's order (``rotor_positions_m``, ``rotor_directions``:
 ``-sign(CA_ROTOR{i}_KM)``, KM being positive for a counter-clockwise rotor) and parameters
 of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...) when logged.
