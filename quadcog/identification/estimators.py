@@ -36,7 +36,7 @@ from quadcog.identification.flight import (BLOCK_SECONDS, SPEED_SPREAD, MIN_BLOC
 from quadcog.model import load
 from quadcog.params import with_cog
 
-__all__ = ["FILTER_RATE", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "FlightEstimate",
+__all__ = ["FILTER_RATE", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT", "FlightEstimate",
            "static_balance", "regression", "missing_for"]
 
 # the composite law's filter rate lam (1/s): one definition, read from its signature
@@ -204,7 +204,7 @@ def _states(log, sel):
 
 
 def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_RATE,
-               mass=None) -> FlightEstimate:
+               mass=None, min_tilt=Z_G_MIN_TILT) -> FlightEstimate:
     """r_G by filtered least squares with the generated regressor (module docstring).
 
     Parameters
@@ -222,6 +222,8 @@ def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_R
         lam (1/s) of F(s).
     mass : float, optional
         The mass (kg); default: the thrust balance of ``static_balance`` on the same window.
+    min_tilt : float
+        RMS tilt (rad) below which z_G is not estimated (``Z_G_MIN_TILT``; 0 forces it).
 
     Returns
     -------
@@ -273,7 +275,7 @@ def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_R
     zn, Yn = z * scale, Y * scale[None, :, None]
     eta = x[keep, 3:5]
     tilt = float(np.sqrt(((eta - eta.mean(axis=0)) ** 2).sum(axis=1).mean()))
-    cols = [0, 1, 2] if tilt >= Z_G_MIN_TILT else [0, 1]
+    cols = [0, 1, 2] if tilt >= min_tilt else [0, 1]
     Yn = Yn[:, :, cols]
     A, b = Yn.reshape(-1, len(cols)), zn.reshape(-1)
     r = np.zeros(3)
@@ -302,7 +304,7 @@ def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_R
         "the mass from the thrust balance of the same window"]
     if len(cols) == 2:
         notes.append(f"z_G not estimated: RMS tilt {np.degrees(tilt):.2f} deg is below "
-                     f"{np.degrees(Z_G_MIN_TILT):g} deg, too little for the attitude noise")
+                     f"{np.degrees(min_tilt):g} deg, too little for the attitude noise")
     return FlightEstimate(log.source, "regression", blocks_r, static.blocks_m, static.blocks_v, r,
                           half, m if mass is not None else static.mass,
                           0.0 if mass is not None else static.mass_ci95, int(keep.sum()),
