@@ -15,9 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from quadcog.errors import IdentificationError
-from quadcog.identification.estimators import (REGRESSION_SIGNALS, FlightEstimate, missing_for,
-                                               regression, static_balance)
+from quadcog.identification.estimators import (REGRESSION_SIGNALS, missing_for, regression,
+                                               static_balance)
 from quadcog.vehicle import PRESETS, Vehicle
+from quadcog.vehicles.rotor_model import RotorModel
 
 __all__ = ["METHODS", "JSON_KEYS", "R_G_NAMES", "IDENTIFIABLE_FRACTION", "Identification",
            "identify", "as_logs", "as_vehicle"]
@@ -117,7 +118,7 @@ class Identification:
         return "\n".join(lines)
 
 
-def as_vehicle(vehicle) -> Vehicle:
+def as_vehicle(vehicle: "str | Vehicle") -> Vehicle:
     """A Vehicle from a preset name (``quadcog.vehicle.PRESETS``) or a Vehicle.
 
     Parameters
@@ -141,7 +142,7 @@ def as_vehicle(vehicle) -> Vehicle:
                               f"{', '.join(PRESETS)} or a quadcog Vehicle")
 
 
-def as_logs(logs, what="logs") -> list:
+def as_logs(logs: object, what: str = "logs") -> list:
     """FlightLogs from one log or path, or a sequence of them (paths are read with
     ``quadcog.logs.read_log``, the format from the file).
 
@@ -219,8 +220,9 @@ def _estimate(logs, vehicle, method, rotor_model):
     return [run(log, vehicle, rotor_model) for log in logs]
 
 
-def identify(logs, vehicle="crazyflie", baseline=None, method="auto",
-             rotor_model=None) -> Identification:
+def identify(logs: object, vehicle: "str | Vehicle" = "crazyflie", baseline: object = None,
+             method: str = "auto", rotor_model: "RotorModel | str | None" = None
+             ) -> Identification:
     """Identify the CoG offset r_G and the mass from flight logs (module docstring).
 
     Parameters

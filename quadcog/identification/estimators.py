@@ -29,15 +29,18 @@ import numpy as np
 from quadcog.conventions import B_U, rotation_matrix
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.errors import IdentificationError
-from quadcog.identification.flight import (BLOCK_SECONDS, SPEED_SPREAD, MIN_BLOCKS, block_mean_ci95,
-                                           block_means, body_velocity, hover_window,
-                                           rotor_thrusts, speed_corrected, t_quantile,
-                                           vertical_acceleration)
+from quadcog.identification.flight import (BLOCK_SECONDS, MIN_BLOCKS, SPEED_SPREAD,
+                                           HoverWindow, block_mean_ci95, block_means,
+                                           body_velocity, hover_window, rotor_thrusts,
+                                           speed_corrected, t_quantile, vertical_acceleration)
+from quadcog.logs.flightlog import FlightLog
 from quadcog.model import load
 from quadcog.params import with_cog
+from quadcog.vehicle import Vehicle
+from quadcog.vehicles.rotor_model import RotorModel
 
-__all__ = ["FILTER_RATE", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT", "FlightEstimate",
-           "static_balance", "regression", "missing_for"]
+__all__ = ["FILTER_RATE", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT",
+           "FlightEstimate", "static_balance", "regression", "missing_for"]
 
 # the composite law's filter rate lam (1/s): one definition, read from its signature
 FILTER_RATE = inspect.signature(CompositeAdaptive.__init__).parameters["filter_rate"].default
@@ -51,7 +54,7 @@ REGRESSION_SIGNALS = ("position", "velocity", "roll", "pitch", "yaw", "body_rate
 Z_G_MIN_TILT = np.radians(2.0)
 
 
-def missing_for(log, names):
+def missing_for(log: FlightLog, names: tuple) -> list:
     """The signals of ``names`` that ``log`` lacks.
 
     Parameters
@@ -124,7 +127,8 @@ def _tilt_cosine(log, notes):
     return np.ones(log.n_samples)
 
 
-def static_balance(log, vehicle, rotor_model=None, window=None) -> FlightEstimate:
+def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str | None" = None,
+                   window: "HoverWindow | None" = None) -> FlightEstimate:
     """x_G, y_G and m from the thrust and moment balance of the hover (module docstring).
 
     Parameters
@@ -203,8 +207,9 @@ def _states(log, sel):
     return np.column_stack([p, eta, nu1, log.signal("body_rates")[sel]])
 
 
-def regression(log, vehicle, rotor_model=None, window=None, filter_rate=FILTER_RATE,
-               mass=None, min_tilt=Z_G_MIN_TILT) -> FlightEstimate:
+def regression(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str | None" = None,
+               window: "HoverWindow | None" = None, filter_rate: float = FILTER_RATE,
+               mass: "float | None" = None, min_tilt: float = Z_G_MIN_TILT) -> FlightEstimate:
     """r_G by filtered least squares with the generated regressor (module docstring).
 
     Parameters

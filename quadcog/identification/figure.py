@@ -14,7 +14,8 @@ from quadcog.outputs import plot_text
 __all__ = ["plot_identification"]
 
 
-def plot_identification(result, path=None, title="quadcog identify"):
+def plot_identification(result: object, path: "str | Path | None" = None,
+                        title: str = "quadcog identify") -> object:
     """Draw the figure of an Identification; saved to ``path`` (PNG) if given.
 
     Parameters

@@ -17,8 +17,8 @@ from quadcog.errors import IdentificationError
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
 
 __all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "HoverWindow", "hover_window",
-           "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95", "ar1_inflation",
-           "speed_corrected", "body_velocity", "SPEED_SPREAD",
+           "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95",
+           "ar1_inflation", "speed_corrected", "body_velocity", "SPEED_SPREAD",
            "t_quantile"]
 
 HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
@@ -70,7 +70,7 @@ class HoverWindow:
         """End of the last segment (s)."""
         return self.segments[-1][1]
 
-    def blocks(self, t, seconds: float = BLOCK_SECONDS) -> np.ndarray:
+    def blocks(self, t: np.ndarray, seconds: float = BLOCK_SECONDS) -> np.ndarray:
         """Block number of each time in ``t`` (the window's samples): consecutive blocks of
         ``seconds`` within each segment, -1 for the rest of a segment shorter than a block.
 
@@ -99,7 +99,8 @@ class HoverWindow:
         return index
 
 
-def hover_window(log, band: float = HOVER_BAND, trim: float = HOVER_TRIM) -> HoverWindow:
+def hover_window(log: object, band: float = HOVER_BAND, trim: float = HOVER_TRIM
+                 ) -> HoverWindow:
     """The hover window of ``log`` (module docstring: plateaus of the height, trimmed).
 
     Parameters
@@ -163,7 +164,8 @@ def _commands_from_mixer(log, vehicle):
     return np.clip(u, 0.0, 1.0)
 
 
-def rotor_thrusts(log, vehicle, rotor_model=None):
+def rotor_thrusts(log: object, vehicle: object, rotor_model: "RotorModel | str | None" = None
+                  ) -> tuple:
     """The thrust of each rotor (N) over the whole log, and how it was obtained.
 
     Parameters
@@ -217,7 +219,7 @@ def rotor_thrusts(log, vehicle, rotor_model=None):
         f"{', '.join(log.signals) or 'no standard signals'})")
 
 
-def vertical_acceleration(log):
+def vertical_acceleration(log: object) -> tuple:
     """Kinematic vertical acceleration (N,) (m/s^2, z up) and where it came from: the
     ``"acceleration"`` signal, else the derivative of the vertical velocity, else zero.
 
@@ -236,7 +238,7 @@ def vertical_acceleration(log):
     return np.zeros(log.n_samples), "none logged (taken as 0)"
 
 
-def block_means(index, values):
+def block_means(index: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Means of ``values`` per block number (``HoverWindow.blocks``; -1 is left out).
 
     Parameters
@@ -270,7 +272,7 @@ def t_quantile(dof: int) -> float:
     return float(stats.t.ppf(0.975, max(int(dof), 1)))
 
 
-def block_mean_ci95(blocks):
+def block_mean_ci95(blocks: np.ndarray) -> tuple:
     """Mean of block means and the half-width of its 95 % interval (Student t on the blocks).
 
     Parameters
@@ -289,7 +291,7 @@ def block_mean_ci95(blocks):
         * np.sqrt(ar1_inflation(b))
 
 
-def ar1_inflation(blocks):
+def ar1_inflation(blocks: np.ndarray) -> np.ndarray:
     """Variance factor (1 + rho) / (1 - rho) of the mean of block means whose neighbours
     correlate with lag-one coefficient rho > 0 (AR(1)); 1 when rho <= 0 or too few blocks.
 
@@ -311,7 +313,7 @@ def ar1_inflation(blocks):
     return (1 + rho) / (1 - rho)
 
 
-def body_velocity(log):
+def body_velocity(log: object) -> np.ndarray:
     """Horizontal velocity in heading axes (N, 2) (m/s: forward, left), the ground velocity
     (else the derivative of the position) turned by -yaw (when logged); zeros without either.
 
@@ -335,7 +337,8 @@ def body_velocity(log):
     return np.column_stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1]])
 
 
-def speed_corrected(blocks_r, blocks_v, spread: float = SPEED_SPREAD):
+def speed_corrected(blocks_r: np.ndarray, blocks_v: np.ndarray, spread: float = SPEED_SPREAD
+                    ) -> tuple:
     """x_G and y_G from block estimates, free of a moment proportional to the speed.
 
     For each of x and y: when the blocks' speeds along that axis spread by more than

@@ -17,7 +17,7 @@ from quadcog.errors import IdentificationError
 __all__ = ["identified_cog"]
 
 
-def identified_cog(source) -> np.ndarray:
+def identified_cog(source: object) -> np.ndarray:
     """The CoG offset r_G (3,) (m, body frame) of an identification.
 
     Parameters

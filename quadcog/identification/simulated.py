@@ -20,8 +20,10 @@ LOG_RATE = 100.0           # Hz: the Crazyflie uSD deck's rate in the CrazyPAD f
 PWM_STEP = 1.0 / 65535     # the 16-bit resolution of a logged motor output
 
 
-def simulated_log(result, vehicle, sensing=None, rate=LOG_RATE, voltage=(4.1, 3.7),
-                  rotor_model=None, seed=None, source="simulated"):
+def simulated_log(result: object, vehicle: object, sensing: "Sensing | None" = None,
+                  rate: float = LOG_RATE, voltage: tuple = (4.1, 3.7),
+                  rotor_model: object = None, seed: "int | None" = None,
+                  source: str = "simulated") -> object:
     """The FlightLog a logger on ``vehicle`` would have written during ``result``.
 
     Parameters

@@ -16,8 +16,6 @@ import math
 from pathlib import Path
 import sys
 
-import numpy as np
-
 from quadcog.errors import QuadcogError
 from quadcog.identification.core import identify
 from quadcog.logs import read_log
@@ -32,7 +30,7 @@ NORMAL = "normal_flight"
 BEGIN, END = "<!-- survey:begin -->", "<!-- survey:end -->"
 
 
-def flights(root):
+def flights(root: "str | Path") -> list:
     """The flights under ``root``: (kind, folder, drone, path), sorted.
 
     Parameters
@@ -66,7 +64,7 @@ def _row(result):
                 dm=1e3 * result.mass_change, mass=1e3 * result.mass)
 
 
-def survey_rows(root, rotor_model=None):
+def survey_rows(root: "str | Path", rotor_model: "str | None" = None) -> list:
     """One row per flight (and a pooled row per weighted folder), each a dict.
 
     Parameters
@@ -106,7 +104,7 @@ def survey_rows(root, rotor_model=None):
     return rows
 
 
-def rotor_model_rows(root):
+def rotor_model_rows(root: "str | Path") -> list:
     """The pooled shift of each weighted folder with each Crazyflie rotor model.
 
     Parameters
@@ -130,7 +128,7 @@ def _fmt(v, spec="+.2f"):
     return format(v, spec)
 
 
-def tables(root) -> str:
+def tables(root: "str | Path") -> str:
     """The survey as markdown (both tables, with the command that made them).
 
     Parameters
@@ -168,7 +166,7 @@ def tables(root) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv=None) -> int:
+def main(argv: "list | None" = None) -> int:
     """The command line (module docstring).
 
     Parameters

@@ -118,7 +118,7 @@ class RotorModel:
                              f"> 0 V, got values from {np.nanmin(v):.4g} to {np.nanmax(v):.4g}")
         return v
 
-    def thrust(self, u, voltage=None) -> np.ndarray:
+    def thrust(self, u: np.ndarray, voltage: "np.ndarray | None" = None) -> np.ndarray:
         """Thrust of each rotor (N) from logged outputs.
 
         Parameters
@@ -149,7 +149,7 @@ class RotorModel:
             f = self.thrust_unit * _quadratic_root(c[2], c[1], -np.maximum(volts, 0.0))
         return np.maximum(f, 0.0)
 
-    def command(self, f, voltage=None) -> np.ndarray:
+    def command(self, f: np.ndarray, voltage: "np.ndarray | None" = None) -> np.ndarray:
         """The logged output u (0..1) that gives the rotor thrusts ``f``: the inverse of
         ``thrust``.
 
