@@ -83,7 +83,8 @@ def main(folder):
         summary["ground_z"].append(np.median(z[ground]))
         p = log.signal("position")
         summary["x_max"].append(p[:, 0].max())
-        summary["y_abs"].append(np.abs(p[np.concatenate([np.flatnonzero(s) for s in segs]), 1]).max())
+        airborne = np.concatenate([np.flatnonzero(s) for s in segs])
+        summary["y_abs"].append(np.abs(p[airborne, 1]).max())
         row = f"| {name} | {log.n_samples} | {1 / med:.2f} | {int(round(summary['lost'][-1]))} |"
         row += " ".join(f" {np.median(z[s]):.3f}" for s in segs) + " |"
         if log.has("motor_command"):
@@ -184,7 +185,8 @@ def main(folder):
               f"{corr:.2f}; with the yaw sign flipped: gain {gf:.2f}, correlation {cf:.2f}"
               f" ({len(flip)} flights)")
     if s["zero_run"]:
-        print(f"controller commands exactly 0 between the flights for {span(s['zero_run'], '{:.2f}')} s")
+        print(f"controller commands exactly 0 between the flights for "
+              f"{span(s['zero_run'], '{:.2f}')} s")
         print(f"integrated q vs x''/g correlation {span(s['q_corr'], '{:.2f}')}; integrated p vs "
               f"-y''/g {span(s['p_corr'], '{:.2f}')}")
 

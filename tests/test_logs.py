@@ -234,3 +234,8 @@ def test_docs_table_lists_every_signal_with_its_unit():
         assert rows[name].strip() == spec.unit, name
         assert f"(N,{' ' + str(spec.shape[0]) if spec.shape else ''})" in \
             re.search(rf"^\| `{name}` \|[^|]+\|", doc, flags=re.M).group(0), name
+
+
+def test_flightlog_refuses_a_non_mapping():
+    with pytest.raises(InputError, match="signals must be a mapping"):
+        FlightLog("x", "csv", [0.0, 1.0], [("roll", [0.0, 0.0])], {}, {})

@@ -80,8 +80,8 @@ def sample():
 def test_sample_reads_into_signals(sample):
     assert sample.format == "ulog" and sample.meta["sys_name"] == "PX4"
     assert set(sample.signals) == {"position", "velocity", "acceleration", "roll", "pitch",
-                                   "yaw", "body_rates", "motor_command", "battery_voltage",
-                                   "thrust_command"}
+                                   "yaw", "body_rates", "motor_command", "motor_pwm",
+                                   "battery_voltage", "thrust_command"}
     assert sample.meta["time_base"] == "vehicle_local_position"
     assert 300 < sample.n_samples < 320 and 30.0 < sample.t[-1] < 31.5
     steps = np.diff(sample.t)                   # logged at 10 Hz, steps of 96 and 104 ms
@@ -106,6 +106,17 @@ def test_sample_rotor_order_from_the_parameters(sample):
     assert (np.sign(pos) == [[1, -1], [-1, -1], [-1, 1], [1, 1]]).all()
     assert sample.meta["rotor_directions"] == "-1 1 -1 1"
     assert sample.meta["param.THR_MDL_FAC"] == "0.0"
+
+
+def test_sample_outputs_are_the_motor_controls(sample):
+    """actuator_outputs (channels by PWM_MAIN_FUNC, 1000..2000 us) and actuator_motors (rotors
+    by CA_ROTOR positions) are two routes to the same motors: when running they agree to the
+    us rounding of the outputs; disarmed (900 us) is 0."""
+    m, pwm = sample.signal("motor_command"), sample.signal("motor_pwm")
+    on = m > 0.01
+    assert on.sum() > 400 and np.abs(m[on] - pwm[on]).max() < 1e-3
+    assert (pwm[m == 0] == 0).all()
+    assert sample.meta["pwm_range"].startswith("PX4's defaults")
 
 
 def _corr(x, y):
@@ -136,8 +147,8 @@ def test_written_ulog_is_read_by_pyulog_in_px4_frames(sample, tmp_path):
     assert not u.file_corruption and u.msg_info_dict["sys_name"] == "quadcog"
     topics = {d.name: d.data for d in u.data_list}
     assert set(topics) == {"vehicle_local_position", "vehicle_attitude",
-                           "vehicle_angular_velocity", "actuator_motors", "battery_status",
-                           "vehicle_thrust_setpoint"}
+                           "vehicle_angular_velocity", "actuator_motors", "actuator_outputs",
+                           "battery_status", "vehicle_thrust_setpoint"}
     lp = topics["vehicle_local_position"]
     assert lp["timestamp"].size == sample.n_samples
     assert np.allclose(lp["z"], -sample.signal("position")[:, 2], atol=1e-6)      # NED down
@@ -151,6 +162,9 @@ def test_written_ulog_is_read_by_pyulog_in_px4_frames(sample, tmp_path):
     am = topics["actuator_motors"]                   # PX4 motor 2 is back-left: quadcog's 3
     assert np.allclose(am["control[1]"], sample.signal("motor_command")[:, 2], atol=1e-6)
     assert np.isnan(am["control[4]"]).all()
+    assert np.allclose(topics["actuator_outputs"]["output[1]"],
+                       1000 + 1000 * sample.signal("motor_pwm")[:, 2], atol=1e-3)
+    assert u.initial_parameters["PWM_MAIN_FUNC2"] == 102
     assert np.allclose(topics["vehicle_thrust_setpoint"]["xyz[2]"],
                        -sample.signal("thrust_command"), atol=1e-6)
     assert u.initial_parameters["CA_ROTOR_COUNT"] == 4
@@ -234,3 +248,19 @@ def test_ulog_without_a_time_base_topic(tmp_path):
                      tmp_path / "bat.ulg", "ulog")
     with pytest.raises(LogSignalError, match="none of the topics"):
         read_log(path)
+
+
+def test_a_signal_with_nan_samples_is_left_out_and_said_so(tmp_path):
+    """PX4 publishes NaN for an estimate that is not valid yet: that signal is left out, the
+    rest of the log is read, and asking for it quotes why."""
+    path = _small(tmp_path)
+    data = bytearray(path.read_bytes())
+    first = next(i for i in range(len(data) - 12) if data[i] == ord("D")
+                 and data[i + 1:i + 3] == b"\x00\x00")
+    data[first + 11:first + 15] = struct.pack("<f", float("nan"))     # its x after timestamp
+    path.write_bytes(bytes(data))
+    log = read_log(path)
+    assert not log.has("position") and log.has("battery_voltage")
+    assert log.meta["signals_dropped"] == "position (1 of 6 samples not finite)"
+    with pytest.raises(LogSignalError, match=r"left out position \(1 of 6 samples"):
+        log.signal("position")

@@ -81,7 +81,7 @@ def _cstring(data, i, path, what):
                              f"{data[i:end][:40]!r}") from None
 
 
-def parse_usd(path):
+def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
     """Decode a Crazyflie uSD log into its events, checking the magic byte and the CRC-32.
 
     Parameters
@@ -232,7 +232,7 @@ def _signals(raw, types):
     return s
 
 
-def read_usd(path):
+def read_usd(path: str | os.PathLike) -> FlightLog:
     """Read a Crazyflie uSD log (see the module docstring for the format and conversions).
 
     Parameters
@@ -266,7 +266,8 @@ def read_usd(path):
     if not (steps > 0).all():
         k = int(np.argmax(steps <= 0))
         raise LogFormatError(f"{path}: fixed-frequency record {k + 1} has time stamp "
-                             f"{float(ticks[k + 1])!r} s after {float(ticks[k])!r} s; expected increasing")
+                             f"{float(ticks[k + 1])!r} s after {float(ticks[k])!r} s; "
+                             "expected increasing")
     types = {k: v.dtype.str for k, v in variables.items()}
     raw = {k: v.astype(np.float64) for k, v in variables.items()}
     median = float(np.median(steps))
@@ -316,7 +317,7 @@ def _variables(log):
     return out
 
 
-def write_usd(log, path):
+def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
     """Write a log's signals as a Crazyflie uSD log (version 2) that ``read_usd`` reads back.
 
     The variables are the firmware's, in its units and signs (the inverse of the reader's

@@ -86,6 +86,10 @@ class FlightLog:
             raise LogFormatError(f"{src}: time is not strictly increasing: sample {i + 1} at "
                                  f"{float(t[i + 1])!r} s follows {float(t[i])!r} s")
         object.__setattr__(self, "t", t)
+        for field in ("signals", "raw", "meta"):
+            if not isinstance(getattr(self, field), Mapping):
+                raise InputError(f"{src}: {field} must be a mapping of names to values, got "
+                                 f"{type(getattr(self, field)).__name__}")
         n = t.size
         signals = {}
         for name, value in dict(self.signals).items():
@@ -157,6 +161,8 @@ class FlightLog:
         has = tuple(self.signals)
         what = ("is not a standard signal (quadcog.logs.SIGNALS: "
                 f"{', '.join(SIGNALS)})" if name not in SIGNALS else "is not in this log")
+        if name in self.meta.get("signals_dropped", ""):
+            what += f" (the reader left out {self.meta['signals_dropped']})"
         raise LogSignalError(
             f"signal {name!r} {what}: {self.format} log {self.source} has "
             f"{', '.join(has) if has else 'no standard signals'}"

@@ -2,9 +2,13 @@
 a file's format from its content (the magic bytes), then its extension."""
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from quadcog.errors import InputError, LogError, LogFormatError
 from quadcog.logs.signals import LOG_FORMATS
+
+if TYPE_CHECKING:
+    from quadcog.logs.flightlog import FlightLog
 
 __all__ = ["read_log", "write_log", "detect_format"]
 
@@ -22,7 +26,7 @@ def _check_format(fmt, where):
     return fmt
 
 
-def detect_format(path):
+def detect_format(path: str | os.PathLike) -> str:
     """The format of a log file, from its first bytes, else its extension.
 
     Parameters
@@ -66,7 +70,7 @@ def detect_format(path):
         "'.csv' file; or pass format=")
 
 
-def read_log(path, format=None):
+def read_log(path: str | os.PathLike, format: str | None = None) -> "FlightLog":
     """Read a flight log into standard signals (SI, quadcog's frames) on one time base.
 
     Parameters
@@ -100,7 +104,7 @@ def read_log(path, format=None):
     return read_table(path, fmt)
 
 
-def write_log(log, path, format):
+def write_log(log: "FlightLog", path: str | os.PathLike, format: str) -> Path:
     """Write a flight log that ``read_log`` reads back to the same signals (to the format's
     precision).
 

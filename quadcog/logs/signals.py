@@ -18,7 +18,7 @@ with ``_`` for ``/`` and without ``^`` (``acceleration_x_m_s2``); a scalar signa
 component (``roll_rad``, ``battery_voltage_V``), a dimensionless one no unit
 (``motor_command_m1``). Time is ``t_s``.
 """
-from typing import NamedTuple
+from typing import Iterable, NamedTuple
 
 __all__ = ["LOG_FORMATS", "SIGNALS", "SignalSpec", "TIME_COLUMN", "signal_columns",
            "table_columns", "unit_token"]
@@ -89,7 +89,7 @@ SIGNALS = {
 }
 
 
-def unit_token(unit):
+def unit_token(unit: str) -> str:
     """The unit as written in a column name: ``"m/s^2"`` -> ``"m_s2"``, ``"1"`` -> ``""``.
 
     Parameters
@@ -105,7 +105,7 @@ def unit_token(unit):
     return "" if unit == "1" else unit.replace("/", "_").replace("^", "")
 
 
-def signal_columns(name):
+def signal_columns(name: str) -> tuple:
     """The column names of one signal, in component order.
 
     Parameters
@@ -125,7 +125,7 @@ def signal_columns(name):
     return tuple("_".join(p + ((unit,) if unit else ())) for p in parts)
 
 
-def table_columns(names=None):
+def table_columns(names: Iterable[str] | None = None) -> tuple:
     """The column names of a log table: ``t_s``, then the columns of each signal.
 
     Parameters

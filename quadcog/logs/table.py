@@ -11,6 +11,7 @@ is refused with the row and column named.
 import csv
 import os
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
@@ -23,7 +24,7 @@ __all__ = ["read_table", "write_table", "require_pyarrow"]
 _PYARROW_HINT = "pip install pyarrow (or pip install 'quadcog[sweep]')"
 
 
-def require_pyarrow():
+def require_pyarrow() -> ModuleType:
     """The ``pyarrow.parquet`` module, or a typed error giving the install command.
 
     Returns
@@ -54,8 +55,8 @@ def _from_columns(path, fmt, columns, meta):
         bad = ~np.isfinite(a)
         if bad.any():
             i = int(np.argmax(bad))
-            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: {float(a[i])!r} is not "
-                                 "a finite number")
+            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: "
+                                 f"{float(a[i])!r} is not a finite number")
     t_abs = columns[TIME_COLUMN]
     if t_abs.size < 2:
         raise LogFormatError(f"{path}: {t_abs.size} data rows; a flight log needs at least 2")
@@ -63,7 +64,8 @@ def _from_columns(path, fmt, columns, meta):
     if not (steps > 0).all():
         i = int(np.argmax(steps <= 0))
         raise LogFormatError(f"{path}: column {TIME_COLUMN!r} is not strictly increasing: data "
-                             f"row {i + 2} has {float(t_abs[i + 1])!r} s after {float(t_abs[i])!r} s")
+                             f"row {i + 2} has {float(t_abs[i + 1])!r} s after "
+                             f"{float(t_abs[i])!r} s")
     signals = {}
     for name in SIGNALS:
         cols = signal_columns(name)
@@ -96,6 +98,16 @@ def _read_csv(path):
     dup = sorted({c for c in header if header.count(c) > 1})
     if dup:
         raise LogFormatError(f"{path}: repeated column names {dup}")
+    try:                                  # fast path; the loop below names a bad cell
+        data = np.array(rows[1:], dtype=np.float64).reshape(len(rows) - 1, len(header))
+    except ValueError:
+        data = _cells(path, header, rows)
+    cols = {h: data[:, j].copy() for j, h in enumerate(header)}
+    return _from_columns(path, "csv", cols, {"columns": str(len(header))})
+
+
+def _cells(path, header, rows):
+    """The data rows as floats, cell by cell: the first bad cell raises with its place."""
     data = np.empty((len(rows) - 1, len(header)))
     for i, row in enumerate(rows[1:]):
         if len(row) != len(header):
@@ -108,8 +120,7 @@ def _read_csv(path):
             except ValueError:
                 raise LogFormatError(f"{path}: line {i + 2}, column {header[j]!r}: {text!r} "
                                      "is not a number") from None
-    cols = {h: data[:, j].copy() for j, h in enumerate(header)}
-    return _from_columns(path, "csv", cols, {"columns": str(len(header))})
+    return data
 
 
 def _read_parquet(path):
@@ -132,7 +143,7 @@ def _read_parquet(path):
     return _from_columns(path, "parquet", cols, {"columns": str(len(cols))})
 
 
-def read_table(path, fmt):
+def read_table(path: str | os.PathLike, fmt: str) -> FlightLog:
     """Read a CSV or Parquet flight log.
 
     Parameters
@@ -157,7 +168,7 @@ def read_table(path, fmt):
     return _read_csv(path) if fmt == "csv" else _read_parquet(path)
 
 
-def write_table(log, path, fmt):
+def write_table(log: FlightLog, path: str | os.PathLike, fmt: str) -> Path:
     """Write a log's ``t`` and standard signals as a CSV or Parquet table.
 
     Parameters

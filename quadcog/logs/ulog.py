@@ -18,6 +18,11 @@ PX4's ground frame is NED and its body frame FRD; both become z-up frames by the
   front-left. Without those parameters PX4's quad X numbering (1 front-right, 2 back-left,
   3 front-left, 4 back-right) is assumed and ``meta["rotor_order"]`` says so. A NaN control
   (PX4: motor stopped) is read as 0 and counted in ``meta["motor_command_nan_as_zero"]``;
+- ``actuator_outputs``: ``output[n - 1]`` (us) of the channel ``n`` whose ``PWM_MAIN_FUNC{n}``
+  is motor ``101 + i`` (channel ``i + 1`` without those parameters) -> ``motor_pwm`` =
+  ``(output - PWM_MAIN_MIN{n}) / (PWM_MAIN_MAX{n} - PWM_MAIN_MIN{n})`` (PX4's defaults 1000 and
+  2000 us when not logged, ``meta["pwm_range"]`` says which), clipped to 0..1: a disarmed
+  output (PWM_MAIN_DIS, 900 us) is 0, counted in ``meta["motor_pwm_clipped"]``;
 - ``battery_status``: ``voltage_v`` (V) -> ``battery_voltage``;
 - ``vehicle_thrust_setpoint``: ``xyz[2]`` (normalized, FRD: thrust along -z) ->
   ``thrust_command`` = ``-xyz[2]``.
@@ -32,7 +37,9 @@ sample for integer fields. ``raw`` holds every numeric field of the topics read 
 counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``, ``ver_sw``,
 ...), its rotor geometry in quadcog's order (``rotor_positions_m``, ``rotor_directions``:
 ``-sign(CA_ROTOR{i}_KM)``, KM being positive for a counter-clockwise rotor) and parameters
-of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...) when logged.
+of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...) when logged. A signal with a NaN or
+infinite sample (an estimate not valid yet) is left out and named in
+``meta["signals_dropped"]``, which ``FlightLog.signal`` quotes when it is asked for.
 """
 import contextlib
 import io
@@ -41,6 +48,7 @@ import struct
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from quadcog.errors import LogFormatError, LogSignalError
 from quadcog.logs.flightlog import FlightLog
@@ -55,6 +63,7 @@ TOPICS = {
     "vehicle_attitude": ("q[0]", "q[1]", "q[2]", "q[3]"),
     "vehicle_angular_velocity": ("xyz[0]", "xyz[1]", "xyz[2]"),
     "actuator_motors": ("control[0]", "control[1]", "control[2]", "control[3]"),
+    "actuator_outputs": tuple(f"output[{i}]" for i in range(16)),
     "battery_status": ("voltage_v",),
     "vehicle_thrust_setpoint": ("xyz[0]", "xyz[1]", "xyz[2]"),
 }
@@ -66,7 +75,7 @@ _PARAMS = ("THR_MDL_FAC", "MPC_THR_HOVER", "SYS_AUTOSTART", "CA_AIRFRAME", "CA_R
 _INFO = ("sys_name", "ver_hw", "ver_sw", "ver_sw_release", "sys_os_name", "sys_uuid")
 
 
-def px4_to_quadcog_quaternion(q):
+def px4_to_quadcog_quaternion(q: ArrayLike) -> np.ndarray:
     """PX4's attitude quaternion (FRD body -> NED) as quadcog's (FLU body -> NWU ground).
 
     Parameters
@@ -83,7 +92,7 @@ def px4_to_quadcog_quaternion(q):
     return q * np.array([1.0, 1.0, -1.0, -1.0])
 
 
-def quaternion_to_euler(q):
+def quaternion_to_euler(q: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ZYX Euler angles of a unit quaternion, ``R(q) = Rz(yaw) Ry(pitch) Rx(roll)``.
 
     Parameters
@@ -103,7 +112,7 @@ def quaternion_to_euler(q):
     return roll, pitch, yaw
 
 
-def euler_to_quaternion(roll, pitch, yaw):
+def euler_to_quaternion(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np.ndarray:
     """The unit quaternion of ``Rz(yaw) Ry(pitch) Rx(roll)``.
 
     Parameters
@@ -176,6 +185,31 @@ def _rotor_map(params):
     return tuple(order), flu[order], -np.sign(km[order]), "from CA_ROTOR{i}_PX/PY"
 
 
+def _motor_pwm(d, t_us, order, params):
+    """actuator_outputs as 0..1 per quadcog rotor (unclipped), and where its range came from."""
+    funcs = {int(params[f"PWM_MAIN_FUNC{n}"]): n for n in range(1, 17)
+             if f"PWM_MAIN_FUNC{n}" in params}
+    ts = d["timestamp"].astype(np.float64)
+    cols, defaults = [], False
+    for i in order:
+        n = funcs.get(101 + i, i + 1) if funcs else i + 1
+        if f"output[{n - 1}]" not in d:
+            return None, None
+        lo, hi = params.get(f"PWM_MAIN_MIN{n}"), params.get(f"PWM_MAIN_MAX{n}")
+        if lo is None or hi is None or not hi > lo:
+            lo, hi, defaults = 1000.0, 2000.0, True
+        out = np.interp(t_us, ts, d[f"output[{n - 1}]"].astype(np.float64))
+        cols.append((out - lo) / (hi - lo))
+    note = ("PX4's defaults 1000..2000 us (no PWM_MAIN_MIN/MAX parameters)" if defaults
+            else "PWM_MAIN_MIN{n}..PWM_MAIN_MAX{n}")
+    return np.column_stack(cols), note
+
+
+def _rate_hz(stamps_us):
+    """Mean rate (Hz) of a topic's time stamps (us)."""
+    return (stamps_us.size - 1) / ((float(stamps_us[-1]) - float(stamps_us[0])) * 1e-6)
+
+
 def _interp(t_base, ts, values, is_float):
     if is_float:
         return np.interp(t_base, ts, values)
@@ -183,7 +217,7 @@ def _interp(t_base, ts, values, is_float):
     return values[np.clip(idx, 0, ts.size - 1)].astype(np.float64)
 
 
-def read_ulog(path):
+def read_ulog(path: str | os.PathLike) -> FlightLog:
     """Read a PX4 ULog (see the module docstring for topics, frames and the time base).
 
     Parameters
@@ -284,7 +318,7 @@ def read_ulog(path):
                 trimmed_s=f"{(tb[0] - ts_base[0]) * 1e-6:.6g} at the start, "
                           f"{(ts_base[-1] - tb[-1]) * 1e-6:.6g} at the end",
                 raw_dropped=str(dropped),
-                rates_hz=", ".join(f"{n}: {(d['timestamp'].size - 1) / ((float(d['timestamp'][-1]) - float(d['timestamp'][0])) * 1e-6):.4g}"
+                rates_hz=", ".join(f"{n}: {_rate_hz(d['timestamp']):.4g}"
                                    for n, d in topics.items()))
     if positions is not None and directions is not None:
         meta["rotor_positions_m"] = "; ".join(f"{float(x)!r} {float(y)!r}"
@@ -301,18 +335,32 @@ def read_ulog(path):
             cols.append(np.interp(t_us, ts, np.nan_to_num(c, nan=0.0)))
         signals["motor_command"] = np.column_stack(cols)
         meta["motor_command_nan_as_zero"] = str(nan)
+    if order is not None and "actuator_outputs" in topics:
+        pwm, note = _motor_pwm(topics["actuator_outputs"], t_us, order, params)
+        if pwm is not None:
+            signals["motor_pwm"] = np.clip(pwm, 0.0, 1.0)
+            meta.update(pwm_range=note, motor_pwm_clipped=str(int(np.sum((pwm < 0) | (pwm > 1)))))
     v = fields("battery_status", ("voltage_v",))
     if v is not None:
         signals["battery_voltage"] = v[:, 0]
     v = fields("vehicle_thrust_setpoint", ("xyz[2]",))
     if v is not None:
         signals["thrust_command"] = -v[:, 0]
+    # an estimate that is not valid yet is NaN in PX4's topics: leave such a signal out, say so
+    dropped = []
+    for name in list(signals):
+        bad = ~np.isfinite(signals[name]).reshape(t_us.size, -1).all(axis=1)
+        if bad.any():
+            del signals[name]
+            dropped.append(f"{name} ({int(bad.sum())} of {t_us.size} samples not finite)")
+    if dropped:
+        meta["signals_dropped"] = "; ".join(dropped)
     return FlightLog(path, "ulog", (tb - tb[0]) * 1e-6, signals, raw, meta)
 
 
 # -- writer -------------------------------------------------------------------------------
 _CARRIED = ("position", "velocity", "acceleration", "roll", "pitch", "yaw", "body_rates",
-            "motor_command", "battery_voltage", "thrust_command")
+            "motor_command", "motor_pwm", "battery_voltage", "thrust_command")
 _START_US = 1_000_000          # a log starts some time after boot
 
 
@@ -339,13 +387,15 @@ def _nominal_positions(log):
     return np.array(x_layout(0.25))
 
 
-def write_ulog(log, path):
+def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
     """Write a log's signals as a minimal valid ULog (version 1) that PX4's tools and
     ``read_ulog`` read.
 
     It holds the header, the flag-bits message, info (``sys_name`` = "quadcog"), the rotor
     parameters (``CA_ROTOR_COUNT``, ``CA_ROTOR{i}_PX/PY/KM``: PX4's quad X numbering, the
-    log's rotor positions or a nominal X), one format and subscription per topic and one
+    log's rotor positions or a nominal X; with ``motor_pwm`` the channels' ``PWM_MAIN_FUNC``,
+    ``PWM_MAIN_MIN`` = 1000 and ``PWM_MAIN_MAX`` = 2000), one format and subscription per topic
+    and one
     data message per topic and sample (float32 fields, ``timestamp`` in integer us), in
     PX4's frames and units (the inverse of the reader's conversions).
 
@@ -364,7 +414,7 @@ def write_ulog(log, path):
     Raises
     ------
     LogSignalError
-        The log has a signal ULog does not carry here (``motor_pwm``, ``moment_command``),
+        The log has a signal ULog does not carry here (``moment_command``),
         only some of roll, pitch and yaw (an attitude quaternion needs all three), or no
         signal at all.
     """
@@ -402,6 +452,11 @@ def write_ulog(log, path):
         for rotor, i in enumerate(QUADX_ORDER):
             control[:, i] = s["motor_command"][:, rotor]
         topics["actuator_motors"] = [("control", "float[12]", control)]
+    if "motor_pwm" in s:                 # channel i + 1 is motor i + 1, 1000..2000 us
+        output = np.full((n, 16), 900.0)
+        for rotor, i in enumerate(QUADX_ORDER):
+            output[:, i] = 1000.0 + 1000.0 * s["motor_pwm"][:, rotor]
+        topics["actuator_outputs"] = [("output", "float[16]", output)]
     if "battery_voltage" in s:
         topics["battery_status"] = [("voltage_v", "float", s["battery_voltage"])]
     if "thrust_command" in s:
@@ -417,6 +472,11 @@ def write_ulog(log, path):
         x, y = positions[rotor]
         for key, v in (("PX", x), ("PY", -y), ("KM", -0.05 * directions[rotor])):
             params[f"CA_ROTOR{i}_{key}"] = ("float", struct.pack("<f", v))
+    if "motor_pwm" in s:
+        for ch in range(1, 5):
+            params[f"PWM_MAIN_FUNC{ch}"] = ("int32_t", struct.pack("<i", 100 + ch))
+            params[f"PWM_MAIN_MIN{ch}"] = ("int32_t", struct.pack("<i", 1000))
+            params[f"PWM_MAIN_MAX{ch}"] = ("int32_t", struct.pack("<i", 2000))
     for key, (ctype, value) in params.items():
         out += _message("P", _key_value(ctype, key, value))
     dtypes = {}
