@@ -24,7 +24,7 @@ from .conventions import IDX, PARAM_NAMES, hover_trim
 from .errors import InputError, ParameterError
 from .params import check_parameters
 from .validate import real
-from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, RotorModel
+from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 N_ROTORS = 4
 
@@ -71,8 +71,9 @@ class Vehicle:
     x_G, y_G, z_G : CoG offset r_G from O in the body frame (m). The inertia about the CoG,
         ``I_O - m (|r_G|^2 I - r_G r_G^T)``, must stay positive definite.
     name : a label.
-    rotor_model : a ``quadcog.vehicles.rotor_model.RotorModel`` (optional): what turns this
-        vehicle's logged motor outputs into rotor thrust (``quadcog identify`` reads it).
+    rotor_model : a ``quadcog.vehicles.rotor_model.RotorModel`` or the name of one in its
+        ``ROTOR_MODELS`` (optional): what turns this vehicle's logged motor outputs into rotor
+        thrust (``quadcog identify`` reads it); ``as_dict`` writes its name.
 
     Raises ParameterError (or InputError for wrong types) naming the field and the value.
     """
@@ -125,9 +126,11 @@ class Vehicle:
             raise InputError(where(f"rotor_directions must be {N_ROTORS} numbers, each +1 or -1, "
                                    f"got {self.rotor_directions!r}"))
         object.__setattr__(self, "rotor_directions", tuple(int(d) for d in dirs))
+        if isinstance(self.rotor_model, str) and self.rotor_model in ROTOR_MODELS:
+            object.__setattr__(self, "rotor_model", ROTOR_MODELS[self.rotor_model])
         if self.rotor_model is not None and not isinstance(self.rotor_model, RotorModel):
-            raise InputError(where(f"rotor_model must be a quadcog RotorModel or None, got "
-                                   f"{self.rotor_model!r}"))
+            raise InputError(where(f"rotor_model must be a quadcog RotorModel, a name of "
+                                   f"{tuple(ROTOR_MODELS)} or None, got {self.rotor_model!r}"))
         for name in ("thrust_constant", "moment_constant", "max_rotor_thrust"):
             if getattr(self, name) <= 0:
                 raise ParameterError(where(f"{name} = {getattr(self, name)} must be > 0"))

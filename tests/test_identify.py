@@ -6,6 +6,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+import quadcog
 from quadcog import CRAZYFLIE, HUMMINGBIRD, Sensed, Sensing, make_controller, simulate
 from quadcog.errors import IdentificationError, InputError
 from quadcog.identification import JSON_KEYS, identify
@@ -71,6 +72,13 @@ def test_rotor_model_is_validated_data():
     assert CRAZYFLIE.rotor_model is CRAZYFLIE_BITCRAZE_VOLTAGE and HUMMINGBIRD.rotor_model is None
     with pytest.raises(InputError, match="rotor_model"):
         CRAZYFLIE.replace(rotor_model="bitcraze")
+    assert CRAZYFLIE.replace(rotor_model="foerster").rotor_model is CRAZYFLIE_FOERSTER
+    # vehicle.json (as_dict) names the model; reading it back gives the same vehicle
+    d = CRAZYFLIE.as_dict()
+    assert d["rotor_model"] == "bitcraze-voltage"
+    back = quadcog.Vehicle(**{k: tuple(map(tuple, v)) if k == "rotor_positions" else
+                              tuple(v) if isinstance(v, list) else v for k, v in d.items()})
+    assert back == CRAZYFLIE
 
 
 def test_crazyflie_motor_order_follows_the_firmware():

@@ -90,6 +90,8 @@ def test_cli_identify_prints_and_writes(tmp_path, capsys):
      "vehicle 'x500' is unknown"),
     (["identify", str(DATA / "motor_data/normal_flight/E9_log00"), "--method", "regression"],
      "needs pitch, body_rates"),
+    # the PX4 sample climbs to 2 m and lands at once: no plateau to balance on
+    (["identify", str(DATA.parent / "ulog" / "sample_px4_events.ulg")], "too few hover samples"),
 ])
 def test_cli_identify_bad_input_is_one_line(argv, message, capsys):
     assert main(argv) == 2
