@@ -52,6 +52,8 @@ REGRESSION_SIGNALS = ("position", "velocity", "roll", "pitch", "yaw", "body_rate
 # biases z_G toward 0 (errors in variables) with an interval that looks tight; z_G is then
 # not estimated
 Z_G_MIN_TILT = np.radians(2.0)
+# the static balance assumes a level hover; beyond this RMS tilt it says it is biased
+STATIC_MAX_TILT = np.radians(3.0)
 
 
 def missing_for(log: FlightLog, names: tuple) -> list:
@@ -127,6 +129,12 @@ def _tilt_cosine(log, notes):
     return np.ones(log.n_samples)
 
 
+def _rms_tilt(log, sel):
+    """RMS of the logged roll and pitch (those present) over the window (rad), or None."""
+    have = [log.signal(n)[sel] for n in ("roll", "pitch") if log.has(n)]
+    return float(np.sqrt(sum((a ** 2).mean() for a in have))) if have else None
+
+
 def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str | None" = None,
                    window: "HoverWindow | None" = None) -> FlightEstimate:
     """x_G, y_G and m from the thrust and moment balance of the hover (module docstring).
@@ -178,6 +186,11 @@ def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | 
     half[2] = np.nan
     m, m_half = block_mean_ci95(m_b)
     notes.append(f"vertical acceleration: {a_from}")
+    tilt = _rms_tilt(log, sel)
+    if tilt is not None and tilt > STATIC_MAX_TILT:
+        notes.append(f"not a hover: RMS tilt {np.degrees(tilt):.1f} deg (above "
+                     f"{np.degrees(STATIC_MAX_TILT):g} deg); the level balance is biased here, "
+                     "use method 'regression'")
     if slopes.any():
         notes.append("moving at constant height (block speeds spread by more than "
                      f"{SPEED_SPREAD:g} m/s): r_G is the zero-speed intercept of the blocks")
@@ -187,15 +200,22 @@ def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | 
                           tuple(notes))
 
 
-def _lowpass(u, t, lam, restart):
-    """F(s) = lam / (s + lam) on samples u (N, ...) at times t (N,): the exact response to
-    a signal held over each step, starting in steady state (F[u] = u) at every sample where
-    ``restart`` (N,) is True (the first one of each segment)."""
-    a = np.exp(-lam * np.diff(t))
+def _lowpass(u, t, lam, restart, held=False):
+    """F(s) = lam / (s + lam) on samples u (N, ...) at times t (N,), exactly: for a command
+    ``held`` from its sample to the next (what a logged motor command does), else for a
+    signal linear between samples (a sampled state). Starts in steady state (F[u] = u) at
+    every sample where ``restart`` (N,) is True (the first one of each segment)."""
+    h = np.diff(t)
+    a = np.exp(-lam * h)
+    ramp = 0.0 * h if held else 1.0 - (1.0 - a) / (lam * h)
     y = np.empty_like(u)
     y[0] = u[0]
     for k in range(1, len(t)):
-        y[k] = u[k] if restart[k] else a[k - 1] * y[k - 1] + (1.0 - a[k - 1]) * u[k]
+        if restart[k]:
+            y[k] = u[k]
+        else:
+            y[k] = a[k - 1] * y[k - 1] + (1.0 - a[k - 1]) * u[k - 1] \
+                + ramp[k - 1] * (u[k] - u[k - 1])
     return y
 
 
@@ -271,7 +291,8 @@ def regression(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str 
     restart = np.r_[True, np.diff(seg) != 0]
     seg_start = np.array([a for a, _ in window.segments])[seg]
     Mnu = x[:, 6:] @ M0.T
-    z = _lowpass(U @ B_U.T - n0, t, lam, restart) - lam * (Mnu - _lowpass(Mnu, t, lam, restart))
+    z = (_lowpass(U @ B_U.T, t, lam, restart, held=True) - _lowpass(n0, t, lam, restart)
+         - lam * (Mnu - _lowpass(Mnu, t, lam, restart)))
     Y = _lowpass(Phi0, t, lam, restart) + lam * (W - _lowpass(W, t, lam, restart))
     index_all = window.blocks(t)
     keep = (t >= seg_start + WARM_UP) & (index_all >= 0)
