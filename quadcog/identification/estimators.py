@@ -103,6 +103,10 @@ class FlightEstimate:
         How the thrusts were obtained.
     notes : tuple of str
         What the estimator assumed.
+
+    Returns
+    -------
+    FlightEstimate
     """
     source: str
     method: str
