@@ -74,8 +74,9 @@ SIGNALS = {
         "(1 front-right, 2 back-right, 3 back-left, 4 front-left); the Crazyflie's before its "
         "battery compensation, PX4's normalized motor output", ("m1", "m2", "m3", "m4")),
     "motor_pwm": SignalSpec(
-        (4,), "1", "PWM duty cycle 0..1 applied to each motor (after the Crazyflie's battery "
-        "compensation), rotors in quadcog's order", ("m1", "m2", "m3", "m4")),
+        (4,), "1", "motor output 0..1 as applied: the Crazyflie's PWM duty cycle (after its "
+        "battery compensation), PX4's actuator_outputs scaled by its PWM range; rotors in "
+        "quadcog's order", ("m1", "m2", "m3", "m4")),
     "battery_voltage": SignalSpec((), "V", "battery voltage"),
     "thrust_command": SignalSpec(
         (), "1", "collective thrust command in motor-command units (0..1 of full scale per "
