@@ -235,7 +235,9 @@ def cmd_identify(args):
     print(result.summary())
     if args.out is not None:
         path = _out_dir(args.out) / "identify.png"
-        plot_identification(result, path)
+        title = f"quadcog identify: {len(args.logs)} log(s) of {args.vehicle}" + (
+            f" against {len(args.baseline)} baseline log(s)" if args.baseline else "")
+        plot_identification(result, path, title=title)
         print(f"wrote {path}")
     if args.json is not None:
         args.json.write_text(strict_json(result.as_json()))

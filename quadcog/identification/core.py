@@ -21,7 +21,7 @@ from quadcog.vehicle import PRESETS, Vehicle
 from quadcog.vehicles.rotor_model import RotorModel
 
 __all__ = ["METHODS", "JSON_KEYS", "R_G_NAMES", "IDENTIFIABLE_FRACTION", "NEVER_DETERMINED",
-           "Identification",
+           "Identification", "pooled_estimate",
            "identify", "as_logs", "as_vehicle"]
 
 METHODS = ("auto", "static", "regression")
@@ -202,9 +202,21 @@ def _choose(method, logs):
     return "regression", "regression (auto: every log has the signals it needs)"
 
 
-def _pool(estimates):
-    """(r (3,), half (3,), m, m_half, samples) over several logs: the static balance's blocks
-    pooled; the regression's per-log results combined by inverse variance."""
+def pooled_estimate(estimates) -> tuple:
+    """The estimate of several logs: the static balance's blocks pooled (speed-corrected);
+    the regression's per-log results combined by inverse variance.
+
+    Parameters
+    ----------
+    estimates : sequence of FlightEstimate
+        Of one method.
+
+    Returns
+    -------
+    (numpy.ndarray (3,), numpy.ndarray (3,), float, float, int)
+        r_G and its half-widths (m, NaN where not estimated), mass and half-width (kg),
+        samples.
+    """
     from quadcog.identification.flight import block_mean_ci95, speed_corrected
     samples = sum(e.samples for e in estimates)
     m, m_half = block_mean_ci95(np.concatenate([e.blocks_m for e in estimates]))
@@ -259,12 +271,12 @@ def identify(logs: object, vehicle: "str | Vehicle" = "crazyflie", baseline: obj
     base = None if baseline is None else as_logs(baseline, "baseline")
     chosen, described = _choose(method, logs + (base or []))
     flights = _estimate(logs, vehicle, chosen, rotor_model)
-    r, half, m, m_half, samples = _pool(flights)
+    r, half, m, m_half, samples = pooled_estimate(flights)
     base_est = ()
     mass_change = None
     if base is not None:
         base_est = tuple(_estimate(base, vehicle, chosen, rotor_model))
-        rb, hb, mb, _, sb = _pool(base_est)
+        rb, hb, mb, _, sb = pooled_estimate(base_est)
         r, half = r - rb, np.sqrt(half ** 2 + hb ** 2)
         mass_change, samples = m - mb, samples + sb
     # an entry the method does not estimate: the vehicle's own value (no shift with a baseline)

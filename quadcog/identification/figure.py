@@ -38,8 +38,9 @@ def plot_identification(result: object, path: "str | Path | None" = None,
     with plt.rc_context({"font.size": 11, "legend.fontsize": 9}):
         fig, (ax_r, ax_m) = plt.subplots(1, 2, figsize=(12, 4.8))
         offset = 0.0
-        base = (np.mean(np.concatenate([e.blocks_r for e in result.baseline]), axis=0)
-                if result.baseline else np.zeros(3))
+        from quadcog.identification.core import pooled_estimate
+        # the blocks relative to the baseline's pooled estimate (the one subtracted)
+        base = pooled_estimate(result.baseline)[0] if result.baseline else np.zeros(3)
         for k, e in enumerate(result.flights):
             tb = offset + BLOCK_SECONDS * (np.arange(len(e.blocks_r)) + 0.5)
             for i, (name, col) in enumerate((("x_G", "C0"), ("y_G", "C1"))):
