@@ -287,3 +287,14 @@ def test_regression_in_a_circle(noise):
         assert abs(res.r_G[2] - r[2]) > 3 * res.r_G_ci95[2]      # biased: errors in variables
     static = identify(log, CRAZYFLIE, method="static")
     assert "not a hover" in static.verdict
+
+
+def test_px4_rotor_model_reads_thr_mdl_fac_from_the_ulog():
+    from pathlib import Path
+    from quadcog.vehicles.rotor_model import px4_thrust_curve_from_log
+    log = read_log(Path(__file__).parent / "data" / "ulog" / "sample_px4_events.ulg")
+    model = px4_thrust_curve_from_log(log, 7.0)
+    assert model.coefficients == (float(log.meta["param.THR_MDL_FAC"]),)
+    assert model.signal == "motor_command" and log.has("motor_command")
+    with pytest.raises(InputError, match="THR_MDL_FAC"):
+        px4_thrust_curve_from_log(dataclasses.replace(log, meta={}), 7.0)

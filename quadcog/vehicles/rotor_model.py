@@ -24,7 +24,8 @@ from quadcog import validate
 from quadcog.errors import InputError
 
 __all__ = ["RotorModel", "ROTOR_MODELS", "STANDARD_GRAVITY", "CRAZYFLIE_BITCRAZE_VOLTAGE",
-           "CRAZYFLIE_FOERSTER", "CRAZYFLIE_FIRMWARE_COMMAND", "px4_thrust_curve"]
+           "CRAZYFLIE_FOERSTER", "CRAZYFLIE_FIRMWARE_COMMAND", "px4_thrust_curve",
+           "px4_thrust_curve_from_log"]
 
 KINDS = ("polynomial", "voltage", "thr_mdl_fac")
 SIGNALS_READ = ("motor_pwm", "motor_command")
@@ -265,3 +266,33 @@ def px4_thrust_curve(max_thrust: float, thr_mdl_fac: float, name: str = "px4",
     return RotorModel(name=name, kind="thr_mdl_fac", signal="motor_command",
                       coefficients=(thr_mdl_fac,), max_thrust=max_thrust, source=source)
 
+
+
+def px4_thrust_curve_from_log(log: object, max_thrust: float) -> RotorModel:
+    """PX4's rotor model with the ``THR_MDL_FAC`` that a ULog recorded.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+        A ULog read by ``quadcog.logs.read_log`` (its ``meta["param.THR_MDL_FAC"]``).
+    max_thrust : float
+        Thrust of one rotor at full output (N): the vehicle's, PX4 does not log it.
+
+    Returns
+    -------
+    RotorModel
+
+    Raises
+    ------
+    InputError
+        The log has no THR_MDL_FAC parameter, or it is not a number.
+    """
+    text = log.meta.get("param.THR_MDL_FAC")
+    try:
+        k = float(text)
+    except (TypeError, ValueError):
+        raise InputError(f"{log.source}: no numeric THR_MDL_FAC parameter in the log (got "
+                         f"{text!r}); pass px4_thrust_curve(max_thrust, thr_mdl_fac)") from None
+    return px4_thrust_curve(max_thrust, k, name=f"px4 (THR_MDL_FAC {k:g})",
+                            source=f"PX4 THR_MDL_FAC = {k:g} from {log.source}; "
+                                   f"T_max = {max_thrust:g} N per rotor given")
