@@ -79,9 +79,12 @@ def test_cli_identify_prints_and_writes(tmp_path, capsys):
     assert data["r_G_ci95"][2] is None and data["mass_change"] is not None
     assert data["identifiable"] == ["x_G", "y_G"]
     assert (out / "identify.png").stat().st_size > 10_000
-    # without a baseline: relative to O, no mass change
-    assert main(["identify", str(normal[0]), "--json", str(js)]) == 0
+    # without a baseline: relative to O, no mass change; another rotor model by name
+    assert main(["identify", str(normal[0]), "--json", str(js), "--rotor-model", "foerster"]) == 0
     assert json.loads(js.read_text())["mass_change"] is None
+    assert "thrust: foerster from motor_pwm" in capsys.readouterr().out
+    from quadcog.identification import identified_cog
+    assert np.allclose(identified_cog(js), json.loads(js.read_text())["r_G"])
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -7,6 +7,7 @@ to flights without the payload (``quadcog.identification.core``). The method: do
 """
 from quadcog.identification.core import (IDENTIFIABLE_FRACTION, JSON_KEYS, METHODS, R_G_NAMES,
                                          Identification, identify)
+from quadcog.identification.identified import identified_cog
 
 __all__ = ["IDENTIFIABLE_FRACTION", "JSON_KEYS", "METHODS", "R_G_NAMES", "Identification",
-           "identify"]
+           "identified_cog", "identify"]
