@@ -100,6 +100,9 @@ def test_crazyflie_motor_order_follows_the_firmware():
     pos = np.asarray(CRAZYFLIE.rotor_positions)
     # M1 front-right, M2 back-right, M3 back-left, M4 front-left (body x forward, y left)
     assert (np.sign(pos) == [[1, -1], [-1, -1], [-1, 1], [1, 1]]).all()
+    # the firmware's force-torque distribution: lever arm 0.707106781 * ARM_LENGTH about each
+    # axis, ARM_LENGTH = 0.046 m (the Crazyflie 2.x's platform default)
+    assert np.allclose(np.abs(pos), 0.707106781 * 0.046, rtol=1e-8)
 
 
 def _log(t, z, f, vehicle=CRAZYFLIE, **signals):
