@@ -100,8 +100,8 @@ def test_crazyflie_motor_order_follows_the_firmware():
     pos = np.asarray(CRAZYFLIE.rotor_positions)
     # M1 front-right, M2 back-right, M3 back-left, M4 front-left (body x forward, y left)
     assert (np.sign(pos) == [[1, -1], [-1, -1], [-1, 1], [1, 1]]).all()
-    # the firmware's force-torque distribution: lever arm 0.707106781 * ARM_LENGTH about each
-    # axis, ARM_LENGTH = 0.046 m (the Crazyflie 2.x's platform default)
+    # the firmware's force-torque distribution: lever arm 0.707106781 * arm length about each
+    # axis, the arm length 0.046 m (CRAZYFLIE_ARM_LENGTH of its power distribution)
     assert np.allclose(np.abs(pos), 0.707106781 * 0.046, rtol=1e-8)
 
 
