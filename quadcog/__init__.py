@@ -6,34 +6,35 @@
 """
 from quadcog import config
 from quadcog.controllers import (
-    AdaptiveFeedbackLinearization,
-    CascadePD,
-    CompositeAdaptive,
-    Controller,
-    FeedbackLinearization,
-    FeedbackLinearizationIntegral,
-    make_controller,
+                                 AdaptiveFeedbackLinearization,
+                                 CascadePD,
+                                 CompositeAdaptive,
+                                 Controller,
+                                 FeedbackLinearization,
+                                 FeedbackLinearizationIntegral,
+                                 make_controller,
 )
 from quadcog.errors import (
-    CompileError,
-    EulerSingularityError,
-    GeneratedFilesError,
-    InputError,
-    ParameterError,
-    PhysicalConsistencyError,
-    QuadcogError,
-    QuadcogWarning,
+                                 CompileError,
+                                 EulerSingularityError,
+                                 GeneratedFilesError,
+                                 InputError,
+                                 ParameterError,
+                                 PhysicalConsistencyError,
+                                 QuadcogError,
+                                 QuadcogWarning,
 )
+from quadcog.identification import Identification, identify
 from quadcog.model.conventions import (
-    B_U,
-    FUNCTIONS,
-    INPUT_NAMES,
-    OUTPUT_NAMES,
-    OUTPUT_ROWS,
-    PARAM_NAMES,
-    STATE_NAMES,
-    hover_trim,
-    rotation_matrix,
+                                 B_U,
+                                 FUNCTIONS,
+                                 INPUT_NAMES,
+                                 OUTPUT_NAMES,
+                                 OUTPUT_ROWS,
+                                 PARAM_NAMES,
+                                 STATE_NAMES,
+                                 hover_trim,
+                                 rotation_matrix,
 )
 from quadcog.model.functions import Linearization, Model, load
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
@@ -63,5 +64,5 @@ __all__ = [
     "FeedbackLinearizationIntegral", "make_controller", "TruthOptions", "Sensed", "Sensing",
     "Metrics", "SimulationResult", "BatchResult", "simulate_batch", "DivergenceCause", "Limits",
     "simulate", "sweep", "CogChange", "CogProfile", "Disturbance", "Circle", "Figure8",
-    "FromCallable", "Helix", "Hover", "Trajectory", "__version__",
+    "FromCallable", "Helix", "Hover", "Trajectory", "Identification", "identify", "__version__",
 ]

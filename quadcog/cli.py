@@ -86,12 +86,21 @@ def add_run(sub):
     p.add_argument("--format", dest="fmt", choices=("csv", "parquet"), default="csv",
                    help="table format (parquet needs pyarrow; default: csv)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--identified", type=Path, default=None, metavar="FILE",
+                   help="JSON of `quadcog identify --json`: its r_G becomes the vehicle's CoG "
+                        "and the controller's starting estimate")
     p.set_defaults(func=cmd_run)
 
 
 def cmd_run(args):
+    import json
+
     from quadcog.scenarios.scenario import default_out, run_file
     out = _out_dir(args.out if args.out is not None else default_out(args.scenario))
+    if args.identified is not None:     # as --set vehicle.identified=... (and the model's)
+        path = json.dumps(str(args.identified.resolve()))
+        args.overrides = list(args.overrides) + [f"vehicle.identified={path}",
+                                                 f"controller_model.identified={path}"]
     run_file(args.scenario, out, progress=not args.quiet, overrides=args.overrides,
              plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate)
 
@@ -191,8 +200,53 @@ def cmd_sweep(args):
     run_cli(args.sweep, _out_dir(args.out), workers=args.workers, scheduler=args.scheduler)
 
 
+def add_identify(sub):
+    p = sub.add_parser("identify", help="identify a real vehicle's CoG offset and mass from "
+                                        "flight logs",
+                       description="Estimate the CoG offset r_G and the mass from flight logs "
+                                   "(Crazyflie uSD, PX4 ULog, CSV, Parquet; several are "
+                                   "pooled) and print them with 95 % intervals (docs/"
+                                   "identify.md).")
+    p.add_argument("logs", nargs="+", type=Path, metavar="LOG", help="flight log file(s)")
+    p.add_argument("--vehicle", default="crazyflie", help="vehicle preset (default crazyflie)")
+    p.add_argument("--baseline", nargs="+", type=Path, default=None, metavar="LOG",
+                   help="flights of the same vehicle without the payload: report the shift "
+                        "relative to them")
+    p.add_argument("--method", default="auto", help="auto (default), static or regression")
+    p.add_argument("--rotor-model", default=None,
+                   help="rotor model name instead of the vehicle's (bitcraze-voltage, "
+                        "foerster, firmware-command)")
+    p.add_argument("--json", type=Path, default=None, metavar="FILE",
+                   help="write r_G, r_G_ci95, mass, mass_ci95, mass_change, samples, "
+                        "identifiable as JSON")
+    p.add_argument("--out", type=Path, default=None, metavar="DIR",
+                   help="folder for the figure identify.png")
+    p.set_defaults(func=cmd_identify)
+
+
+def cmd_identify(args):
+    from quadcog.files import strict_json
+    from quadcog.identification import identify
+    from quadcog.identification.figure import plot_identification
+    for path in list(args.logs) + list(args.baseline or []):
+        if not path.is_file():
+            raise QuadcogError(f"{path}: no such log file")
+    result = identify(args.logs, vehicle=args.vehicle, baseline=args.baseline,
+                      method=args.method, rotor_model=args.rotor_model)
+    print(result.summary())
+    if args.out is not None:
+        path = _out_dir(args.out) / "identify.png"
+        title = f"quadcog identify: {len(args.logs)} log(s) of {args.vehicle}" + (
+            f" against {len(args.baseline)} baseline log(s)" if args.baseline else "")
+        plot_identification(result, path, title=title)
+        print(f"wrote {path}")
+    if args.json is not None:
+        args.json.write_text(strict_json(result.as_json()))
+        print(f"wrote {args.json}")
+
+
 SUBCOMMANDS = [add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
-               add_export, add_sweep]
+               add_export, add_sweep, add_identify]
 
 
 def _version():

@@ -94,3 +94,8 @@ class LogSignalError(LogError):
     def __init__(self, message, signal=None, source=None, available=()):
         self.signal, self.source, self.available = signal, source, tuple(available)
         super().__init__(message)
+
+
+class IdentificationError(InputError):
+    """A CoG/mass identification cannot run on the logs given (quadcog.identification): a
+    missing signal, too few hover samples, no rotor model; the message names the log."""

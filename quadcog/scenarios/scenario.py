@@ -260,11 +260,17 @@ def _vehicle(data, key, base, source):
     table = dict(data.get(key, {}))
     _validate(table, VEHICLE, source, f"{key}.", " vehicle field")
     preset = table.pop("preset", None)
+    identified = table.pop("identified", None)
     if preset is not None:
         base = PRESETS[validate.choice(preset, f"{source}: key '{key}.preset'", tuple(PRESETS),
                                        ScenarioError)]
     try:
-        return (base or HUMMINGBIRD).replace(**table)
+        vehicle = (base or HUMMINGBIRD).replace(**table)
+        if identified is not None:
+            from quadcog.identification.identified import identified_cog
+            path = Path(source).parent / identified        # relative to the scenario file
+            vehicle = vehicle.with_cog(identified_cog(path))
+        return vehicle
     except InputError as e:
         raise ScenarioError(f"{source}: key {key!r}: {e}") from None
 

@@ -30,8 +30,9 @@ TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "
        "sensing": dict, "initial_offset": "vec3"}
 # every Vehicle field, and a preset to start from
 VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
-                  "name": str}.get(name, NUMBER) for name in FIELD_NAMES}
+                  "name": str, "rotor_model": str}.get(name, NUMBER) for name in FIELD_NAMES}
 VEHICLE["preset"] = str
+VEHICLE["identified"] = str         # the JSON of `quadcog identify --json`: its r_G
 TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
 SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,
            "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}

@@ -24,6 +24,7 @@ from quadcog.errors import InputError, ParameterError
 from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
 from quadcog.model.parameters import check_parameters
 from quadcog.validate import real
+from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 N_ROTORS = 4
 
@@ -39,7 +40,7 @@ def x_layout(arm):
     """Rotor positions (m) of an "X" frame with arm length ``arm`` (centre to rotor): rotor 1
     front-right (+x, -y), 2 back-right, 3 back-left, 4 front-left."""
     h = float(arm) / np.sqrt(2.0)
-    return ((h, -h), (-h, -h), (-h, h), (h, h))
+    return ((h, -h), (-h, -h), (-h, h), (h, h))     # the Crazyflie firmware's M1..M4
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,9 @@ class Vehicle:
     x_G, y_G, z_G : CoG offset r_G from O in the body frame (m). The inertia about the CoG,
         ``I_O - m (|r_G|^2 I - r_G r_G^T)``, must stay positive definite.
     name : a label.
+    rotor_model : a ``quadcog.vehicles.rotor_model.RotorModel`` or the name of one in its
+        ``ROTOR_MODELS`` (optional): what turns this vehicle's logged motor outputs into rotor
+        thrust (``quadcog identify`` reads it); ``as_dict`` writes its name.
 
     Raises ParameterError (or InputError for wrong types) naming the field and the value.
     """
@@ -95,11 +99,12 @@ class Vehicle:
     y_G: float = 0.0
     z_G: float = 0.0
     name: str = "vehicle"
+    rotor_model: RotorModel | None = None
 
     def __post_init__(self):
         where = lambda f: f"vehicle {self.name!r}: {f}"
         for f in fields(self):
-            if f.name in ("rotor_positions", "rotor_directions", "name"):
+            if f.name in ("rotor_positions", "rotor_directions", "name", "rotor_model"):
                 continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
@@ -121,6 +126,11 @@ class Vehicle:
             raise InputError(where(f"rotor_directions must be {N_ROTORS} numbers, each +1 or -1, "
                                    f"got {self.rotor_directions!r}"))
         object.__setattr__(self, "rotor_directions", tuple(int(d) for d in dirs))
+        if isinstance(self.rotor_model, str) and self.rotor_model in ROTOR_MODELS:
+            object.__setattr__(self, "rotor_model", ROTOR_MODELS[self.rotor_model])
+        if self.rotor_model is not None and not isinstance(self.rotor_model, RotorModel):
+            raise InputError(where(f"rotor_model must be a quadcog RotorModel, a name of "
+                                   f"{tuple(ROTOR_MODELS)} or None, got {self.rotor_model!r}"))
         for name in ("thrust_constant", "moment_constant", "max_rotor_thrust"):
             if getattr(self, name) <= 0:
                 raise ParameterError(where(f"{name} = {getattr(self, name)} must be > 0"))
@@ -208,6 +218,7 @@ class Vehicle:
         d = asdict(self)
         d["rotor_positions"] = [list(r) for r in self.rotor_positions]
         d["rotor_directions"] = list(self.rotor_directions)
+        d["rotor_model"] = None if self.rotor_model is None else self.rotor_model.name
         return d
 
 
@@ -245,7 +256,7 @@ CRAZYFLIE = Vehicle(
     c_psi=2.4e-6, rotor_positions=x_layout(0.046), rotor_directions=(-1, 1, -1, 1),
     thrust_constant=_CF_THRUST_CONSTANT, moment_constant=5.964552e-3,
     max_rotor_thrust=_CF_THRUST_CONSTANT * _CF_MAX_ROTOR_SPEED ** 2,    # 0.0879 N
-    motor_time_constant=0.0125)
+    motor_time_constant=0.0125, rotor_model=CRAZYFLIE_BITCRAZE_VOLTAGE)
 
 PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE}
 

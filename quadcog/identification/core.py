@@ -1,0 +1,333 @@
+"""``identify``: where is the CoG, and what is the mass, from flight logs.
+
+Several logs are pooled. The method is ``"static"`` (moment and thrust balance at hover),
+``"regression"`` (whole-flight filtered least squares with the generated regressor) or
+``"auto"``: the regression when every log has the signals it needs, else the static balance,
+and the result says why. With ``baseline`` logs of the same vehicle without the payload, the
+same estimator runs on them and the result is the difference: the payload's shift of the CoG
+and its mass, free of the vehicle's own rotor asymmetry (which reads as a CoG offset: a rotor
+that gives 5 % less thrust per command than the model moves the apparent CoG by 5 % / 4 of its
+distance from O toward it).
+"""
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from quadcog.errors import IdentificationError
+from quadcog.identification.estimators import REGRESSION_SIGNALS, missing_for, regression, static_balance
+from quadcog.vehicles.rotor_model import RotorModel
+from quadcog.vehicles.vehicle import PRESETS, Vehicle
+
+__all__ = ["METHODS", "JSON_KEYS", "R_G_NAMES", "IDENTIFIABLE_FRACTION", "NEVER_DETERMINED",
+           "Identification", "pooled_estimate",
+           "identify", "as_logs", "as_vehicle"]
+
+METHODS = ("auto", "static", "regression")
+R_G_NAMES = ("x_G", "y_G", "z_G")
+JSON_KEYS = ("r_G", "r_G_ci95", "mass", "mass_ci95", "mass_change", "samples", "identifiable")
+# an entry of r_G is "determined" when its 95 % half-width is below this fraction of the arm
+IDENTIFIABLE_FRACTION = 0.05
+# z_G is never reported determined: where a flight excites it at all (tilt, angular
+# acceleration), its regressor column is made of measured rates, angles and velocities whose
+# noise biases the least squares toward 0 (errors in variables) by more than the interval
+# shows (docs/identify.md: a simulated 23 deg circle with the *-real sensing noise)
+NEVER_DETERMINED = ("z_G",)
+ROTOR_ASYMMETRY = 0.05         # the weaker-rotor example of the verdict: 5 % less thrust
+
+
+@dataclass(frozen=True, eq=False)
+class Identification:
+    """The identified CoG offset and mass (what ``quadcog identify --json`` writes, and more).
+
+    Parameters
+    ----------
+    r_G : tuple of 3 float
+        CoG offset (m, body frame: x forward, y left, z up); with a baseline the shift
+        relative to the baseline flights, else relative to O. An entry the method does not
+        estimate is the vehicle's own value (baseline: 0).
+    r_G_ci95 : tuple of 3 (float or None)
+        95 % half-widths (m); None where the method does not estimate the entry.
+    mass : float
+        Mass (kg) during the flights.
+    mass_ci95 : float
+        Its 95 % half-width (kg).
+    mass_change : float or None
+        Mass minus the baseline's (kg); None without a baseline.
+    samples : int
+        Log samples used (flights, and baseline flights).
+    identifiable : tuple of str
+        The entries of r_G the data determine (names of ``R_G_NAMES``).
+    method : str
+        ``"static"`` or ``"regression"``, with the reason when ``"auto"`` chose.
+    verdict : str
+        The identifiability report in words.
+    flights, baseline : tuple of FlightEstimate
+        Per-log estimates (for figures and surveys).
+    condition : float or None
+        Largest condition number of the scaled regressor over the logs (regression).
+
+    Returns
+    -------
+    Identification
+    """
+    r_G: tuple
+    r_G_ci95: tuple
+    mass: float
+    mass_ci95: float
+    mass_change: float | None
+    samples: int
+    identifiable: tuple
+    method: str
+    verdict: str
+    flights: tuple = ()
+    baseline: tuple = ()
+    condition: float | None = None
+
+    def as_json(self) -> dict:
+        """Exactly the ``JSON_KEYS`` as plain JSON values (None for null).
+
+        Returns
+        -------
+        dict
+        """
+        return {"r_G": [float(v) for v in self.r_G],
+                "r_G_ci95": [None if v is None else float(v) for v in self.r_G_ci95],
+                "mass": float(self.mass), "mass_ci95": float(self.mass_ci95),
+                "mass_change": None if self.mass_change is None else float(self.mass_change),
+                "samples": int(self.samples), "identifiable": list(self.identifiable)}
+
+    def summary(self) -> str:
+        """The lines ``quadcog identify`` prints (mm and g).
+
+        Returns
+        -------
+        str
+        """
+        what = "shift relative to the baseline" if self.mass_change is not None else \
+            "offset from O"
+        parts = []
+        for name, v, h in zip(R_G_NAMES, self.r_G, self.r_G_ci95):
+            parts.append(f"{name} = {1e3 * v:+.2f} +- {1e3 * h:.2f} mm" if h is not None
+                         else f"{name} not estimated")
+        lines = [f"CoG {what} (body x forward, y left, z up; 95 % intervals): "
+                 + ", ".join(parts),
+                 f"mass: {1e3 * self.mass:.2f} +- {1e3 * self.mass_ci95:.2f} g"
+                 + ("" if self.mass_change is None else
+                    f" (change against the baseline: {1e3 * self.mass_change:+.2f} g)"),
+                 f"samples: {self.samples} ({len(self.flights)} log(s)"
+                 + (f", {len(self.baseline)} baseline log(s)" if self.baseline else "")
+                 + f"); method: {self.method}",
+                 f"identifiable: {', '.join(self.identifiable) or 'nothing'}",
+                 f"verdict: {self.verdict}"]
+        return "\n".join(lines)
+
+
+def as_vehicle(vehicle: "str | Vehicle") -> Vehicle:
+    """A Vehicle from a preset name (``quadcog.vehicles.vehicle.PRESETS``) or a Vehicle.
+
+    Parameters
+    ----------
+    vehicle : str or Vehicle
+
+    Returns
+    -------
+    Vehicle
+
+    Raises
+    ------
+    IdentificationError
+        An unknown name or another type.
+    """
+    if isinstance(vehicle, Vehicle):
+        return vehicle
+    if isinstance(vehicle, str) and vehicle in PRESETS:
+        return PRESETS[vehicle]
+    raise IdentificationError(f"vehicle {vehicle!r} is unknown; expected one of "
+                              f"{', '.join(PRESETS)} or a quadcog Vehicle")
+
+
+def as_logs(logs: object, what: str = "logs") -> list:
+    """FlightLogs from one log or path, or a sequence of them (paths are read with
+    ``quadcog.logs.read_log``, the format from the file).
+
+    Parameters
+    ----------
+    logs : FlightLog, str, Path or a sequence of them
+    what : str
+        The argument's name, for messages.
+
+    Returns
+    -------
+    list of FlightLog
+
+    Raises
+    ------
+    IdentificationError
+        An empty sequence or an item of another type; the readers' LogError for bad files.
+    """
+    from quadcog.logs import FlightLog, read_log
+    items = [logs] if isinstance(logs, (str, Path, FlightLog)) else list(logs)
+    if not items:
+        raise IdentificationError(f"{what}: expected at least one flight log, got none")
+    out = []
+    for item in items:
+        if isinstance(item, FlightLog):
+            out.append(item)
+        elif isinstance(item, (str, Path)):
+            out.append(read_log(item))
+        else:
+            raise IdentificationError(f"{what}: expected FlightLogs or paths, got {item!r}")
+    return out
+
+
+def _choose(method, logs):
+    if method not in METHODS:
+        raise IdentificationError(f"method {method!r} is unknown; expected one of "
+                                  f"{', '.join(METHODS)}")
+    lacking = {log.source: missing_for(log, REGRESSION_SIGNALS) for log in logs}
+    lacking = {k: v for k, v in lacking.items() if v}
+    if method == "regression" and lacking:
+        src, miss = next(iter(lacking.items()))
+        raise IdentificationError(f"{src}: method 'regression' needs {', '.join(miss)}, which "
+                                  "the log lacks; method 'static' needs only the rotor outputs "
+                                  "and the height")
+    if method != "auto":
+        return method, method
+    if lacking:
+        src, miss = next(iter(lacking.items()))
+        return "static", (f"static (auto: the whole-flight least squares needs "
+                          f"{', '.join(miss)}, which {Path(src).name} lacks)")
+    return "regression", "regression (auto: every log has the signals it needs)"
+
+
+def pooled_estimate(estimates) -> tuple:
+    """The estimate of several logs: the static balance's blocks pooled (speed-corrected);
+    the regression's per-log results combined by inverse variance.
+
+    Parameters
+    ----------
+    estimates : sequence of FlightEstimate
+        Of one method.
+
+    Returns
+    -------
+    (numpy.ndarray (3,), numpy.ndarray (3,), float, float, int)
+        r_G and its half-widths (m, NaN where not estimated), mass and half-width (kg),
+        samples.
+    """
+    from quadcog.identification.flight import block_mean_ci95, speed_corrected
+    samples = sum(e.samples for e in estimates)
+    m, m_half = block_mean_ci95(np.concatenate([e.blocks_m for e in estimates]))
+    if estimates[0].method == "static":
+        if len(estimates) == 1:
+            r, half = estimates[0].r_G, estimates[0].r_G_ci95
+        else:
+            r, half, _ = speed_corrected(np.concatenate([e.blocks_r for e in estimates]),
+                                         np.concatenate([e.blocks_v for e in estimates]))
+            half[2] = np.nan
+        return r, half, float(m), float(m_half), samples
+    w = np.array([1.0 / np.maximum(e.r_G_ci95, 1e-300) ** 2 for e in estimates])
+    r = (w * np.array([e.r_G for e in estimates])).sum(axis=0) / w.sum(axis=0)
+    return r, 1.0 / np.sqrt(w.sum(axis=0)), float(m), float(m_half), samples
+
+
+def _estimate(logs, vehicle, method, rotor_model):
+    run = static_balance if method == "static" else regression
+    return [run(log, vehicle, rotor_model) for log in logs]
+
+
+def identify(logs: object, vehicle: "str | Vehicle" = "crazyflie", baseline: object = None,
+             method: str = "auto", rotor_model: "RotorModel | str | None" = None
+             ) -> Identification:
+    """Identify the CoG offset r_G and the mass from flight logs (module docstring).
+
+    Parameters
+    ----------
+    logs : FlightLog, path, or a sequence of them
+        The flights (pooled). The take-off and landing are cut by ``hover_window``.
+    vehicle : str or Vehicle
+        ``"crazyflie"``, ``"hummingbird"`` or a Vehicle: rotor positions, rotor model, inertia.
+    baseline : FlightLog, path, sequence of them, or None
+        Flights of the same vehicle without the payload: the result is relative to them.
+    method : str
+        ``"auto"``, ``"static"`` or ``"regression"``.
+    rotor_model : RotorModel or str, optional
+        Instead of the vehicle's (a name of ``quadcog.vehicles.rotor_model.ROTOR_MODELS``).
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    IdentificationError
+        Unknown vehicle or method, a log without the signals the method needs, too few hover
+        samples; LogError for a file that cannot be read.
+    """
+    vehicle = as_vehicle(vehicle)
+    logs = as_logs(logs)
+    base = None if baseline is None else as_logs(baseline, "baseline")
+    chosen, described = _choose(method, logs + (base or []))
+    flights = _estimate(logs, vehicle, chosen, rotor_model)
+    r, half, m, m_half, samples = pooled_estimate(flights)
+    base_est = ()
+    mass_change = None
+    if base is not None:
+        base_est = tuple(_estimate(base, vehicle, chosen, rotor_model))
+        rb, hb, mb, _, sb = pooled_estimate(base_est)
+        r, half = r - rb, np.sqrt(half ** 2 + hb ** 2)
+        mass_change, samples = m - mb, samples + sb
+    # an entry the method does not estimate: the vehicle's own value (no shift with a baseline)
+    r = np.where(np.isnan(half), 0.0 if base is not None else vehicle.r_G, r)
+    limit = IDENTIFIABLE_FRACTION * vehicle.arm_length
+    ok = tuple(n for n, h in zip(R_G_NAMES, half)
+               if np.isfinite(h) and h < limit and n not in NEVER_DETERMINED)
+    conditions = [e.condition for e in flights + list(base_est) if e.condition is not None]
+    condition = max(conditions) if conditions else None
+    verdict = _verdict(vehicle, flights, half, ok, limit, condition, base is not None)
+    return Identification(
+        r_G=tuple(float(v) for v in r),
+        r_G_ci95=tuple(None if not np.isfinite(h) else float(h) for h in half),
+        mass=m, mass_ci95=m_half, mass_change=None if mass_change is None else
+        float(mass_change), samples=int(samples), identifiable=ok, method=described,
+        verdict=verdict, flights=tuple(flights), baseline=base_est, condition=condition)
+
+
+def _verdict(vehicle, flights, half, ok, limit, condition, with_baseline):
+    out = []
+    not_ok = [n for n in R_G_NAMES if n not in ok]
+    if ok:
+        out.append(f"{', '.join(ok)} determined (95 % half-widths below "
+                   f"{1e3 * limit:.2f} mm, {100 * IDENTIFIABLE_FRACTION:g} % of the arm)")
+    for n, h in zip(R_G_NAMES, half):
+        if n in not_ok:
+            if not np.isfinite(h):
+                why = [note for e in flights for note in e.notes
+                       if note.startswith(f"{n} not estimated")]
+                out.append(why[0] if why else f"{n} not estimated")
+            elif n in NEVER_DETERMINED:
+                out.append(f"{n} estimated (half-width {1e3 * h:.2f} mm) but not determined: "
+                           "the noise of the measured rates, angles and velocities in its "
+                           "regressor column biases it toward 0 by more than its interval")
+            else:
+                out.append(f"{n} not determined by these flights (half-width "
+                           f"{1e3 * h:.2f} mm)")
+    for start in ("not a hover", "moving at constant height"):
+        notes = [note for e in flights for note in e.notes if note.startswith(start)]
+        if notes:
+            out.append(notes[0] + (f" ({len(notes)} of {len(flights)} logs)"
+                                   if len(flights) > 1 else ""))
+    if condition is not None:
+        out.append(f"condition number of the scaled regressor {condition:.3g}")
+    arm = max(np.hypot(*np.asarray(vehicle.rotor_positions).T))
+    shift = ROTOR_ASYMMETRY * arm / 4
+    if with_baseline:
+        out.append("relative to the baseline flights, so the vehicle's own rotor asymmetry "
+                   "cancels (if it did not change between the flights)")
+    else:
+        out.append(f"a rotor {100 * ROTOR_ASYMMETRY:g} % weaker than the rotor model reads as a "
+                   f"CoG shift of {1e3 * shift:.2f} mm toward it, indistinguishable in these "
+                   "data; fly baseline flights without the payload (--baseline) to remove it")
+    out.append(f"thrust: {flights[0].rotor}")
+    return "; ".join(out)

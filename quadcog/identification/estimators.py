@@ -1,0 +1,352 @@
+"""The two estimators of the CoG offset r_G and the mass m from one flight log.
+
+Static balance at hover (``static_balance``). Level and at rest, the rotor thrusts f_i at
+(x_i, y_i) hold the weight: the thrust balance ``sum f_i cos(phi) cos(theta) = m (g + a_z)``
+(a_z the measured vertical acceleration) gives m, and the moment balance about O,
+``[sum y_i f_i, -sum x_i f_i] = m g [y_G, -x_G]`` (docs/model.md sec. 3.3), gives x_G, y_G.
+z_G does not enter a level hover. Needs only the rotor outputs, the height (for the hover
+window) and, when logged, the vertical acceleration and the tilt.
+
+Whole flight by least squares (``regression``). The equations of motion are affine in r_G:
+``B_u U - n(nu, eta, 0) - M(0) nu_dot = Phi(nu, eta, nu_dot) r_G`` (docs/model.md sec. 3.1,
+``regressor`` of ``quadcog.load()``). Both sides pass through the filter F(s) = lam / (s + lam)
+of the composite adaptive law (quadcog/controllers/composite.py, its default ``filter_rate``),
+so that no acceleration is needed: ``F[M nu_dot] = lam (M nu - F[M nu])``, and
+
+    z = F[B_u U - n_0] - lam (M_0 nu - F[M_0 nu]),    Y = F[Phi_0] + lam (W - F[W]),
+
+with n_0, Phi_0, M_0 at r_G = 0 and W = Phi(nu, eta, nu) - Phi_0. Rows are scaled to metres
+of CoG as in the composite law (moments by 1 / (m g), forces by l / (m g)); the mass comes
+from the thrust balance. z = Y r_G is solved by least squares; the covariance is the
+cluster-robust (sandwich) one over 1 s blocks, because neighbouring samples share their noise.
+Needs the velocity, the three Euler angles, the body rates and the rotor outputs.
+"""
+from dataclasses import dataclass
+import inspect
+
+import numpy as np
+
+from quadcog.controllers.composite import CompositeAdaptive
+from quadcog.errors import IdentificationError
+from quadcog.identification.flight import (
+    BLOCK_SECONDS,
+    MIN_BLOCKS,
+    SPEED_SPREAD,
+    HoverWindow,
+    block_mean_ci95,
+    block_means,
+    body_velocity,
+    hover_window,
+    rotor_thrusts,
+    speed_corrected,
+    t_quantile,
+    vertical_acceleration,
+)
+from quadcog.logs.flightlog import FlightLog
+from quadcog.model.conventions import B_U, rotation_matrix
+from quadcog.model.functions import load
+from quadcog.model.parameters import with_cog
+from quadcog.vehicles.rotor_model import RotorModel
+from quadcog.vehicles.vehicle import Vehicle
+
+__all__ = ["FILTER_RATE", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT",
+           "FlightEstimate", "static_balance", "regression", "missing_for"]
+
+# the composite law's filter rate lam (1/s): one definition, read from its signature
+FILTER_RATE = inspect.signature(CompositeAdaptive.__init__).parameters["filter_rate"].default
+WARM_UP = 5.0 / FILTER_RATE            # s: the filter's start-up term has decayed by e^-5
+STATIC_SIGNALS = ("position",)         # + the rotor model's signals
+REGRESSION_SIGNALS = ("position", "velocity", "roll", "pitch", "yaw", "body_rates")
+# z_G enters the moments through m g z_G sin(tilt) and the linear accelerations: below this
+# RMS tilt about the mean the logged attitude noise dominates that column, and least squares
+# biases z_G toward 0 (errors in variables) with an interval that looks tight; z_G is then
+# not estimated
+Z_G_MIN_TILT = np.radians(2.0)
+# the static balance assumes a level hover; beyond this RMS tilt it says it is biased
+STATIC_MAX_TILT = np.radians(3.0)
+
+
+def missing_for(log: FlightLog, names: tuple) -> list:
+    """The signals of ``names`` that ``log`` lacks.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+    names : sequence of str
+
+    Returns
+    -------
+    list of str
+    """
+    return [n for n in names if not log.has(n)]
+
+
+@dataclass(frozen=True, eq=False)
+class FlightEstimate:
+    """What one estimator found in one log.
+
+    Parameters
+    ----------
+    source : str
+        The log.
+    method : str
+        ``"static"`` or ``"regression"``.
+    blocks_r : numpy.ndarray, shape (B, 3)
+        Per-block estimates of r_G (m) (static: z entry 0); the regression's are per-block
+        least-squares solutions, for the figure only.
+    blocks_m : numpy.ndarray, shape (B,)
+        Per-block masses (kg).
+    blocks_v : numpy.ndarray, shape (B, 2)
+        Per-block mean speeds forward and left (m/s), for ``speed_corrected``.
+    r_G, r_G_ci95 : numpy.ndarray, shape (3,)
+        Estimate and 95 % half-widths (m); NaN half-width where the method does not estimate.
+    mass, mass_ci95 : float
+        kg.
+    samples : int
+        Samples used.
+    t, moment, weight : numpy.ndarray
+        For the figure: sample times (s), the rotor moments [sum y_i f_i, -sum x_i f_i] (N m)
+        and m g (N) over the window.
+    condition : float or None
+        Condition number of the scaled regressor (regression only).
+    rotor : str
+        How the thrusts were obtained.
+    notes : tuple of str
+        What the estimator assumed.
+
+    Returns
+    -------
+    FlightEstimate
+    """
+    source: str
+    method: str
+    blocks_r: np.ndarray
+    blocks_m: np.ndarray
+    blocks_v: np.ndarray
+    r_G: np.ndarray
+    r_G_ci95: np.ndarray
+    mass: float
+    mass_ci95: float
+    samples: int
+    t: np.ndarray
+    moment: np.ndarray
+    weight: np.ndarray
+    condition: float | None
+    rotor: str
+    notes: tuple
+
+
+def _tilt_cosine(log, notes):
+    if log.has("roll") and log.has("pitch"):
+        return np.cos(log.signal("roll")) * np.cos(log.signal("pitch"))
+    notes.append("no roll and pitch together in the log: the thrust taken as vertical")
+    return np.ones(log.n_samples)
+
+
+def _rms_tilt(log, sel):
+    """RMS of the logged roll and pitch (those present) over the window (rad), or None."""
+    have = [log.signal(n)[sel] for n in ("roll", "pitch") if log.has(n)]
+    return float(np.sqrt(sum((a ** 2).mean() for a in have))) if have else None
+
+
+def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str | None" = None,
+                   window: "HoverWindow | None" = None) -> FlightEstimate:
+    """x_G, y_G and m from the thrust and moment balance of the hover (module docstring).
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+        With "position" and the rotor model's signals.
+    vehicle : quadcog.Vehicle
+        Rotor positions, g and the rotor model.
+    rotor_model : RotorModel or str, optional
+        Instead of the vehicle's.
+    window : HoverWindow, optional
+        Default: ``hover_window(log)``.
+
+    Returns
+    -------
+    FlightEstimate
+        ``method = "static"``; r_G[2] = 0 with a NaN half-width (not estimated).
+
+    Raises
+    ------
+    IdentificationError
+        Missing signals or too few hover samples.
+    """
+    window = hover_window(log) if window is None else window
+    f_all, rotor, _ = rotor_thrusts(log, vehicle, rotor_model)
+    notes = []
+    a_z, a_from = vertical_acceleration(log)
+    cos_tilt = _tilt_cosine(log, notes)
+    sel = window.mask
+    t, f = log.t[sel], f_all[sel]
+    g = vehicle.g
+    pos = np.asarray(vehicle.rotor_positions)
+    thrust_up = f.sum(axis=1) * cos_tilt[sel]
+    moment = np.column_stack([f @ pos[:, 1], -(f @ pos[:, 0])])      # [U2, U3] (N m)
+    lift = g + a_z[sel]
+    blocks = block_means(window.blocks(t), np.column_stack([thrust_up, lift, moment,
+                                                            body_velocity(log)[sel]]))
+    if len(blocks) < MIN_BLOCKS:
+        raise IdentificationError(f"{log.source}: too few hover samples ({sel.sum()} in "
+                                  f"{len(blocks)} blocks of {BLOCK_SECONDS:g} s)")
+    m_b = blocks[:, 0] / blocks[:, 1]
+    # U2 = m g y_G, U3 = -m g x_G
+    r_b = np.column_stack([-blocks[:, 3] / (m_b * g), blocks[:, 2] / (m_b * g),
+                           np.zeros(len(m_b))])
+    v_b = blocks[:, 4:6]
+    r, half, slopes = speed_corrected(r_b, v_b)
+    half[2] = np.nan
+    m, m_half = block_mean_ci95(m_b)
+    notes.append(f"vertical acceleration: {a_from}")
+    tilt = _rms_tilt(log, sel)
+    if tilt is not None and tilt > STATIC_MAX_TILT:
+        notes.append(f"not a hover: RMS tilt {np.degrees(tilt):.1f} deg (above "
+                     f"{np.degrees(STATIC_MAX_TILT):g} deg); the level balance is biased here, "
+                     "use method 'regression'")
+    if slopes.any():
+        notes.append("moving at constant height (block speeds spread by more than "
+                     f"{SPEED_SPREAD:g} m/s): r_G is the zero-speed intercept of the blocks")
+    notes.append("z_G not estimated: it does not enter the moment balance of a level hover")
+    return FlightEstimate(log.source, "static", r_b, m_b, v_b, r, half, float(m), float(m_half),
+                          int(sel.sum()), t, moment, m * g * np.ones(len(t)), None, rotor,
+                          tuple(notes))
+
+
+def _lowpass(u, t, lam, restart, held=False):
+    """F(s) = lam / (s + lam) on samples u (N, ...) at times t (N,), exactly: for a command
+    ``held`` from its sample to the next (what a logged motor command does), else for a
+    signal linear between samples (a sampled state). Starts in steady state (F[u] = u) at
+    every sample where ``restart`` (N,) is True (the first one of each segment)."""
+    h = np.diff(t)
+    a = np.exp(-lam * h)
+    ramp = 0.0 * h if held else 1.0 - (1.0 - a) / (lam * h)
+    y = np.empty_like(u)
+    y[0] = u[0]
+    for k in range(1, len(t)):
+        if restart[k]:
+            y[k] = u[k]
+        else:
+            y[k] = a[k - 1] * y[k - 1] + (1.0 - a[k - 1]) * u[k - 1] \
+                + ramp[k - 1] * (u[k] - u[k - 1])
+    return y
+
+
+def _states(log, sel):
+    """States x (N, 12) on the window: ground position, ZYX angles, body velocities, rates."""
+    p, v = log.signal("position")[sel], log.signal("velocity")[sel]
+    eta = np.column_stack([log.signal(n)[sel] for n in ("roll", "pitch", "yaw")])
+    nu1 = np.array([rotation_matrix(*e).T @ vk for e, vk in zip(eta, v)])
+    return np.column_stack([p, eta, nu1, log.signal("body_rates")[sel]])
+
+
+def regression(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str | None" = None,
+               window: "HoverWindow | None" = None, filter_rate: float = FILTER_RATE,
+               mass: "float | None" = None, min_tilt: float = Z_G_MIN_TILT) -> FlightEstimate:
+    """r_G by filtered least squares with the generated regressor (module docstring).
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+        With ``REGRESSION_SIGNALS`` and the rotor model's signals.
+    vehicle : quadcog.Vehicle
+        Inertia, drag, rotor geometry, rotor model (its r_G is not used).
+    rotor_model : RotorModel or str, optional
+        Instead of the vehicle's.
+    window : HoverWindow, optional
+        Default: ``hover_window(log)``; the first ``5 / filter_rate`` s are the filter's
+        warm-up and not used.
+    filter_rate : float
+        lam (1/s) of F(s).
+    mass : float, optional
+        The mass (kg); default: the thrust balance of ``static_balance`` on the same window.
+    min_tilt : float
+        RMS tilt (rad) below which z_G is not estimated (``Z_G_MIN_TILT``; 0 forces it).
+
+    Returns
+    -------
+    FlightEstimate
+        ``method = "regression"``, with the condition number of the scaled regressor.
+
+    Raises
+    ------
+    IdentificationError
+        Missing signals or too few samples.
+    """
+    missing = missing_for(log, REGRESSION_SIGNALS)
+    if missing:
+        raise IdentificationError(f"{log.source}: the whole-flight least squares needs "
+                                  f"{', '.join(missing)}, which the log lacks")
+    window = hover_window(log) if window is None else window
+    static = static_balance(log, vehicle, rotor_model, window)
+    m = static.mass if mass is None else float(mass)
+    f_all, rotor, _ = rotor_thrusts(log, vehicle, rotor_model)
+    sel = window.mask
+    t = log.t[sel]
+    x = _states(log, sel)
+    U = f_all[sel] @ vehicle.mixer().T
+    p0 = with_cog(vehicle.replace(m=m).parameters(), np.zeros(3))
+    model = load()
+    M0 = model.mass_matrix(p0)
+    D = model.damping(p0)
+    N = len(t)
+    n0 = np.empty((N, 6))
+    Phi0 = np.empty((N, 6, 3))
+    W = np.empty((N, 6, 3))
+    zero = np.zeros(6)
+    for k in range(N):
+        nu = x[k, 6:]
+        n0[k] = model.coriolis(x[k], p0) @ nu + D @ nu + model.gravity(x[k], p0)
+        Phi0[k] = model.regressor(x[k], zero, p0)
+        W[k] = model.regressor(x[k], nu, p0) - Phi0[k]
+    lam = float(filter_rate)
+    seg = np.searchsorted(np.array([a for a, _ in window.segments]), t, side="right") - 1
+    restart = np.r_[True, np.diff(seg) != 0]
+    seg_start = np.array([a for a, _ in window.segments])[seg]
+    Mnu = x[:, 6:] @ M0.T
+    z = (_lowpass(U @ B_U.T, t, lam, restart, held=True) - _lowpass(n0, t, lam, restart)
+         - lam * (Mnu - _lowpass(Mnu, t, lam, restart)))
+    Y = _lowpass(Phi0, t, lam, restart) + lam * (W - _lowpass(W, t, lam, restart))
+    index_all = window.blocks(t)
+    keep = (t >= seg_start + WARM_UP) & (index_all >= 0)
+    t, z, Y, index = t[keep], z[keep], Y[keep], index_all[keep]
+    scale = np.r_[[vehicle.arm_length / (m * vehicle.g)] * 3, [1.0 / (m * vehicle.g)] * 3]
+    zn, Yn = z * scale, Y * scale[None, :, None]
+    eta = x[keep, 3:5]
+    tilt = float(np.sqrt(((eta - eta.mean(axis=0)) ** 2).sum(axis=1).mean()))
+    cols = [0, 1, 2] if tilt >= min_tilt else [0, 1]
+    Yn = Yn[:, :, cols]
+    A, b = Yn.reshape(-1, len(cols)), zn.reshape(-1)
+    r = np.zeros(3)
+    r[cols], *_ = np.linalg.lstsq(A, b, rcond=None)
+    e = (b - A @ r[cols]).reshape(-1, 6)
+    n_blocks = index.max() + 1
+    if n_blocks < MIN_BLOCKS:
+        raise IdentificationError(f"{log.source}: too few samples for the least squares "
+                                  f"({len(t)} in {n_blocks} blocks of {BLOCK_SECONDS:g} s)")
+    AtA_inv = np.linalg.inv(A.T @ A)
+    meat = np.zeros((len(cols), len(cols)))
+    blocks_r = np.zeros((n_blocks, 3))
+    for bl in range(n_blocks):
+        s = index == bl
+        gb = np.einsum("kij,ki->j", Yn[s], e[s])
+        meat += np.outer(gb, gb)
+        Ab, bb = Yn[s].reshape(-1, len(cols)), zn[s].reshape(-1)
+        blocks_r[bl, cols] = np.linalg.lstsq(Ab, bb, rcond=None)[0]
+    cov = AtA_inv @ meat @ AtA_inv * n_blocks / (n_blocks - 1)
+    half = np.full(3, np.nan)
+    half[cols] = t_quantile(n_blocks - 1) * np.sqrt(np.diag(cov))
+    condition = float(np.linalg.cond(A))
+    notes = list(static.notes[:-1]) + [
+        f"filter F(s) = {lam:g} / (s + {lam:g}) as the composite law's; first {WARM_UP:g} s "
+        "of the window are its warm-up",
+        "the mass from the thrust balance of the same window"]
+    if len(cols) == 2:
+        notes.append(f"z_G not estimated: RMS tilt {np.degrees(tilt):.2f} deg is below "
+                     f"{np.degrees(min_tilt):g} deg, too little for the attitude noise")
+    return FlightEstimate(log.source, "regression", blocks_r, static.blocks_m, static.blocks_v, r,
+                          half, m if mass is not None else static.mass,
+                          0.0 if mass is not None else static.mass_ci95, int(keep.sum()),
+                          static.t, static.moment, static.weight, condition, rotor,
+                          tuple(notes))

@@ -1,0 +1,377 @@
+"""What the estimators take from a flight log: the hover window, the rotor thrusts, the
+vertical acceleration, and block statistics for samples that are not independent.
+
+The hover window (take-off and landing removed) is found from the height alone, so that it
+works with every log: the plateau height h is the median of the heights above half the
+largest one; the window is every run of samples within ``HOVER_BAND`` of h (a log may hold
+several flights), each shortened by ``HOVER_TRIM`` seconds at both ends (the climb and the
+descent settle there). Samples of one flight are correlated, so intervals come from the means
+of blocks of ``BLOCK_SECONDS`` (Student t over the blocks, widened for the blocks' remaining
+lag-one correlation).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from quadcog.errors import IdentificationError
+from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
+
+__all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "HoverWindow", "hover_window",
+           "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95",
+           "ar1_inflation", "speed_corrected", "body_velocity", "SPEED_SPREAD",
+           "t_quantile"]
+
+HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
+HOVER_TRIM = 1.5         # s cut at both ends of the plateau (the climb and descent settle)
+BLOCK_SECONDS = 1.0      # samples of one flight are correlated (slow integrators): blocks,
+                         # and the blocks' own lag-one correlation widens the interval
+MIN_BLOCKS = 3           # fewer blocks than this: too few hover samples for an interval
+# Flown at constant height but moving (the CrazyPAD flights cross the room at 0.47 m/s, once
+# each way), the rotors' flapping and drag add a moment proportional to the speed, which reads
+# as a CoG shift along the motion. When the blocks' mean speeds spread by more than this along
+# a body axis, the CoG is the zero-speed intercept of a line fitted through the blocks.
+SPEED_SPREAD = 0.1       # m/s
+
+
+@dataclass(frozen=True, eq=False)
+class HoverWindow:
+    """The take-off and landing free part of one log: one or more plateaus (a log may hold
+    several flights).
+
+    Parameters
+    ----------
+    segments : tuple of (float, float)
+        Start and end (s, on the log's time) of each trimmed plateau.
+    height : float
+        The plateau height h (m).
+    mask : numpy.ndarray, shape (N,), bool
+        The log's samples inside the window.
+
+    Returns
+    -------
+    HoverWindow
+    """
+    segments: tuple
+    height: float
+    mask: np.ndarray
+
+    @property
+    def samples(self) -> int:
+        """Number of samples in the window."""
+        return int(self.mask.sum())
+
+    @property
+    def t0(self) -> float:
+        """Start of the first segment (s)."""
+        return self.segments[0][0]
+
+    @property
+    def t1(self) -> float:
+        """End of the last segment (s)."""
+        return self.segments[-1][1]
+
+    def blocks(self, t: np.ndarray, seconds: float = BLOCK_SECONDS) -> np.ndarray:
+        """Block number of each time in ``t`` (the window's samples): consecutive blocks of
+        ``seconds`` within each segment, -1 for the rest of a segment shorter than a block.
+
+        Parameters
+        ----------
+        t : numpy.ndarray, shape (n,)
+            Times (s) inside the window.
+        seconds : float
+            Block length (s).
+
+        Returns
+        -------
+        numpy.ndarray of int, shape (n,)
+        """
+        index = np.full(len(t), -1)
+        first = 0
+        for a, b in self.segments:
+            inside = (t >= a) & (t <= b)
+            n = int((b - a) // seconds)
+            if n == 0:
+                continue
+            # n equal blocks tile the segment, each at least ``seconds`` long
+            k = np.minimum(np.floor((t[inside] - a) / ((b - a) / n)).astype(int), n - 1)
+            index[inside] = k + first
+            first += n
+        return index
+
+
+def hover_window(log: object, band: float = HOVER_BAND, trim: float = HOVER_TRIM
+                 ) -> HoverWindow:
+    """The hover window of ``log`` (module docstring: plateaus of the height, trimmed).
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+        With the signal ``"position"`` (m, ground frame, z up).
+    band : float
+        Half-width of the plateau band as a fraction of its height.
+    trim : float
+        Seconds removed at each end of each plateau.
+
+    Returns
+    -------
+    HoverWindow
+
+    Raises
+    ------
+    IdentificationError
+        The log has no position, never leaves the ground, or its plateaus hold fewer than
+        ``MIN_BLOCKS`` blocks of ``BLOCK_SECONDS`` after the trim.
+    """
+    if not log.has("position"):
+        raise IdentificationError(f"{log.source}: no 'position' signal, so the hover (take-off "
+                                  "and landing free) part cannot be found from the height")
+    z = log.signal("position")[:, 2]
+    t = log.t
+    top = np.max(z)
+    if not top > 0.05:
+        raise IdentificationError(f"{log.source}: the height never exceeds 5 cm (largest "
+                                  f"{top:.3f} m): no flight to identify from")
+    h = float(np.median(z[z > 0.5 * top]))
+    inside = np.abs(z - h) < band * h
+    edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
+    segments = []
+    for i, j in zip(edges[0::2], edges[1::2]):
+        a, b = t[i] + trim, t[j - 1] - trim
+        if b - a >= BLOCK_SECONDS:
+            segments.append((float(a), float(b)))
+    mask = np.zeros(len(t), bool)
+    for a, b in segments:
+        mask |= (t >= a) & (t <= b)
+    window = HoverWindow(tuple(segments), h, mask)
+    n_blocks = window.blocks(t[mask]).max(initial=-1) + 1
+    if n_blocks < MIN_BLOCKS:
+        raise IdentificationError(
+            f"{log.source}: too few hover samples: the plateau(s) near {h:.2f} m give "
+            f"{n_blocks} block(s) of {BLOCK_SECONDS:g} s after cutting {trim:g} s at each end "
+            f"(at least {MIN_BLOCKS} needed)")
+    return window
+
+
+def _commands_from_mixer(log, vehicle):
+    """Rotor commands (N, 4) from thrust_command and moment_command, by the mixer the signals
+    are defined with (quadcog.logs.SIGNALS['moment_command'])."""
+    pos = np.asarray(vehicle.rotor_positions)
+    d = np.asarray(vehicle.rotor_directions, float)
+    T = log.signal("thrust_command")[:, None]
+    m = log.signal("moment_command")
+    u = T + np.sign(pos[:, 1])[None] * m[:, :1] - np.sign(pos[:, 0])[None] * m[:, 1:2] \
+        + d[None] * m[:, 2:3]
+    return np.clip(u, 0.0, 1.0)
+
+
+def rotor_thrusts(log: object, vehicle: object, rotor_model: "RotorModel | str | None" = None
+                  ) -> tuple:
+    """The thrust of each rotor (N) over the whole log, and how it was obtained.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+    vehicle : quadcog.Vehicle
+        Its ``rotor_model`` is used unless ``rotor_model`` is given.
+    rotor_model : RotorModel or str, optional
+        A model or a name of ``ROTOR_MODELS``.
+
+    Returns
+    -------
+    (numpy.ndarray of shape (N, 4), str, RotorModel)
+        Thrusts (N), a sentence saying which signals and model gave them, the model used.
+
+    Raises
+    ------
+    IdentificationError
+        No rotor model, or the log lacks the signals it needs and no fallback applies (the
+        message names the signals).
+    """
+    model = vehicle.rotor_model if rotor_model is None else rotor_model
+    if isinstance(model, str):
+        if model not in ROTOR_MODELS:
+            raise IdentificationError(f"rotor model {model!r} is unknown; expected one of "
+                                      f"{', '.join(ROTOR_MODELS)}")
+        model = ROTOR_MODELS[model]
+    if not isinstance(model, RotorModel):
+        raise IdentificationError(f"vehicle {vehicle.name!r} has no rotor_model, so motor "
+                                  "outputs cannot be turned into thrust; pass rotor_model=")
+    missing = [s for s in model.signals if not log.has(s)]
+    if not missing:
+        u = log.signal(model.signal)
+        v = log.signal("battery_voltage") if model.uses_voltage else None
+        return model.thrust(u, v), f"{model.name} from {' and '.join(model.signals)}", model
+    # A Crazyflie log without the PWM (the controller logs): with battery compensation the
+    # firmware's command is linear in thrust, so the command is the next best input.
+    crazyflie = model.name in ROTOR_MODELS
+    fallback = CRAZYFLIE_FIRMWARE_COMMAND if crazyflie else None
+    if fallback is not None and log.has("motor_command"):
+        return (fallback.thrust(log.signal("motor_command")),
+                f"{fallback.name} from motor_command (the log has no {', '.join(missing)})",
+                fallback)
+    if fallback is not None and log.has("thrust_command") and log.has("moment_command"):
+        u = _commands_from_mixer(log, vehicle)
+        return (fallback.thrust(u), f"{fallback.name} from thrust_command and moment_command "
+                "through the firmware's mixer (the log has no motor outputs)", fallback)
+    raise IdentificationError(
+        f"{log.source}: rotor model {model.name!r} needs the signal(s) "
+        f"{', '.join(missing)}, which the log lacks (it has "
+        f"{', '.join(log.signals) or 'no standard signals'})")
+
+
+def vertical_acceleration(log: object) -> tuple:
+    """Kinematic vertical acceleration (N,) (m/s^2, z up) and where it came from: the
+    ``"acceleration"`` signal, else the derivative of the vertical velocity, else zero.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+
+    Returns
+    -------
+    (numpy.ndarray of shape (N,), str)
+    """
+    if log.has("acceleration"):
+        return log.signal("acceleration")[:, 2], "the logged acceleration"
+    if log.has("velocity"):
+        return np.gradient(log.signal("velocity")[:, 2], log.t), "the derivative of velocity"
+    return np.zeros(log.n_samples), "none logged (taken as 0)"
+
+
+def block_means(index: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Means of ``values`` per block number (``HoverWindow.blocks``; -1 is left out).
+
+    Parameters
+    ----------
+    index : numpy.ndarray of int, shape (n,)
+        Block number of each sample.
+    values : numpy.ndarray, shape (n, ...)
+        Samples.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, ...)
+        One mean per block, B = index.max() + 1.
+    """
+    return np.asarray([values[index == b].mean(axis=0) for b in range(index.max() + 1)])
+
+
+def t_quantile(dof: int) -> float:
+    """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom (two-sided 95 %).
+
+    Parameters
+    ----------
+    dof : int
+        Degrees of freedom, >= 1.
+
+    Returns
+    -------
+    float
+    """
+    from scipy import stats  # here: slow to import
+    return float(stats.t.ppf(0.975, max(int(dof), 1)))
+
+
+def block_mean_ci95(blocks: np.ndarray) -> tuple:
+    """Mean of block means and the half-width of its 95 % interval (Student t on the blocks).
+
+    Parameters
+    ----------
+    blocks : numpy.ndarray, shape (B, ...)
+        Block means (``block_means``), B >= 2.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        Mean and half-width, each of shape (...).
+    """
+    b = np.asarray(blocks, dtype=float)
+    n = b.shape[0]
+    return b.mean(axis=0), t_quantile(n - 1) * b.std(axis=0, ddof=1) / np.sqrt(n) \
+        * np.sqrt(ar1_inflation(b))
+
+
+def ar1_inflation(blocks: np.ndarray) -> np.ndarray:
+    """Variance factor (1 + rho) / (1 - rho) of the mean of block means whose neighbours
+    correlate with lag-one coefficient rho > 0 (AR(1)); 1 when rho <= 0 or too few blocks.
+
+    Parameters
+    ----------
+    blocks : numpy.ndarray, shape (B, ...)
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+    """
+    b = np.asarray(blocks, dtype=float)
+    if b.shape[0] < 4:
+        return np.ones(b.shape[1:])
+    d = b - b.mean(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rho = (d[1:] * d[:-1]).sum(axis=0) / (d * d).sum(axis=0)
+    rho = np.clip(np.nan_to_num(rho), 0.0, 0.9)
+    return (1 + rho) / (1 - rho)
+
+
+def body_velocity(log: object) -> np.ndarray:
+    """Horizontal velocity in heading axes (N, 2) (m/s: forward, left), the ground velocity
+    (else the derivative of the position) turned by -yaw (when logged); zeros without either.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 2)
+    """
+    if log.has("velocity"):
+        v = log.signal("velocity")[:, :2]
+    elif log.has("position"):
+        v = np.gradient(log.signal("position")[:, :2], log.t, axis=0)
+    else:
+        return np.zeros((log.n_samples, 2))
+    if not log.has("yaw"):
+        return v.copy()
+    c, s = np.cos(log.signal("yaw")), np.sin(log.signal("yaw"))
+    return np.column_stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1]])
+
+
+def speed_corrected(blocks_r: np.ndarray, blocks_v: np.ndarray, spread: float = SPEED_SPREAD
+                    ) -> tuple:
+    """x_G and y_G from block estimates, free of a moment proportional to the speed.
+
+    For each of x and y: when the blocks' speeds along that axis spread by more than
+    ``spread``, the zero-speed intercept of the least-squares line r_b = r + k v_b and the
+    95 % half-width of that intercept (Student t with B - 2 degrees of freedom, widened for the
+    residuals' lag-one correlation); otherwise the mean of the blocks (``block_mean_ci95``).
+
+    Parameters
+    ----------
+    blocks_r : numpy.ndarray, shape (B, 3)
+        Block estimates of r_G (m).
+    blocks_v : numpy.ndarray, shape (B, 2)
+        Block mean speeds forward and left (m/s).
+    spread : float
+        m/s.
+
+    Returns
+    -------
+    (numpy.ndarray (3,), numpy.ndarray (3,), numpy.ndarray (2,))
+        r_G, half-widths (the z entry as ``block_mean_ci95`` gives it) and the slopes k
+        (m per m/s; 0 where not fitted).
+    """
+    r, half = block_mean_ci95(blocks_r)
+    slopes = np.zeros(2)
+    n = len(blocks_r)
+    for i in (0, 1):
+        v = blocks_v[:, i]
+        if n < 4 or np.ptp(v) <= spread:
+            continue
+        A = np.column_stack([np.ones(n), v])
+        coef, *_ = np.linalg.lstsq(A, blocks_r[:, i], rcond=None)
+        e = blocks_r[:, i] - A @ coef
+        cov = np.linalg.inv(A.T @ A) * (e @ e) / (n - 2)
+        r[i], slopes[i] = coef
+        half[i] = t_quantile(n - 2) * np.sqrt(cov[0, 0] * ar1_inflation(e[:, None])[0])
+    return r, half, slopes

@@ -1,0 +1,298 @@
+"""Rotor models: what turns a logged motor command (and the battery voltage) into rotor thrust.
+
+A ``RotorModel`` is data with its source: a frozen, validated record of one published map from
+the motor output a flight log records to the thrust of one rotor (N). Three forms:
+
+- ``"polynomial"``: ``f = c0 + c1 (s u) + c2 (s u)^2`` for the logged output u in 0..1 and
+  the scale s of the source's command (65535 for the Crazyflie's 16-bit PWM);
+- ``"voltage"``: the voltage across the motor, ``u V_bat``, is a quadratic of the thrust,
+  ``u V_bat = c0 + c1 F + c2 F^2`` with F in the source's unit (``thrust_unit`` N per unit per
+  rotor); the model solves it for F (0 below ``c0``: the motor does not turn);
+- ``"thr_mdl_fac"``: PX4's thrust curve, ``f = T_max ((1 - k) u + k u^2)`` for the normalized
+  motor output u in 0..1, k the vehicle's ``THR_MDL_FAC``.
+
+``thrust(u, voltage)`` maps (N, 4) outputs to (N, 4) thrusts; ``command(f, voltage)`` is its
+inverse (for writing simulated flights as logs). ``signal`` names the log signal the model
+reads (``quadcog.logs`` standard names: ``"motor_pwm"`` or ``"motor_command"``) and
+``uses_voltage`` whether it needs ``"battery_voltage"``.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from quadcog import validate
+from quadcog.errors import InputError
+
+__all__ = ["RotorModel", "ROTOR_MODELS", "STANDARD_GRAVITY", "CRAZYFLIE_BITCRAZE_VOLTAGE",
+           "CRAZYFLIE_FOERSTER", "CRAZYFLIE_FIRMWARE_COMMAND", "px4_thrust_curve",
+           "px4_thrust_curve_from_log"]
+
+KINDS = ("polynomial", "voltage", "thr_mdl_fac")
+SIGNALS_READ = ("motor_pwm", "motor_command")
+STANDARD_GRAVITY = 9.80665          # m/s^2: grams-force to newtons (CGPM 1901)
+
+
+@dataclass(frozen=True)
+class RotorModel:
+    """One map from logged motor output to the thrust of one rotor (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+        Short identifier (``ROTOR_MODELS`` key), e.g. ``"bitcraze-voltage"``.
+    kind : str
+        ``"polynomial"``, ``"voltage"`` or ``"thr_mdl_fac"``.
+    signal : str
+        The log signal read: ``"motor_pwm"`` (the duty the motor sees) or ``"motor_command"``.
+    coefficients : tuple of float
+        ``"polynomial"``: (c0, c1, c2) in N; ``"voltage"``: (c0, c1, c2) in V, V per unit and
+        V per unit^2 of the source's thrust; ``"thr_mdl_fac"``: (k,), dimensionless in [0, 1].
+    scale : float
+        ``"polynomial"``: the source's command at u = 1 (65535 for a 16-bit PWM); else 1.
+    thrust_unit : float
+        N per unit of the source's thrust, per rotor (``"voltage"``; 1 otherwise).
+    max_thrust : float
+        Thrust of one rotor at u = 1 (N) for ``"thr_mdl_fac"``; otherwise the model's own
+        value at u = 1, informative only.
+    source : str
+        The publication or document the numbers come from.
+
+    Raises
+    ------
+    InputError
+        Naming the field and the bad value.
+    """
+    name: str
+    kind: str
+    signal: str
+    coefficients: tuple
+    source: str
+    scale: float = 1.0
+    thrust_unit: float = 1.0
+    max_thrust: float = 0.0
+
+    def __post_init__(self):
+        where = f"rotor model {self.name!r}"
+        if not isinstance(self.name, str) or not self.name:
+            validate.fail("RotorModel.name", "a non-empty string", self.name)
+        validate.choice(self.kind, f"{where}: kind", KINDS)
+        validate.choice(self.signal, f"{where}: signal", SIGNALS_READ)
+        n = {"polynomial": 3, "voltage": 3, "thr_mdl_fac": 1}[self.kind]
+        c = validate.array(self.coefficients, f"{where}: coefficients", (n,))
+        object.__setattr__(self, "coefficients", tuple(float(v) for v in c))
+        for field in ("scale", "thrust_unit"):
+            object.__setattr__(self, field, validate.positive(getattr(self, field),
+                                                              f"{where}: {field}"))
+        object.__setattr__(self, "max_thrust", validate.nonnegative(
+            self.max_thrust, f"{where}: max_thrust", "N"))
+        if self.kind == "thr_mdl_fac":
+            validate.real(c[0], f"{where}: THR_MDL_FAC", lo=0.0, hi=1.0)
+            if self.max_thrust <= 0:
+                validate.fail(f"{where}: max_thrust", "a thrust > 0 N at full output",
+                              self.max_thrust)
+        if self.kind == "voltage" and not (c[1] > 0 and c[0] >= 0):
+            validate.fail(f"{where}: coefficients", "c0 >= 0 V and a positive slope c1",
+                          c.tolist())
+        if not isinstance(self.source, str) or not self.source.strip():
+            validate.fail(f"{where}: source", "the citation of the numbers", self.source)
+
+    @property
+    def uses_voltage(self) -> bool:
+        """True when the thrust depends on the battery voltage (the ``"voltage"`` form)."""
+        return self.kind == "voltage"
+
+    @property
+    def signals(self) -> tuple:
+        """The log signals the model reads: (signal,) or (signal, "battery_voltage")."""
+        return (self.signal, "battery_voltage") if self.uses_voltage else (self.signal,)
+
+    def _voltage(self, voltage, shape):
+        if not self.uses_voltage:
+            return None
+        if voltage is None:
+            raise InputError(f"rotor model {self.name!r} needs the battery voltage (V), got "
+                             "None")
+        v = np.asarray(voltage, dtype=float)
+        v = v.reshape(v.shape + (1,) * (len(shape) - v.ndim)) if v.ndim < len(shape) else v
+        if not (np.isfinite(v).all() and (v > 0).all()):
+            raise InputError(f"rotor model {self.name!r}: battery voltage must be finite and "
+                             f"> 0 V, got values from {np.nanmin(v):.4g} to {np.nanmax(v):.4g}")
+        return v
+
+    def thrust(self, u: np.ndarray, voltage: "np.ndarray | None" = None) -> np.ndarray:
+        """Thrust of each rotor (N) from logged outputs.
+
+        Parameters
+        ----------
+        u : array_like, shape (..., 4)
+            Motor outputs in 0..1 (values outside are clipped to 0..1).
+        voltage : array_like, shape (...,), optional
+            Battery voltage (V); required when ``uses_voltage``.
+
+        Returns
+        -------
+        numpy.ndarray, shape of u
+            Thrust of each rotor (N), >= 0.
+        """
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        if not np.isfinite(u).all():
+            raise InputError(f"rotor model {self.name!r}: motor outputs must be finite")
+        c = self.coefficients
+        if self.kind == "polynomial":
+            s = self.scale * u
+            f = c[0] + c[1] * s + c[2] * s * s
+        elif self.kind == "thr_mdl_fac":
+            f = self.max_thrust * ((1.0 - c[0]) * u + c[0] * u * u)
+        else:
+            volts = u * self._voltage(voltage, u.shape) - c[0]
+            if c[2] < 0:        # beyond the parabola's vertex the fit means nothing: saturate
+                volts = np.minimum(volts, c[1] ** 2 / (-4.0 * c[2]))
+            f = self.thrust_unit * _quadratic_root(c[2], c[1], -np.maximum(volts, 0.0))
+        return np.maximum(f, 0.0)
+
+    def command(self, f: np.ndarray, voltage: "np.ndarray | None" = None) -> np.ndarray:
+        """The logged output u (0..1) that gives the rotor thrusts ``f``: the inverse of
+        ``thrust``.
+
+        Parameters
+        ----------
+        f : array_like, shape (..., 4)
+            Thrust of each rotor (N), >= 0.
+        voltage : array_like, shape (...,), optional
+            Battery voltage (V); required when ``uses_voltage``.
+
+        Returns
+        -------
+        numpy.ndarray, shape of f
+            Outputs in 0..1; InputError if a thrust needs more than full output.
+        """
+        f = np.asarray(f, dtype=float)
+        if not (np.isfinite(f).all() and (f >= 0).all()):
+            raise InputError(f"rotor model {self.name!r}: thrusts must be finite and >= 0 N")
+        c = self.coefficients
+        if self.kind == "polynomial":
+            u = _quadratic_root(c[2], c[1], c[0] - f) / self.scale
+        elif self.kind == "thr_mdl_fac":
+            u = _quadratic_root(c[0], 1.0 - c[0], -f / self.max_thrust)
+        else:
+            F = f / self.thrust_unit
+            u = np.where(F > 0, c[0] + c[1] * F + c[2] * F * F, 0.0) \
+                / self._voltage(voltage, f.shape)
+        u = np.maximum(u, 0.0)
+        if u.max(initial=0.0) > 1.0 + 1e-9:
+            raise InputError(f"rotor model {self.name!r}: a thrust of {f.max():.4g} N needs "
+                             f"output {u.max():.4g} > 1 (beyond full output)")
+        return np.minimum(u, 1.0)
+
+    def describe(self) -> str:
+        """One line: name, form and source."""
+        return f"{self.name} ({self.kind} of {self.signal}): {self.source}"
+
+
+def _quadratic_root(a, b, c):
+    """The root of a x^2 + b x + c = 0 (elementwise, b > 0) that tends to -c / b as a -> 0:
+    the physical branch of each map. The form 2c / (-b - sqrt(b^2 - 4ac)) loses no digits for
+    small a; a negative discriminant (beyond the map's vertex) is taken as 0."""
+    c = np.asarray(c, dtype=float)
+    disc = np.maximum(b * b - 4.0 * a * c, 0.0)
+    denom = -b - np.sqrt(disc)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.where(denom != 0, 2.0 * c / np.where(denom != 0, denom, 1.0), 0.0)
+    return x
+
+
+# --- Crazyflie 2.x -----------------------------------------------------------------------
+# Bitcraze measured the thrust of the whole Crazyflie 2.X on a scale at 16 PWM steps with the
+# supply voltage (wiki "PWM to Thrust", 2015 measurements) and fitted the voltage across the
+# motors, PWM x supply, against the total thrust F (g) (crazyflie-firmware
+# src/drivers/src/motors.c, comment above motorsCompensateBatteryVoltage, GNU Octave polyfit):
+# V = 0.06865956 + 0.08835522 F - 0.00062390 F^2. Per rotor: F / 4 grams. The firmware's
+# compensation drops the constant (zero thrust = zero PWM): CRAZYFLIE_FIRMWARE_COMMAND.
+CRAZYFLIE_BITCRAZE_VOLTAGE = RotorModel(
+    name="bitcraze-voltage", kind="voltage", signal="motor_pwm",
+    coefficients=(0.06865956, 0.08835522, -0.00062390),
+    thrust_unit=STANDARD_GRAVITY * 1e-3 / 4, max_thrust=60 / 4 * STANDARD_GRAVITY * 1e-3,
+    source="Bitcraze, wiki 'PWM to Thrust' (2015 thrust-stand table) and its fit in "
+           "crazyflie-firmware motors.c: motor voltage PWM * V_bat = 0.06865956 + 0.08835522 F "
+           "- 0.00062390 F^2, F the Crazyflie 2.X total thrust (g), a quarter per rotor")
+# J. Foerster, "System Identification of the Crazyflie 2.0 Nano Quadrocopter", BSc thesis,
+# ETH Zurich (IDSC), 2015: thrust of one rotor f = 2.130295e-11 c^2 + 1.032633e-6 c +
+# 5.484560e-4 N for the 16-bit PWM command c (0..65535), measured at a fixed supply: no
+# voltage term. Read here with the logged PWM duty (pwm.m*_pwm), the motor's own input.
+CRAZYFLIE_FOERSTER = RotorModel(
+    name="foerster", kind="polynomial", signal="motor_pwm",
+    coefficients=(5.484560e-4, 1.032633e-6, 2.130295e-11), scale=65535.0,
+    max_thrust=5.484560e-4 + 1.032633e-6 * 65535 + 2.130295e-11 * 65535 ** 2,
+    source="J. Foerster, 'System Identification of the Crazyflie 2.0 Nano Quadrocopter', "
+           "BSc thesis, ETH Zurich 2015: f = 2.130295e-11 c^2 + 1.032633e-6 c + 5.484560e-4 N "
+           "per rotor, c the 16-bit PWM (0..65535), no voltage term")
+# The firmware's intent with battery compensation on: the thrust command (motor.m*) is linear
+# in thrust, 65536 <==> 60 g total, i.e. 15 g per rotor at full command (same motors.c); the
+# PWM it sets is (0.088 F - 0.0006239 F^2) / V_bat, the fit above without its constant, so
+# this map reads about 0.0687 V / (dV/dF) more thrust than the measured fit (1.3 g of the
+# vehicle's at a 27 g hover).
+CRAZYFLIE_FIRMWARE_COMMAND = RotorModel(
+    name="firmware-command", kind="polynomial", signal="motor_command",
+    coefficients=(0.0, 60 / 4 * STANDARD_GRAVITY * 1e-3 / 65536, 0.0), scale=65535.0,
+    max_thrust=60 / 4 * STANDARD_GRAVITY * 1e-3,
+    source="Bitcraze, crazyflie-firmware motors.c: with battery compensation the thrust "
+           "command maps 65536 <==> 60 g total (15 g per rotor), linearly")
+
+ROTOR_MODELS = {m.name: m for m in (CRAZYFLIE_BITCRAZE_VOLTAGE, CRAZYFLIE_FOERSTER,
+                                    CRAZYFLIE_FIRMWARE_COMMAND)}
+
+
+def px4_thrust_curve(max_thrust: float, thr_mdl_fac: float, name: str = "px4",
+                     source: str = "PX4 parameter THR_MDL_FAC (mc_att_control / control "
+                                   "allocation: thrust = (1 - k) u + k u^2 of full thrust)"
+                     ) -> RotorModel:
+    """PX4's rotor model: normalized motor output u (0..1) to thrust
+    ``max_thrust ((1 - k) u + k u^2)``.
+
+    Parameters
+    ----------
+    max_thrust : float
+        Thrust of one rotor at full output (N), > 0.
+    thr_mdl_fac : float
+        The vehicle's ``THR_MDL_FAC`` k in [0, 1] (0: thrust linear in u; 1: quadratic).
+    name, source : str
+        Identifier and citation of the numbers (the vehicle's own parameters).
+
+    Returns
+    -------
+    RotorModel
+        Of kind ``"thr_mdl_fac"`` reading ``"motor_command"``.
+    """
+    return RotorModel(name=name, kind="thr_mdl_fac", signal="motor_command",
+                      coefficients=(thr_mdl_fac,), max_thrust=max_thrust, source=source)
+
+
+
+def px4_thrust_curve_from_log(log: object, max_thrust: float) -> RotorModel:
+    """PX4's rotor model with the ``THR_MDL_FAC`` that a ULog recorded.
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+        A ULog read by ``quadcog.logs.read_log`` (its ``meta["param.THR_MDL_FAC"]``).
+    max_thrust : float
+        Thrust of one rotor at full output (N): the vehicle's, PX4 does not log it.
+
+    Returns
+    -------
+    RotorModel
+
+    Raises
+    ------
+    InputError
+        The log has no THR_MDL_FAC parameter, or it is not a number.
+    """
+    text = log.meta.get("param.THR_MDL_FAC")
+    try:
+        k = float(text)
+    except (TypeError, ValueError):
+        raise InputError(f"{log.source}: no numeric THR_MDL_FAC parameter in the log (got "
+                         f"{text!r}); pass px4_thrust_curve(max_thrust, thr_mdl_fac)") from None
+    return px4_thrust_curve(max_thrust, k, name=f"px4 (THR_MDL_FAC {k:g})",
+                            source=f"PX4 THR_MDL_FAC = {k:g} from {log.source}; "
+                                   f"T_max = {max_thrust:g} N per rotor given")
