@@ -17,6 +17,7 @@ from . import config
 from .batch import batch_metrics, run_kernel
 from .closed_loop import ACCUMULATORS, CHUNK, monitored_step, packed
 from .compiled import cached_compile
+from .errors import InputError
 from .plant import Actuation, initial_rotor_thrusts
 from .schedule import STEP_INPUTS, Schedule, cog_at
 from .simulation import check_time, run_options, start_at_reference
@@ -57,7 +58,7 @@ def cog_shapes(times, cog_times):
 
 def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=None,
               cog_times=(), disturbances=(), truth=None, limits=None, x0=None, threads=1,
-              kernel="auto"):
+              kernel="auto", precision="float64"):
     """Fly ``controller`` (designed for its model already) with each truth vehicle and CoG
     increments D (B, 3 J).
 
@@ -79,6 +80,8 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
         Threads that share the flights.
     kernel : "auto", "vector" or "casadi"
         The vectorized C kernel ("auto" when a C compiler is there) or CasADi's map.
+    precision : "float64" or "float32"
+        The vector kernel's precision (float32 needs the vector kernel).
 
     Returns
     -------
@@ -108,11 +111,15 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     Q = np.hstack([P, D])
     t0 = time.perf_counter()
     run = None
+    if precision == "float32" and kernel == "casadi":
+        raise InputError("precision='float32' needs kernel='auto' or 'vector' (CasADi's map "
+                         "runs in float64), got kernel='casadi'")
     if kernel in ("auto", "vector"):
         from .kernel import kernel_for
         run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
                          lambda: packed(sweep_step(controller, actuation, limits, J)),
-                         required=kernel == "vector")
+                         required=kernel == "vector" or precision == "float32",
+                         precision=precision)
     if run is not None:
         Z = run_kernel(run, Z, Q, schedule, shapes, threads=threads)
     else:
