@@ -12,7 +12,7 @@ from .closed_loop import ACCUMULATORS, CHUNK, monitored_chunk_function, monitore
 from .controllers.base import Controller
 from .divergence import DivergenceCause, divergence_rule, magnitude
 from .errors import InputError
-from .kernel import PRECISIONS, kernel_for
+from .kernel import kernel_for
 from .plant import Actuation, initial_rotor_thrusts
 from .result import metrics_from_sums, position_errors
 from .schedule import STEP_INPUTS, Schedule
@@ -37,13 +37,11 @@ class BatchResult:
     seconds: float
 
 
-def batch_kernel(controller, actuation, limits, precision="float64"):
+def batch_kernel(controller, actuation, limits):
     """The vector kernel of the monitored step (``quadcog.kernel.kernel_for``), or None where
-    it cannot be built (float32 has no other path: KernelError). Rows come from
-    ``Schedule.rows``."""
+    it cannot be built. Rows come from ``Schedule.rows``."""
     return kernel_for(("batch", controller.cache_key(), actuation, limits),
-                      lambda: packed(monitored_step(controller, actuation, limits)),
-                      required=precision == "float32", precision=precision)
+                      lambda: packed(monitored_step(controller, actuation, limits)))
 
 
 def _vehicles(vehicles, options):
@@ -78,7 +76,7 @@ def _cog_scale(cog_shape):
 
 def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=None,
                    controller_model=None, cog_shape=None, disturbances=(), truth=None,
-                   limits=None, threads=2, progress=None, precision="float64"):
+                   limits=None, threads=2, progress=None):
     """Fly one controller over many truth vehicles in parallel; keep metrics, not trajectories.
 
     Parameters
@@ -94,8 +92,6 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
         from t = 0).
     trajectory, duration, dt, disturbances, truth, limits, progress : as ``simulate``.
     threads : the number of threads that share the flights.
-    precision : "float64", or "float32" (the vector kernel in float, twice the lanes; its
-        accuracy is in docs/performance.md).
 
     Returns
     -------
@@ -105,7 +101,6 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
         validate.fail("controller", "a quadcog Controller", controller)
     options, limits = run_options(truth, limits, progress)
     threads = validate.integer(threads, "threads", lo=1, hi=1024)
-    precision = validate.choice(precision, "precision", PRECISIONS)
     cog_scale = _cog_scale(cog_shape)
     dt = config.get("simulate.dt", dt)
     vehicles, actuation = _vehicles(vehicles, options)
@@ -133,7 +128,7 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
     Z[:, 12 + nf:nX] = controller.initial_state()
     Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
     t0 = time.perf_counter()
-    kernel = batch_kernel(controller, actuation, limits, precision)
+    kernel = batch_kernel(controller, actuation, limits)
     if kernel is not None:
         Z = run_kernel(kernel, Z, params, schedule, threads=threads, progress=progress)
     else:

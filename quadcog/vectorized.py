@@ -81,7 +81,8 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     kernel : "auto", "vector" or "casadi"
         The vectorized C kernel ("auto" when a C compiler is there) or CasADi's map.
     precision : "float64" or "float32"
-        The vector kernel's precision (float32 needs the vector kernel).
+        The vector kernel's precision. float32 is for measuring only (bench/precision.py):
+        its metrics are not within 1e-4 of float64's (docs/performance.md).
 
     Returns
     -------
