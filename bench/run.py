@@ -19,6 +19,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+# crazyflow refuses to import once scipy is loaded without this (it asks scipy for the array
+# API); set before quadcog imports scipy, it changes nothing for numpy arrays
+os.environ.setdefault("SCIPY_ARRAY_API", "1")
 
 import quadcog  # noqa: E402
 from quadcog import (AdaptiveFeedbackLinearization, CogProfile, simulate,  # noqa: E402
@@ -311,6 +314,40 @@ def bench_isa(n_flights, duration=20.0):
            f"differ in {differ} of {n_flights} flights, at most {worst:.1e} relative")
 
 
+def bench_float32(n_flights, duration=20.0):
+    """The float32 kernel (measured, not offered: docs/performance.md) against float64 on the
+    same batch of the sweep engine, 1 thread: CPU time per flight-step and the largest
+    relative difference of the metrics of the flights that stay bounded."""
+    from quadcog.vectorized import fly_batch
+    ctl = AdaptiveFeedbackLinearization()
+    rng = np.random.default_rng(2)
+    D = np.column_stack([rng.uniform(-0.06, 0.06, (n_flights, 2)), np.zeros(n_flights)])
+    vehicles = [quadcog.HUMMINGBIRD] * n_flights
+    kw = dict(duration=duration, cog_times=[(1.0, 0.0)], threads=1)
+    print(f"{n_flights} flights of {duration:g} s: float32 against float64 kernel")
+    out = {}
+    for precision in ("float64", "float32"):
+        fly_batch(ctl, vehicles[:2], D[:2], **dict(kw, duration=0.01), precision=precision)
+        c0 = os.times()
+        r = fly_batch(ctl, vehicles, D, **kw, precision=precision)
+        c1 = os.times()
+        out[precision] = (r, (c1.user - c0.user) + (c1.system - c0.system))
+    steps = n_flights * int(round(duration / 1e-3))
+    (r64, c64), (r32, c32) = out["float64"], out["float32"]
+    ok = ~(r64.diverged | r32.diverged)
+    def worst_rel(m):
+        a, b = getattr(r32, m)[ok], getattr(r64, m)[ok]
+        d = np.where(a == b, 0.0, np.abs(a - b) / np.maximum(np.abs(b), 1e-300))
+        return float(d.max()) if d.size else float("nan")
+    worst = {m: worst_rel(m) for m in ("rms_position_error", "rms_position_error_tail")}
+    record("batch: float32 kernel (measured, not offered), 1 thread",
+           f"{c32 / steps * 1e9:.0f}", "ns per flight-step (CPU)",
+           f"{c64 / max(c32, 1e-9):.2f}x faster than float64", "",
+           f"float64 {c64 / steps * 1e9:.0f} ns; max rel. diff rms "
+           f"{worst['rms_position_error']:.1e}, tail rms {worst['rms_position_error_tail']:.1e}; "
+           f"verdicts differ: {int(np.sum(r64.diverged != r32.diverged))}")
+
+
 def bench_scale(sizes=(10, 100, 1000, 10000), duration=2.0, threads=2):
     """Cost per flight-step of the kernel and of the whole simulate_batch call at each batch
     size, and the memory per flight (tracemalloc peak of a separate short run / flights)."""
@@ -353,6 +390,10 @@ def bench_crazyflow(n_flights, n_steps, quadcog_rate):
     except ImportError as e:
         record("peer: crazyflow (JAX)", "absent", "", "", "", f"not installed ({e.name}): "
                "pip install -e '.[bench]'")
+        return None
+    except RuntimeError as e:           # installed, but refuses to import here
+        record("peer: crazyflow (JAX)", "absent", "", "", "",
+               f"installed but not importable: {str(e).splitlines()[0][:120]}")
         return None
     from importlib.metadata import version
     print(f"crazyflow: {n_flights} worlds x {n_steps} steps at 1 kHz")
@@ -473,6 +514,7 @@ def main():
     ns_step, rate = bench_batch(args.flights)
     bench_vector_limits(ns_step)
     bench_isa(args.flights)
+    bench_float32(args.flights)
     if args.scale:
         bench_scale(tuple(args.scale))
     bench_rotorpy_batched(args.flights, args.peer_seconds, rate)
