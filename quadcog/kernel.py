@@ -46,15 +46,15 @@ from quadcog import sxc
 from quadcog.build import compile_library, find_compiler
 from quadcog.errors import CompileError, InputError, QuadcogError, QuadcogWarning
 
-__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "VECTORS_PER_BLOCK", "KernelError",
-           "VectorKernel", "cpu_features", "detect_isa", "emit_c", "kernel_for", "lanes_for",
-           "vector_flags"]
+__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
+           "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c", "kernel_for",
+           "lanes_for", "vector_flags"]
 
 PRECISIONS = ("float64", "float32")
 # instruction sets, widest first: "portable" is the compiler's default target (SSE2 on x86-64)
 ISAS = ("avx512", "avx2", "sse2", "portable")
-# the /proc/cpuinfo flags an ISA needs; -mfma with AVX2 and AVX-512 only gives libmvec's FMA
-# variants and the roofline loop their instruction: -ffp-contract=off keeps it out of the step
+# the /proc/cpuinfo flags an ISA needs. -mfma: with -ffp-contract=off no FMA appears in the step
+# itself, only inside libmvec's functions and in `make bench`'s roofline loop
 _CPU_NEEDS = {"avx512": ("avx512f", "avx512dq", "avx512vl", "avx512bw", "fma"),
               "avx2": ("avx2", "fma"), "sse2": ("sse2",), "portable": ()}
 ISA_FLAGS = {"avx512": ("-mavx512f", "-mavx512dq", "-mavx512vl", "-mavx512bw", "-mfma",
@@ -95,7 +95,7 @@ def _literal32(v):
     v = float(v)
     if math.isnan(v):
         return "__builtin_nanf(\"\")"
-    if abs(v) > _FLOAT32_MAX:     # beyond the float range (or inf): rounds to inf
+    if abs(v) >= _FLOAT32_MAX:    # beyond the float range (or inf): rounds to inf
         return "__builtin_inff()" if v > 0 else "(-__builtin_inff())"
     return literal(v, "float32")
 
