@@ -54,12 +54,12 @@ def machine():
     -------
     dict
         cpu (model name), cores (os.cpu_count), features (the VECTOR_FEATURES it has, space
-        separated), compiler (first line of ``cc --version``), isa (``detect_isa()``), lanes
+        separated), compiler (first line of ``cc --version``), isa (``kernel_isa()``), lanes
         (flights per float64 block), flags (the kernel's compiler flags).
     """
     feats = qk.cpu_features()
     cc = find_compiler()
-    isa = qk.detect_isa()
+    isa = qk.kernel_isa()
     return {"cpu": _cpu_model(), "cores": os.cpu_count(), "machine": platform.machine(),
             "features": " ".join(f for f in VECTOR_FEATURES if f in feats) or "none listed",
             "compiler": _compiler_identity(cc) if cc else "none", "isa": isa,
@@ -98,7 +98,7 @@ def fma_roofline(isa=None, seconds=0.5):
     Parameters
     ----------
     isa : str, optional
-        One of ``quadcog.kernel.ISAS`` (default ``detect_isa()``): the loop is compiled with
+        One of ``quadcog.kernel.ISAS`` (default ``kernel_isa()``): the loop is compiled with
         the kernel's flags for it.
     seconds : float
         About how long to measure (CPU time of this thread).
@@ -109,7 +109,7 @@ def fma_roofline(isa=None, seconds=0.5):
         flops (floating-point operations per second, an FMA counted as 2), ns (CPU time of
         the measured call), isa, kind ("FMA" or "mul+add").
     """
-    isa = qk.detect_isa() if isa is None else isa
+    isa = qk.kernel_isa() if isa is None else isa
     source, flops_per_iter = _loop_source(isa)
     flags = qk.vector_flags(isa)
     lib = compile_library(source.encode(), f"roofline_{isa}", find_compiler(), flags=flags)

@@ -292,15 +292,15 @@ def bench_isa(n_flights, duration=20.0):
     print(f"{n_flights} flights of {duration:g} s: portable against {native} build")
     out = {}
     for isa in dict.fromkeys(("portable", native)):
-        detect = qk.detect_isa
-        qk.detect_isa = lambda *a, _isa=isa, **k: _isa
+        pinned = qk.kernel_isa
+        qk.kernel_isa = lambda _isa=isa: _isa
         try:
             simulate_batch(ctl, vehicles[:2], **dict(kw, duration=0.01))       # compile
             c0 = os.times()
             r = simulate_batch(ctl, vehicles, **kw)
             c1 = os.times()
         finally:
-            qk.detect_isa = detect
+            qk.kernel_isa = pinned
         out[isa] = (r, (c1.user - c0.user) + (c1.system - c0.system))
     steps = n_flights * int(round(duration / 1e-3))
     (rp, cp), (rn, cn) = out["portable"], out[native]

@@ -36,6 +36,7 @@ import ctypes
 import functools
 import hashlib
 import math
+import os
 import platform
 import threading
 import warnings
@@ -47,8 +48,8 @@ from quadcog.build import compile_library, find_compiler
 from quadcog.errors import CompileError, InputError, QuadcogError, QuadcogWarning
 
 __all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
-           "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c", "kernel_for",
-           "lanes_for", "vector_flags"]
+           "ISA_ENV", "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c",
+           "kernel_for", "kernel_isa", "lanes_for", "vector_flags"]
 
 PRECISIONS = ("float64", "float32")
 # instruction sets, widest first: "portable" is the compiler's default target (SSE2 on x86-64)
@@ -61,6 +62,9 @@ ISA_FLAGS = {"avx512": ("-mavx512f", "-mavx512dq", "-mavx512vl", "-mavx512bw", "
                         # gcc 12 prefers 256-bit vectors even with AVX-512 unless told
                         "-mprefer-vector-width=512"),
              "avx2": ("-mavx2", "-mfma"), "sse2": ("-msse2",), "portable": ()}
+# pins the ISA (e.g. "portable": the workers of one sweep on different CPUs then agree in
+# every bit); unset, the CPU's widest is used
+ISA_ENV = "QUADCOG_KERNEL_ISA"
 VECTOR_BITS = {"avx512": 512, "avx2": 256, "sse2": 128, "portable": 128}
 VECTORS_PER_BLOCK = 4   # independent vectors per operation: enough to hide a few cycles' latency
 _BYTES = {"float64": 8, "float32": 4}
@@ -165,6 +169,21 @@ def detect_isa(features=None, machine=None):
     return "portable"
 
 
+def kernel_isa():
+    """The instruction set the kernel is built for.
+
+    Returns
+    -------
+    str
+        $QUADCOG_KERNEL_ISA (``ISA_ENV``) when it is set, checked to be one of ``ISAS``; else
+        ``detect_isa()``.
+    """
+    env = os.environ.get(ISA_ENV)
+    if env:
+        return _check_isa(env, f"${ISA_ENV}")
+    return detect_isa()
+
+
 def lanes_for(isa, precision="float64"):
     """Flights per block: ``VECTORS_PER_BLOCK`` vectors of the ISA's width.
 
@@ -193,7 +212,7 @@ def vector_flags(isa=None, precision="float64"):
     Parameters
     ----------
     isa : str, optional
-        One of ``ISAS`` (default ``detect_isa()``).
+        One of ``ISAS`` (default ``kernel_isa()``).
     precision : str
         "float64" or "float32" (which math builtins to turn off: gcc merges sin and cos into a
         sincos that has no vector form).
@@ -203,7 +222,7 @@ def vector_flags(isa=None, precision="float64"):
     tuple of str
         The flags, ``-shared -fPIC`` included.
     """
-    isa = detect_isa() if isa is None else _check_isa(isa)
+    isa = kernel_isa() if isa is None else _check_isa(isa)
     f = "f" if _check_precision(precision) == "float32" else ""
     return ("-O3", *ISA_FLAGS[isa], "-ffp-contract=off", "-fno-math-errno",
             "-fno-trapping-math", "-fopenmp-simd", f"-fno-builtin-sin{f}",
@@ -290,7 +309,7 @@ class VectorKernel:
     lanes : int, optional
         Flights per block (default ``lanes_for(isa, precision)``).
     isa : str, optional
-        One of ``ISAS`` (default ``detect_isa()``); one the CPU cannot run is refused.
+        One of ``ISAS`` (default ``kernel_isa()``); one the CPU cannot run is refused.
     precision : str
         "float64" or "float32".
 
@@ -307,7 +326,7 @@ class VectorKernel:
             raise KernelError("no C compiler")
         self.precision = _check_precision(precision)
         native = detect_isa()
-        isa = native if isa is None else _check_isa(isa)
+        isa = kernel_isa() if isa is None else _check_isa(isa)
         if ISAS.index(isa) < ISAS.index(native):
             raise KernelError(f"isa={isa!r}: this CPU runs at most {native!r} (CPU flags of "
                               "/proc/cpuinfo); its instructions would stop the process")
@@ -403,7 +422,7 @@ def kernel_for(key, build_step, required=False, precision="float64", isa=None):
     precision : str
         "float64" or "float32".
     isa : str, optional
-        One of ``ISAS`` (default ``detect_isa()``).
+        One of ``ISAS`` (default ``kernel_isa()``).
 
     Returns
     -------
@@ -412,7 +431,7 @@ def kernel_for(key, build_step, required=False, precision="float64", isa=None):
         (no libmvec: not glibc on x86-64); callers then use CasADi's map.
     """
     precision = _check_precision(precision)
-    isa = detect_isa() if isa is None else _check_isa(isa)
+    isa = kernel_isa() if isa is None else _check_isa(isa)
     key = (key, precision, isa)
     if key not in _kernels:
         try:

@@ -134,7 +134,7 @@ def _vehicles(n=19, seed=3):
 @pytest.mark.parametrize("build", ["portable", "float32"])
 def test_bits_independent_of_threads_and_batch_on_every_build(build, monkeypatch):
     if build == "portable":
-        monkeypatch.setattr(qk, "detect_isa", lambda *a, **k: "portable")
+        monkeypatch.setenv(qk.ISA_ENV, "portable")
     precision = "float32" if build == "float32" else "float64"
     ctl = quadcog.AdaptiveFeedbackLinearization()
     vehicles, D = _vehicles()
@@ -190,3 +190,34 @@ def test_float32_refuses_the_casadi_path():
     with pytest.raises(InputError, match="float32"):
         fly_batch(quadcog.CascadePD(), [quadcog.HUMMINGBIRD], np.zeros((1, 0)), duration=0.01,
                   kernel="casadi", precision="float32")
+
+
+@needs_cc
+def test_batch_agrees_with_the_single_flight_path_to_1e12():
+    """The native build against ``simulate`` (glibc's scalar sin/cos; libmvec's are within
+    4 ulp): the whole-flight metrics to 1e-12 relative; the final error, a single sample of a
+    few micrometres, to 1e-12 relative or 1e-16 m."""
+    ctl = quadcog.AdaptiveFeedbackLinearization()
+    rng = np.random.default_rng(1)
+    vehicles = [quadcog.HUMMINGBIRD.with_cog((*rng.uniform(-0.06, 0.06, 2), 0.0))
+                for _ in range(3)]
+    b = quadcog.simulate_batch(ctl, vehicles, duration=5.0, cog_shape=lambda t: float(t >= 1.0))
+    for i, v in enumerate(vehicles):
+        m = quadcog.simulate(ctl, duration=5.0, vehicle=v.with_cog(np.zeros(3)),
+                             cog=quadcog.CogProfile.step(1.0, v.r_G)).metrics
+        for name in METRICS[:3]:
+            assert getattr(b, name)[i] == pytest.approx(getattr(m, name), rel=1e-12, abs=0)
+        assert b.final_position_error[i] == pytest.approx(m.final_position_error, rel=1e-12,
+                                                          abs=1e-16)
+
+
+@needs_cc
+def test_the_isa_can_be_pinned_by_the_environment(monkeypatch):
+    ctl = quadcog.FeedbackLinearization()
+    monkeypatch.setenv(qk.ISA_ENV, "portable")
+    assert qk.kernel_isa() == "portable"
+    k = qk.kernel_for(("pinned", ctl.cache_key()), _step_fn)
+    assert k.isa == "portable" and k.lanes == qk.lanes_for("portable")
+    monkeypatch.setenv(qk.ISA_ENV, "avx9000")
+    with pytest.raises(InputError, match="QUADCOG_KERNEL_ISA.*avx9000"):
+        qk.kernel_isa()
