@@ -112,9 +112,9 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     Q = np.hstack([P, D])
     t0 = time.perf_counter()
     run = None
-    if precision == "float32" and kernel == "casadi":
-        raise InputError("precision='float32' needs kernel='auto' or 'vector' (CasADi's map "
-                         "runs in float64), got kernel='casadi'")
+    if precision != "float64" and kernel == "casadi":
+        raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
+                         "map runs in float64), got kernel='casadi'")
     if kernel in ("auto", "vector"):
         from .kernel import kernel_for
         run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
