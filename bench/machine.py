@@ -72,7 +72,8 @@ def _loop_source(isa, chains=CHAINS):
     fused = isa in ("avx2", "avx512")        # the FMA instruction is there (-mfma)
     # acc = acc * m + c converges to c / (1 - m): no overflow, no subnormals
     update = "__builtin_fma(a[i][j], m, c)" if fused else "a[i][j] * m + c"
-    return f"""/* quadcog roofline: {chains} x {width} independent {'FMA' if fused else 'mul+add'} chains */
+    kind = "FMA" if fused else "mul+add"
+    return f"""/* quadcog roofline: {chains} x {width} independent {kind} chains */
 #define K {chains}
 #define W {width}
 double qc_fma_loop(long n) {{
