@@ -88,6 +88,9 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     -------
     quadcog.BatchResult
     """
+    if precision != "float64" and kernel == "casadi":
+        raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
+                         "map runs in float64), got kernel='casadi'")
     options, limits = run_options(truth, limits, None)
     dt = config.get("simulate.dt", dt)
     duration, dt = check_time(duration, dt)
@@ -112,9 +115,6 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
     Q = np.hstack([P, D])
     t0 = time.perf_counter()
     run = None
-    if precision != "float64" and kernel == "casadi":
-        raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
-                         "map runs in float64), got kernel='casadi'")
     if kernel in ("auto", "vector"):
         from .kernel import kernel_for
         run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),

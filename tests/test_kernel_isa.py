@@ -109,6 +109,7 @@ def test_the_isa_is_in_the_library_name_and_cache_key():
         assert f"_{b.isa}_" in b.library.name and a.library != b.library
 
 
+@pytest.mark.slow
 @needs_cc
 def test_avx512_build_uses_512_bit_vectors(tmp_path):
     """Compiled only (this CPU may lack AVX-512): gcc must emit zmm registers and libmvec's
@@ -187,8 +188,9 @@ def test_float32_computes_in_float():
 
 
 def test_float32_refuses_the_casadi_path():
+    """Refused before any work (the controller is not even looked at)."""
     with pytest.raises(InputError, match="float32"):
-        fly_batch(quadcog.CascadePD(), [quadcog.HUMMINGBIRD], np.zeros((1, 0)), duration=0.01,
+        fly_batch(None, [quadcog.HUMMINGBIRD], np.zeros((1, 0)), duration=0.01,
                   kernel="casadi", precision="float32")
 
 
