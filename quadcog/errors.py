@@ -51,7 +51,7 @@ class ReferenceWarning(QuadcogWarning):
 
 class KernelError(QuadcogError):
     """The vector kernel cannot be built here (no compiler, no libmvec, an operation without
-    a C form in quadcog.codegen.sx_to_c)."""
+    a C form in quadcog.codegen.sx_to_c, an instruction set this CPU does not have)."""
 
 
 class SweepError(InputError):

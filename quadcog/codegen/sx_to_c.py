@@ -16,6 +16,7 @@ import re
 from typing import Callable, NamedTuple
 
 import casadi as ca
+import numpy as np
 
 from quadcog.errors import QuadcogError
 
@@ -129,3 +130,24 @@ def walk(fn, target, read, write):
         statements.append(f"w{outs[0]} = {rhs};")
         slots.add(outs[0])
     return Walk(statements, slots, inputs, calls)
+
+
+def float32_literal(value: float) -> str:
+    """The C float literal of the float32 nearest to ``value``: the shortest text that
+    round-trips, with an ``f`` suffix (the same text on every machine).
+
+    Parameters
+    ----------
+    value : float
+        A finite number.
+
+    Returns
+    -------
+    str
+        E.g. ``"0.1f"``, ``"1.5e-7f"``.
+    """
+    text = np.format_float_scientific(np.float32(value), unique=True, trim="0")
+    mantissa, exponent = text.split("e")
+    exp = int(exponent)
+    mantissa = mantissa if "." in mantissa else mantissa + ".0"
+    return f"{mantissa}e{exp}f" if exp else f"{mantissa}f"

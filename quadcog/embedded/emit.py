@@ -29,11 +29,7 @@ def literal(value, precision):
     if not np.isfinite(value):
         raise ExportError(f"constant {value} in the expression is not finite")
     if precision == "float32":
-        text = np.format_float_scientific(np.float32(value), unique=True, trim="0")
-        mantissa, exponent = text.split("e")
-        exp = int(exponent)
-        mantissa = mantissa if "." in mantissa else mantissa + ".0"
-        return f"{mantissa}e{exp}f" if exp else f"{mantissa}f"
+        return sxc.float32_literal(value)
     text = f"{value:.{DOUBLE_DIGITS - 1}e}"
     mantissa, exponent = text.split("e")
     mantissa = mantissa.rstrip("0")

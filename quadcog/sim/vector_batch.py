@@ -14,6 +14,7 @@ import casadi as ca
 import numpy as np
 
 from quadcog import config
+from quadcog.errors import InputError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
 from quadcog.sim.batch import batch_metrics, run_kernel, run_map
 from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
@@ -57,7 +58,7 @@ def cog_shapes(times, cog_times):
 
 def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=None,
               cog_times=(), disturbances=(), truth=None, limits=None, x0=None, threads=1,
-              kernel="auto"):
+              kernel="auto", precision="float64"):
     """Fly ``controller`` (designed for its model already) with each truth vehicle and CoG
     increments D (B, 3 J).
 
@@ -79,11 +80,17 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
         Threads that share the flights.
     kernel : "auto", "vector" or "casadi"
         The vectorized C kernel ("auto" when a C compiler is there) or CasADi's map.
+    precision : "float64" or "float32"
+        The vector kernel's precision. float32 is for measuring only (bench/precision.py):
+        its metrics are not within 1e-4 of float64's (docs/performance.md).
 
     Returns
     -------
     quadcog.BatchResult
     """
+    if precision != "float64" and kernel == "casadi":
+        raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
+                         "map runs in float64), got kernel='casadi'")
     options, limits = run_options(truth, limits, None)
     dt = config.get("simulate.dt", dt)
     duration, dt = check_time(duration, dt)
@@ -108,7 +115,8 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
         from quadcog.codegen.vector_kernel import kernel_for
         run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
                          lambda: packed(sweep_step(controller, actuation, limits, J)),
-                         required=kernel == "vector")
+                         required=kernel == "vector" or precision == "float32",
+                         precision=precision)
     if run is not None:
         Z = run_kernel(run, Z, Q, schedule, shapes, threads=threads)
     else:

@@ -87,8 +87,10 @@ def cog_steps(scenario):
     return d
 
 
-def fly_group(key, scenarios, threads=1):
-    """Metrics of scenarios that differ only in their truth CoG, flown as one batch."""
+def fly_group(key, scenarios, threads=1, precision="float64"):
+    """Metrics of scenarios that differ only in their truth CoG, flown as one batch
+    (``precision``: "float64" or "float32", the vector kernel's; see
+    ``quadcog.sim.vector_batch.fly_batch``)."""
     from quadcog.sim.vector_batch import fly_batch
     s0 = scenarios[0]
     ctl = _controllers.get(key)
@@ -100,5 +102,5 @@ def fly_group(key, scenarios, threads=1):
     r = fly_batch(ctl, [s.vehicle for s in scenarios], D, s0.trajectory, duration=s0.duration, dt=s0.dt,
                   cog_times=[(c.t, c.ramp) for c in s0.cog.changes],
                   disturbances=s0.disturbances, truth=s0.truth, limits=s0.limits, x0=x0,
-                  threads=threads)
+                  threads=threads, precision=precision)
     return {name: getattr(r, name) for name in METRICS}
