@@ -49,8 +49,9 @@ def rotation_matrix(phi, theta, psi):
 
 def hover_trim(p):
     """U* (4,) = [m g, m g y_G, -m g x_G, 0]: the input that holds a level hover at rest with
-    the CoG at r_G of the parameter vector ``p`` (14,) (docs/model.md sec. 3.3)."""
+    the CoG at r_G of the parameter vector ``p`` (14,) (docs/model.md sec. 3.3); for
+    parameters (B, 14) of many flights, U* (B, 4)."""
     p = np.asarray(p, dtype=float)
-    mg = p[IDX["m"]] * p[IDX["g"]]
-    return np.array([mg, mg * p[IDX["y_G"]], -mg * p[IDX["x_G"]], 0.0])
-
+    mg = p[..., IDX["m"]] * p[..., IDX["g"]]
+    return np.stack([mg, mg * p[..., IDX["y_G"]], -mg * p[..., IDX["x_G"]], np.zeros_like(mg)],
+                    axis=-1)

@@ -84,8 +84,10 @@ class Actuation:
         return ca.if_else(ca.fabs(f) < np.inf, clipped, f)
 
     def rotor_command_numpy(self, U):
-        """``rotor_command`` for a numpy U (4,)."""
-        return np.clip(np.linalg.solve(self.mixer_matrix(), U), self.lower, self.upper)
+        """``rotor_command`` for a numpy U (4,), or (B, 4) for many flights."""
+        U = np.asarray(U, dtype=float)
+        f = np.linalg.solve(self.mixer_matrix(), U.T).T
+        return np.clip(f, self.lower, self.upper)
 
 
 def truth_arguments(p, options):
@@ -147,7 +149,7 @@ def plant_step_function(model, actuation):
 def initial_rotor_thrusts(P0, actuation):
     """Rotor thrusts (n_rotor_states,) at t = 0: those of a level hover of the truth
     parameters ``P0`` (14,) (r_G at t = 0), within the limits (the motors spin up before the
-    run starts)."""
+    run starts); (B, n_rotor_states) for parameters (B, 14) of many flights."""
     if not actuation.n_rotor_states:
-        return np.zeros(0)
+        return np.zeros(np.shape(P0)[:-1] + (0,))
     return actuation.rotor_command_numpy(hover_trim(P0))

@@ -167,8 +167,7 @@ def batch_start(controller: Controller, actuation: Actuation, P0: np.ndarray,
     nX = N_STATE + nf + nc
     Z = np.zeros((P0.shape[0], nX + len(ACCUMULATORS)))
     Z[:, :N_STATE] = x0
-    for b in range(P0.shape[0]):
-        Z[b, N_STATE:N_STATE + nf] = initial_rotor_thrusts(P0[b], actuation)
+    Z[:, N_STATE:N_STATE + nf] = initial_rotor_thrusts(P0, actuation)
     Z[:, N_STATE + nf:nX] = controller.initial_state()
     Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
     return Z

@@ -37,20 +37,36 @@ class Metrics:
         return d
 
 
+def metric_arrays(count, sum_sq, max_error, count_tail, sum_sq_tail, last_error, diverged):
+    """The metrics of many flights from their sums (arrays of one entry per flight): the one
+    definition behind single flights (``metrics_from_sums``) and batches.
+
+    count, count_tail: samples counted (all, tail); sum_sq, sum_sq_tail: their sums of e^2
+    (m^2); max_error, last_error (m); diverged: bool. Returns {name: array}: the RMS (NaN
+    without samples), the tail RMS (inf for a diverged flight), the max and the final error."""
+    count, count_tail = np.asarray(count, float), np.asarray(count_tail, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rms = np.where(count > 0, np.sqrt(np.asarray(sum_sq, float) / np.where(count > 0, count, 1)),
+                       np.nan)
+        tail = np.where(count_tail > 0, np.sqrt(np.asarray(sum_sq_tail, float)
+                                                / np.where(count_tail > 0, count_tail, 1)), np.nan)
+    tail = np.where(np.asarray(diverged, bool), np.inf, tail)
+    return {"rms_position_error": rms, "max_position_error": np.asarray(max_error, float),
+            "rms_position_error_tail": tail, "final_position_error": np.asarray(last_error, float)}
+
+
 def metrics_from_sums(count, sum_sq, max_error, count_tail, sum_sq_tail, last_error,
                       diverged_at=None, cause=None, limits=None):
-    """Metrics from the sums of the squared position errors over the counted samples: the one
-    definition behind single flights (``flight_metrics``) and batches (compiled sums).
+    """Metrics of one flight from the sums of the squared position errors over the counted
+    samples (``metric_arrays``, for one flight).
 
     count, count_tail: samples counted (all, tail); sum_sq, sum_sq_tail: their sums of e^2
     (m^2); max_error, last_error (m). cause: a DivergenceCause or None, described with
     ``limits``."""
-    nan = float("nan")
+    m = metric_arrays([count], [sum_sq], [max_error], [count_tail], [sum_sq_tail],
+                      [last_error], [cause is not None])
     return Metrics(
-        rms_position_error=float(np.sqrt(sum_sq / count)) if count else nan,
-        max_position_error=float(max_error), final_position_error=float(last_error),
-        rms_position_error_tail=(float("inf") if cause is not None else
-                                 float(np.sqrt(sum_sq_tail / count_tail)) if count_tail else nan),
+        **{k: float(v[0]) for k, v in m.items()},
         diverged=cause is not None,
         diverged_at=None if cause is None else float(diverged_at),
         diverged_cause=cause,
