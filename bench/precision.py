@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import quadcog.codegen.vector_kernel as qk
-from quadcog.scenarios.files import scenario_names
+from quadcog.scenarios.lookup import scenario_names
 from quadcog.scenarios.scenario import load_scenario
 from quadcog.sim.timeline import CogProfile
 from quadcog.sweeps.flights import METRICS, _controllers, fly_group

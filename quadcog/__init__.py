@@ -38,7 +38,7 @@ from quadcog.model.conventions import (
 )
 from quadcog.model.functions import Linearization, Model, load
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
-from quadcog.scenarios.files import scenario_names, scenario_path, shipped_scenarios
+from quadcog.scenarios.lookup import scenario_names, scenario_path, shipped_scenarios
 from quadcog.sim.batch import BatchResult, simulate_batch
 from quadcog.sim.divergence import DivergenceCause, Limits
 from quadcog.sim.flight import simulate

@@ -53,7 +53,7 @@ def add_scenarios(sub):
 
 
 def cmd_scenarios(args):
-    from quadcog.scenarios.files import shipped_scenarios
+    from quadcog.scenarios.lookup import shipped_scenarios
     scenarios = shipped_scenarios()
     width = max(map(len, scenarios), default=0)
     for name, description in scenarios.items():

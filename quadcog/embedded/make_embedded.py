@@ -7,8 +7,8 @@ import tempfile
 
 from quadcog.controllers.registry import CONTROLLERS, make_controller
 from quadcog.embedded import target
+from quadcog.embedded.controller_export import render
 from quadcog.embedded.emit import PRECISIONS
-from quadcog.embedded.export import render
 from quadcog.embedded.host import build_host_library
 from quadcog.paths import generated_dir
 

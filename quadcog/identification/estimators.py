@@ -28,7 +28,7 @@ import numpy as np
 
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.errors import IdentificationError
-from quadcog.identification.flight import (
+from quadcog.identification.segments import (
     BLOCK_SECONDS,
     MIN_BLOCKS,
     SPEED_SPREAD,

@@ -12,7 +12,7 @@ from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import InputError, ParameterError, QuadcogWarning
 from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
-from quadcog.model.inertial import check_physically_consistent
+from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import check_parameters
 from quadcog.paths import generated_dir
 from quadcog.validate import nonnegative, positive, vector
@@ -195,7 +195,7 @@ class Model:
         -------
         numpy.ndarray, shape (6, 10)
             Y with ``Y pi = M nu_dot + C(nu) nu + g_G`` (N, N m) for any inertial parameters
-            pi (``quadcog.model.inertial``); drag is not in Y.
+            pi (``quadcog.model.inertial_parameters``); drag is not in Y.
         """
         g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
         return self._call("inertial_regressor", (x, nu_dot, g), out)
@@ -243,7 +243,7 @@ class Model:
         -------
         numpy.ndarray, shape (12,)
             x_dot; equals ``dynamics(x, U, p)`` for ``(pi, g, c) =
-            quadcog.model.inertial.inertial_arguments(p)``.
+            quadcog.model.inertial_parameters.inertial_arguments(p)``.
         """
         g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
         return self._call("inertial_dynamics", (x, U, pi, g, c), out)

@@ -17,7 +17,7 @@ from quadcog.controllers.registry import controller_names, make_controller
 from quadcog.errors import InputError, ScenarioError
 from quadcog.files import RunFiles, strict_json, write_csv
 from quadcog.model.columns import trajectory_columns
-from quadcog.scenarios.files import read_toml, scenario_path
+from quadcog.scenarios.lookup import read_toml, scenario_path
 from quadcog.scenarios.schema import (
     COG,
     DISTURBANCE,
@@ -277,7 +277,7 @@ def _vehicle(data, key, base, source):
 
 def load_scenario(path, overrides=()):
     """Read and validate a scenario: a file path or the name of a shipped scenario ("fig6";
-    see ``quadcog.scenarios.files.scenario_path``). ``overrides``: ``--set`` texts ("vehicle.m=0.8",
+    see ``quadcog.scenarios.lookup.scenario_path``). ``overrides``: ``--set`` texts ("vehicle.m=0.8",
     see ``quadcog.scenarios.keys``), applied before the validation, which then names them."""
     path = scenario_path(path)
     data = read_toml(path, ScenarioError)

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from quadcog import config
-from quadcog.scenarios.files import scenario_path
+from quadcog.scenarios.lookup import scenario_path
 from quadcog.scenarios.scenario import load_scenario, run_with_progress, write_outputs
 
 TRACKS = 0.05        # m: tail RMS under which a balanced run "tracks" (Fig. 3)

@@ -18,9 +18,9 @@ import numpy as np
 
 from quadcog.errors import QuadcogError
 from quadcog.files import atomic_write
+from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.flights import make_job, run_chunk
 from quadcog.sweeps.spec import Sweep, SweepError, from_dict, load_sweep
-from quadcog.sweeps.table import require_pyarrow, to_arrow
 
 CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"

@@ -20,8 +20,8 @@ import numpy as np
 
 from quadcog.errors import ParameterError, SweepError
 from quadcog.model.parameters import admissible_radius
-from quadcog.scenarios.files import find_file, read_toml, scenario_path, shipped_names
 from quadcog.scenarios.keys import KEY_EXAMPLE, parse_key, set_key
+from quadcog.scenarios.lookup import find_file, read_toml, scenario_path, shipped_names
 from quadcog.scenarios.scenario import ScenarioError, parse
 from quadcog.sim.flight import check_cog_changes
 

@@ -7,7 +7,7 @@ import re
 import numpy as np
 
 from quadcog.files import atomic_write
-from quadcog.sweeps.table import require_pyarrow, to_arrow
+from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 
 QUANTILES = (0.5, 0.9, 0.99)
 _COG_XY = re.compile(r"^(cog\[\d+\]\.r)\[([01])\]$")
