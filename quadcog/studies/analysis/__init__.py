@@ -12,9 +12,11 @@
    run, with diagnostic controller variants (``adaptive_variants``).
 4. ``failure_map``: tail RMS error of the three controllers over a grid of CoG offsets.
 """
+import os
 from pathlib import Path
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -180,16 +182,31 @@ def _fm_summary(fm, grid):
             "adaptive_vs_projection": fm.get("adaptive_vs_projection")}
 
 
-def analyze(out_dir, grid=41, progress=True, duration=20.0):
+def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = True,
+            duration: float = 20.0) -> dict[str, Any]:
     """Run the whole analysis and write it to ``out_dir`` (created if needed).
 
-    out_dir: folder (str or Path). grid: failure-map points per axis (grid x grid offsets over
-    [-arm, arm]^2 m, arm = the Hummingbird's 0.17 m). progress: print part names and a
-    progress bar for the failure map on stderr. duration: seconds per failure-map flight.
     Writes pd_sigma.png, zero_dynamics.png, lyapunov.png, failure_map.png, failure_map.npz,
     failure_map.json, analysis.json, analysis.md and report_fragment.tex (the PDF's analysis
-    section). Returns the summary dict (the numbers of
-    analysis.json, as Python/numpy values; complex eigenvalues stay complex).
+    section).
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        The folder.
+    grid : int
+        Failure-map points per axis (grid x grid offsets over [-arm, arm]^2 m, arm = the
+        Hummingbird's 0.17 m).
+    progress : bool
+        Print part names and a progress bar for the failure map on stderr.
+    duration : float
+        Seconds per failure-map flight [s].
+
+    Returns
+    -------
+    dict
+        The summary (the numbers of analysis.json, as Python/numpy values; complex
+        eigenvalues stay complex).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
