@@ -3,9 +3,9 @@
 CasADi's own code generator writes double literals and calls sin/cos even with
 casadi_real=float, so a float32 build promotes to double (software double on a Cortex-M4).
 Here every instruction of the SX algorithm becomes one C statement on a local scalar (the
-operations and the walk are quadcog.codegen.sx_to_c's, shared with the vector kernel): float literals with
-an f suffix and sinf/cosf/fminf/... for float32, 15-digit literals for double. The output
-depends only on the algorithm, so it is byte-reproducible.
+operations and the walk are quadcog.codegen.sx_to_c's, shared with the vector kernel): float
+literals with an f suffix and sinf/cosf/fminf/... for float32, 15-digit literals for double.
+The output depends only on the algorithm, so it is byte-reproducible.
 """
 from collections.abc import Sequence
 import functools

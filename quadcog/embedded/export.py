@@ -162,10 +162,12 @@ def _header(name, controller, precision, command, nc):
         f"/* quadcog_{name}: {type(controller).__name__} ({type(controller).__module__}) as a",
         f" * C99 module in {c_type} ({precision}); exported by: {command}",
         " *",
-        f" * Designed for: a control period of dt = {dt:g} s ({1 / dt:g} Hz), fed the state estimate",
+        f" * Designed for: a control period of dt = {dt:g} s ({1 / dt:g} Hz), fed the state "
+        "estimate",
         " * at the start of the period; U is held over the period. Frames and signs: ground frame",
         " * {G} inertial, z up,",
-        " * gravity -g e_z; body frame {A} with origin O at the rotor-plane centre, x forward, z up",
+        " * gravity -g e_z; body frame {A} with origin O at the rotor-plane centre, x forward, "
+        "z up",
         " * along the thrust (a z-down NED/FRD estimate must be converted: see the README, "
         "\"On a",
         " * flight controller\"); ZYX Euler angles, R = Rz(psi) Ry(theta) Rx(phi) maps body to "
@@ -173,9 +175,11 @@ def _header(name, controller, precision, command, nc):
         f" * x (12) = [{', '.join(STATE_NAMES)}]: position of O (m, ground),",
         " *   Euler angles (rad), body velocities u, v, w (m/s, body axes), body rates p, q, r "
         "(rad/s).",
-        " * ref (14) = position (3, m), velocity (3, m/s), acceleration (3, m/s^2), jerk (3, m/s^3),",
+        " * ref (14) = position (3, m), velocity (3, m/s), acceleration (3, m/s^2), "
+        "jerk (3, m/s^3),",
         " *   all in the ground frame, then yaw (rad) and yaw rate (rad/s).",
-        " * U (4) = [U1 thrust along body z (N), U2, U3, U4 body moments about O (N m)]; map to rotor",
+        " * U (4) = [U1 thrust along body z (N), U2, U3, U4 body moments about O (N m)]; "
+        "map to rotor",
         " *   thrusts with the inverse of the vehicle's mixer.",
         f" * c ({max(nc, 1)}) = the controller state"
         + (" (NC = 0: unused, pass any 1-entry array)." if nc == 0 else

@@ -369,7 +369,8 @@ def run_beyond(out: str | os.PathLike[str], progress: bool = True
         m = next(r for r in rows if r["scenario"] == name and r["controller"] == "composite")
         for text, check in checks:
             targets.append(dict(scenario=name, target=text, met=bool(check(m)),
-                                max=m["max"], tail=m["tail"], converged_after=m["converged_after"]))
+                                max=m["max"], tail=m["tail"],
+                                converged_after=m["converged_after"]))
     why = []
     for name, kind, text, change in DIAGNOSTICS:
         sc = diagnostic(load_scenario(name), kind, change)
@@ -377,8 +378,8 @@ def run_beyond(out: str | os.PathLike[str], progress: bool = True
         why.append(dict(scenario=name, controller=kind, change=text, **measure(sc, res)))
     z_rows = z_g_study(progress)
     _plot(flights, z_rows, out / "beyond.png")
-    (out / "beyond.json").write_text(json.dumps(dict(rows=rows, targets=targets, why=why, z_G=z_rows),
-                                                indent=2) + "\n")
+    (out / "beyond.json").write_text(json.dumps(dict(rows=rows, targets=targets, why=why,
+                                                     z_G=z_rows), indent=2) + "\n")
     md = ["# Beyond the paper", "",
           "Max excursion: largest position error of the run; tail: RMS over the last 25 %; "
           "x_G, y_G within 5 %: seconds after the last CoG change is complete from which both "
@@ -392,7 +393,8 @@ def run_beyond(out: str | os.PathLike[str], progress: bool = True
            "|---|---|---|---|---|"]
     md += [f"| {w['scenario']} | {w['controller']} | {w['change']} | {w['max']:.3f} | "
            f"{_fmt_tail(w)} |" for w in why]
-    md += ["", f"z_G (composite law, ideal truth, CoG step to {[round(100 * v, 1) for v in Z_G_STEP]} "
+    md += ["", "z_G (composite law, ideal truth, CoG step to "
+           f"{[round(100 * v, 1) for v in Z_G_STEP]} "
            "cm at 1 s, 20 s):", "", "| trajectory | r_hat at 20 s (cm) | z_G within 5 % |",
            "|---|---|---|"]
     after = lambda z: ("not in the run" if z["z_G_converged_after"] is None
@@ -441,7 +443,8 @@ def _fragment(rows, targets, why, z_rows):
 Z_G_WHY = (r"Why: the thrust acts along body $z$, so a CoG offset along body $z$ has no moment "
            r"arm to the thrust; gravity's moment on $z_G$ is cancelled by the same offset's "
            r"inertial coupling $m\,r_G\times\dot\nu_1$ whenever the vehicle is in (quasi-)steady "
-           r"flight. $z_G$ shows only through the angular accelerations ($m\,\dot\nu_2\times r_G$) "
+           r"flight. $z_G$ shows only through the angular accelerations "
+           r"($m\,\dot\nu_2\times r_G$) "
            r"and the horizontal drag at $O$, which hover and the paper's slow trajectories hardly "
            r"excite; the covariance in that direction stays at its bound $k_0$ and the estimate "
            r"keeps what a transient taught it. Aggressive trajectories with large angular "

@@ -26,7 +26,8 @@ def tour(print_: Callable[[str], object] = print) -> None:
     fmt = {"float_kind": lambda v: f"{v: .4g}"}
 
     def show(title, value):
-        print_(f"\n{title}\n{np.array2string(np.asarray(value), formatter=fmt, max_line_width=100)}")
+        text = np.array2string(np.asarray(value), formatter=fmt, max_line_width=100)
+        print_(f"\n{title}\n{text}")
 
     print_(f"quadcog tour: backend {model.backend!r}; default vehicle (AscTec Hummingbird) with "
            f"r_G = {p[R_G].tolist()} m, level hover")

@@ -161,7 +161,8 @@ def fly_group(key: str, scenarios: Sequence[Scenario],
     D = np.array([cog_steps(s).ravel() for s in scenarios]).reshape(len(scenarios), -1)
     x0 = start_at_reference(s0.trajectory(0.0))
     x0[:3] += np.asarray(s0.initial_offset)
-    r = fly_batch(ctl, [s.vehicle for s in scenarios], D, s0.trajectory, duration=s0.duration, dt=s0.dt,
+    r = fly_batch(ctl, [s.vehicle for s in scenarios], D, s0.trajectory, duration=s0.duration,
+                  dt=s0.dt,
                   cog_times=[(c.t, c.ramp) for c in s0.cog.changes],
                   disturbances=s0.disturbances, truth=s0.truth, limits=s0.limits, x0=x0,
                   threads=threads)

@@ -254,8 +254,8 @@ def _range_values(spec, where, source):
                          f"{{start, stop, step}}, got {spec!r}")
     has_num, has_step = "num" in spec, "step" in spec
     if has_num == has_step:
-        raise _field_err(source, where, "expected exactly one of 'num' (points, stop included) and "
-                   "'step'")
+        raise _field_err(source, where, "expected exactly one of 'num' (points, stop included) "
+                         "and 'step'")
     _table(spec, where, source, ("start", "stop", "num" if has_num else "step"))
     start, stop = float(spec["start"]), float(spec["stop"])
     if has_num:
@@ -465,7 +465,8 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
         raise _err(source, dup, "appears in two dimensions")
-    sweep = Sweep(name=data.get("name", Path(source).stem), description=data.get("description", ""),
+    sweep = Sweep(name=data.get("name", Path(source).stem),
+                  description=data.get("description", ""),
                   source=source, base=base, base_source=base_source, mode=mode,
                   seed=ints["seed"], chunk=ints["chunk"], threshold=float(threshold),
                   dimensions=dims)

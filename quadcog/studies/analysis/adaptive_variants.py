@@ -6,8 +6,8 @@ OutputRegulationAdaptive: no outer position loop; the outputs [z, phi, theta, ps
     without neglected reference derivatives. x and y are then free (the zero dynamics).
 OracleB (mixin): the update law uses B = [0; H M(r_G)^{-1}] at the TRUE CoG instead of the
     estimate's M_hat. Not implementable (it needs r_G); it isolates the one approximation the
-    law itself makes (docs/model.md sec. 3.2: "use M_hat in the law"), because the exact error model
-    is e_s_dot = A e_s + B(M) Phi(nu, eta, nu_dot_star) r_tilde with the true M.
+    law itself makes (docs/model.md sec. 3.2: "use M_hat in the law"), because the exact error
+    model is e_s_dot = A e_s + B(M) Phi(nu, eta, nu_dot_star) r_tilde with the true M.
 """
 from collections.abc import Sequence
 from typing import Any

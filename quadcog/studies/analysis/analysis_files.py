@@ -171,7 +171,8 @@ def markdown(s: dict[str, Any]) -> str:
                f"- Whole vector field, not only its linearization: over {sens['n_points']} random "
                f"points of the manifold (random zeta, held attitudes up to 0.5 rad, any heading, "
                f"random drag, |r_G| < 9 cm), max |d zeta_dot / d r_G| = "
-               f"{sens['max_dzeta_dot_dr']:.1e} (m/s^2 per m), while the holding input does depend "
+               f"{sens['max_dzeta_dot_dr']:.1e} (m/s^2 per m), while the holding input does "
+               f"depend "
                f"on r_G: max |d U* / d r_G| = {sens['max_dU_dr']:.3g} (N m per m). Manifold "
                f"invariance residual (y_dot, y_ddot, w consistency, nu2_dot): "
                f"{sens['max_residual']:.1e}.\n"
@@ -203,7 +204,8 @@ def markdown(s: dict[str, Any]) -> str:
                "(r_tilde jumps); the question is whether it increases afterwards. 'rise' is the "
                "largest amount V climbs above its running minimum after the step. 'M_hat term' "
                "integrates the positive part of 2 e_s^T P (B_true - B) Phi r_tilde (what using "
-               "M_hat instead of M in B adds to V_dot); 'unexplained' integrates the positive part "
+               "M_hat instead of M in B adds to V_dot); 'unexplained' integrates the positive "
+               "part "
                "of the sampled dV/dt minus the continuous-time model rate.\n")
     rows = []
     for label, v in ad["lyapunov"].items():
@@ -221,7 +223,8 @@ def markdown(s: dict[str, Any]) -> str:
     out.append("## 4. Failure map\n")
     out.append(f"CoG step at hover at t = {fm['t_step']:g} s to (x_G, y_G, 0) on a "
                f"{fm['grid']} x {fm['grid']} grid over [-{fm['half_width']:g}, "
-               f"{fm['half_width']:g}]^2 m, {fm['duration']:g} s flights (the shipped sweep failure-map). "
+               f"{fm['half_width']:g}]^2 m, {fm['duration']:g} s flights (the shipped sweep "
+               f"failure-map). "
                f"{fm['n_admissible']} of {fm['n_points']} offsets are admissible (the others make "
                "the inertia about the CoG indefinite: grey, not simulated; boundary |r_G| = "
                f"{fm['admissible_radius']:.4f} m). Failure: tail RMS (last "

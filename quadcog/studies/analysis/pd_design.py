@@ -76,7 +76,8 @@ def pd_design(controller: CascadePD | None = None,
         "min_sigma_inverse_return_difference": float(ird.min()),
         "min_sigma_inverse_return_difference_at_rad_s": float(omega[np.argmin(ird)]),
         "guaranteed_simultaneous_gain_margin_db": gm,
-        "guaranteed_simultaneous_phase_margin_deg": float(np.degrees(2 * np.arcsin(min(a, 2) / 2))),
+        "guaranteed_simultaneous_phase_margin_deg":
+            float(np.degrees(2 * np.arcsin(min(a, 2) / 2))),
         "margins": margins, "loop": loop,
     }
 
