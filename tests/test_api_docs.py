@@ -38,6 +38,11 @@ CHECKED = ("quadcog.kinds", "quadcog.controllers.registry", "quadcog.trajectorie
            "quadcog.vehicles",
            "quadcog.trajectories",
            "quadcog.controllers",
+           "quadcog.scenarios",
+           "quadcog.sweeps",
+           "quadcog.embedded",
+           "quadcog.studies",
+           "quadcog.cli",
            )
 MODULES = [m for m in _modules()
            if any(m == c or m.startswith(c + ".") for c in CHECKED)]

@@ -1,11 +1,27 @@
 """Sweep results as Arrow tables (pyarrow, the ``sweep`` extra)."""
+from types import ModuleType
+from typing import Any
+
+from numpy.typing import NDArray
+
 from quadcog.errors import QuadcogError
 
 __all__ = ["require_pyarrow", "to_arrow"]
 
 
-def require_pyarrow():
-    """The pyarrow module, or a QuadcogError saying how to install it."""
+def require_pyarrow() -> ModuleType:
+    """The pyarrow module (with ``pyarrow.parquet`` loaded).
+
+    Returns
+    -------
+    module
+        ``pyarrow``.
+
+    Raises
+    ------
+    quadcog.errors.QuadcogError
+        Without pyarrow, saying how to install it.
+    """
     try:
         import pyarrow
         import pyarrow.parquet  # noqa: F401
@@ -15,8 +31,19 @@ def require_pyarrow():
             from None
 
 
-def to_arrow(columns):
-    """A pyarrow Table of {name: numpy array}."""
+def to_arrow(columns: dict[str, NDArray[Any]]) -> Any:
+    """A pyarrow Table of {name: numpy array}.
+
+    Parameters
+    ----------
+    columns : dict of str to numpy.ndarray
+        {column: (n,) array}; string arrays become string columns.
+
+    Returns
+    -------
+    pyarrow.Table
+        The table (pyarrow ships no type stubs: typed as Any).
+    """
     pa = require_pyarrow()
     arrays = []
     for v in columns.values():
