@@ -3,8 +3,8 @@
 A batch step is a CasADi SX Function ``step(Z, Q, row) -> Z_next``: Z the state of one flight
 (with its metric accumulators), Q its constant parameters, row the step's entry of the step
 table (shared by all flights). This module emits C from the step's SX instructions (the
-operations and the walk are quadcog.codegen.sx_to_c's, shared with the embedded export) with the flight
-index as the innermost loop of every operation: flights go in blocks of ``LANES``, the
+operations and the walk are quadcog.codegen.sx_to_c's, shared with the embedded export) with
+the flight index as the innermost loop of every operation: flights go in blocks of ``LANES``, the
 whole step is one ``#pragma omp simd`` loop over a block, and gcc turns every operation into a
 vector instruction, with glibc's libmvec for sin, cos, tan and atan2. A block's state stays in
 the L1 cache for all its steps, so memory traffic is a few hundred bytes per flight.
@@ -15,6 +15,7 @@ blocks: the thread count asked for is the thread count used. A flight's bits do 
 the block it is in (every lane runs the same vector code; a partial block is padded), so
 results are the same for any batch size, thread count or chunking.
 """
+from collections.abc import Callable, Hashable
 import ctypes
 import hashlib
 import math
@@ -22,11 +23,15 @@ import platform
 import threading
 import warnings
 
+import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.errors import CompileError, KernelError, QuadcogWarning
+
+__all__ = ["LANES", "vector_flags", "emit_c", "VectorKernel", "kernel_for"]
 
 LANES = 16         # flights per block: four AVX2 vectors of doubles per operation
 
@@ -49,10 +54,17 @@ def _literal(v):
 _TARGET = sxc.Target(literal=_literal, suffix="", selects=True, error=KernelError)
 
 
-def vector_flags():
-    """Compiler flags for this CPU: AVX2 + FMA where /proc/cpuinfo lists them (x86-64), else
-    the baseline. No -ffast-math: IEEE arithmetic, only errno and traps are given up (which
-    lets sqrt and the libmvec calls vectorize)."""
+def vector_flags() -> tuple[str, ...]:
+    """Compiler flags for this CPU.
+
+    No -ffast-math: IEEE arithmetic, only errno and traps are given up (which lets sqrt and
+    the libmvec calls vectorize).
+
+    Returns
+    -------
+    tuple of str
+        AVX2 + FMA where /proc/cpuinfo lists them (x86-64), else the baseline.
+    """
     flags = ["-O3", "-fno-math-errno", "-fno-trapping-math", "-fopenmp-simd", "-fno-builtin-sin",
              "-fno-builtin-cos", "-shared", "-fPIC"]
     if platform.machine() in ("x86_64", "AMD64"):
@@ -66,12 +78,32 @@ def vector_flags():
     return tuple(flags)
 
 
-def emit_c(step, name="qc_kernel", lanes=LANES):
+def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES) -> str:
     """C source of ``void name(long n_steps, const double *rows, double *Z, const double *Q,
     long n_blocks)`` for the SX Function ``step(Z, Q, row) -> Z_next``.
 
     Layouts (C order): rows (n_steps, n_row); Z (n_blocks, nZ, lanes), updated in place;
-    Q (n_blocks, nQ, lanes)."""
+    Q (n_blocks, nQ, lanes).
+
+    Parameters
+    ----------
+    step : casadi.Function
+        The SX Function ``step(Z, Q, row) -> Z_next``, Z_next of the size of Z.
+    name : str, optional
+        Name of the C function.
+    lanes : int, optional
+        Flights per block.
+
+    Returns
+    -------
+    str
+        The C translation unit.
+
+    Raises
+    ------
+    KernelError
+        ``step`` is not an SX Function of that form, or uses an operation without a C form.
+    """
     if not step.is_a("SXFunction"):
         raise KernelError(f"{step.name()}: expected an SX Function")
     nZ, nQ, nR = (step.nnz_in(i) for i in range(3))
@@ -116,9 +148,24 @@ void {name}(long n_steps, const double *rows, double *Z, const double *Q, long n
 
 class VectorKernel:
     """A compiled vector kernel: ``kernel(Z (B, nZ), Q (B, nQ), rows (n, n_row), threads)``
-    returns Z after the n steps (B, nZ)."""
+    returns Z after the n steps (B, nZ).
 
-    def __init__(self, step, lanes=LANES):
+    Parameters
+    ----------
+    step : casadi.Function
+        The SX Function ``step(Z, Q, row) -> Z_next`` (see ``emit_c``).
+    lanes : int, optional
+        Flights per block.
+
+    Raises
+    ------
+    KernelError
+        No C compiler, or ``step`` cannot be written as C.
+    CompileError
+        The C does not build here (e.g. no libmvec).
+    """
+
+    def __init__(self, step: ca.Function, lanes: int = LANES) -> None:
         cc = find_compiler()
         if cc is None:
             raise KernelError("no C compiler")
@@ -133,7 +180,8 @@ class VectorKernel:
         self._fn.argtypes = [ctypes.c_long, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
                              ctypes.c_long]
 
-    def __call__(self, Z, Q, rows, threads=1):
+    def __call__(self, Z: npt.ArrayLike, Q: npt.ArrayLike, rows: npt.ArrayLike,
+                 threads: int = 1) -> npt.NDArray[np.float64]:
         Z, Q = np.asarray(Z, dtype=float), np.asarray(Q, dtype=float)
         B, L = Z.shape[0], self.lanes
         n_blocks = -(-B // L)
@@ -148,7 +196,7 @@ class VectorKernel:
         threads = max(1, min(int(threads), n_blocks))
         bounds = np.linspace(0, n_blocks, threads + 1).round().astype(int)
 
-        def work(t):
+        def work(t: int) -> None:
             lo, hi = bounds[t], bounds[t + 1]
             if hi > lo:
                 self._fn(n, rows.ctypes.data, Zb[lo:hi].ctypes.data, Qb[lo:hi].ctypes.data,
@@ -164,16 +212,34 @@ class VectorKernel:
         return Zb.transpose(0, 2, 1).reshape(n_blocks * L, self.nZ)[:B].copy()
 
 
-_kernels = {}
-_warned = []
+_kernels: dict[Hashable, VectorKernel | None] = {}
+_warned: list[bool] = []
 
 
-def kernel_for(key, build_step, required=False):
+def kernel_for(key: Hashable, build_step: Callable[[], ca.Function],
+               required: bool = False) -> VectorKernel | None:
     """The VectorKernel of the step that ``build_step()`` makes, once per ``key`` and process.
 
-    Without a C compiler, or where the C does not build (no libmvec: not glibc on x86-64),
-    returns None after one QuadcogWarning (callers then use CasADi's map), or raises
-    KernelError when ``required``."""
+    Parameters
+    ----------
+    key : hashable
+        What identifies the step in this process.
+    build_step : callable
+        ``build_step() -> casadi.Function``, the SX step (called the first time only).
+    required : bool, optional
+        Raise instead of returning None when the kernel cannot be built.
+
+    Returns
+    -------
+    VectorKernel or None
+        The kernel; None without a C compiler, or where the C does not build (no libmvec:
+        not glibc on x86-64), after one QuadcogWarning (callers then use CasADi's map).
+
+    Raises
+    ------
+    KernelError
+        When ``required`` and the kernel cannot be built here.
+    """
     if key not in _kernels:
         try:
             _kernels[key] = VectorKernel(build_step())
