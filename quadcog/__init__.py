@@ -48,7 +48,8 @@ from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
 from quadcog.sweeps import sweep
 from quadcog.trajectories.analytic import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
-from quadcog.vehicles.vehicle import CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters, plus_layout, x_layout
+from quadcog.vehicles import CRAZYFLIE, HUMMINGBIRD, Vehicle
+from quadcog.vehicles.vehicle import default_parameters, plus_layout, x_layout
 
 __version__ = "0.1.0"
 

@@ -43,6 +43,14 @@ CHECKED = ("quadcog.kinds", "quadcog.controllers.registry", "quadcog.trajectorie
            "quadcog.embedded",
            "quadcog.studies",
            "quadcog.cli",
+           "quadcog.errors",
+           "quadcog.config",
+           "quadcog.validate",
+           "quadcog.paths",
+           "quadcog.files",
+           "quadcog.codegen",
+           "quadcog.model",
+           "quadcog.logs",
            )
 MODULES = [m for m in _modules()
            if any(m == c or m.startswith(c + ".") for c in CHECKED)]

@@ -32,6 +32,7 @@ asked for is the thread count used. A flight's bits do not depend on the block i
 lane runs the same vector code; a partial block is padded), so results are the same for any
 batch size, thread count or chunking.
 """
+from collections.abc import Callable, Hashable
 import ctypes
 import functools
 import hashlib
@@ -41,6 +42,7 @@ import platform
 import threading
 import warnings
 
+import casadi as ca
 import numpy as np
 
 from quadcog.codegen import sx_to_c as sxc
@@ -120,7 +122,7 @@ def _check_isa(isa, where="isa"):
 
 
 @functools.lru_cache(maxsize=None)
-def cpu_features():
+def cpu_features() -> frozenset[str]:
     """The CPU's feature flags as /proc/cpuinfo lists them.
 
     Returns
@@ -137,7 +139,8 @@ def cpu_features():
     return frozenset(line.partition(":")[2].split())
 
 
-def detect_isa(features=None, machine=None):
+def detect_isa(features: frozenset[str] | set[str] | None = None,
+               machine: str | None = None) -> str:
     """The widest instruction set of ``ISAS`` that the CPU can run.
 
     Parameters
@@ -163,7 +166,7 @@ def detect_isa(features=None, machine=None):
     return "portable"
 
 
-def kernel_isa():
+def kernel_isa() -> str:
     """The instruction set the kernel is built for.
 
     Returns
@@ -178,7 +181,7 @@ def kernel_isa():
     return detect_isa()
 
 
-def lanes_for(isa, precision="float64"):
+def lanes_for(isa: str, precision: str = "float64") -> int:
     """Flights per block: ``VECTORS_PER_BLOCK`` vectors of the ISA's width.
 
     Parameters
@@ -197,7 +200,7 @@ def lanes_for(isa, precision="float64"):
     return VECTORS_PER_BLOCK * VECTOR_BITS[isa] // (8 * _BYTES[_check_precision(precision)])
 
 
-def vector_flags(isa=None, precision="float64"):
+def vector_flags(isa: str | None = None, precision: str = "float64") -> tuple[str, ...]:
     """Compiler flags of the kernel for an instruction set.
 
     No -ffast-math: IEEE arithmetic, only errno and traps are given up (which lets sqrt and
@@ -223,7 +226,8 @@ def vector_flags(isa=None, precision="float64"):
             f"-fno-builtin-cos{f}", "-shared", "-fPIC")
 
 
-def emit_c(step, name="qc_kernel", lanes=LANES, precision="float64"):
+def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
+           precision: str = "float64") -> str:
     """C source of the kernel of the SX Function ``step(Z, Q, row) -> Z_next``.
 
     Parameters
@@ -314,7 +318,8 @@ class VectorKernel:
         flights per block, the compiler flags and the library's path.
     """
 
-    def __init__(self, step, lanes=None, isa=None, precision="float64"):
+    def __init__(self, step: ca.Function, lanes: int | None = None, isa: str | None = None,
+                 precision: str = "float64") -> None:
         cc = find_compiler()
         if cc is None:
             raise KernelError("no C compiler")
@@ -348,7 +353,8 @@ class VectorKernel:
         stem = f"vector_kernel_{isa}_" + hashlib.sha256(source).hexdigest()[:12]
         self.library = compile_library(source, stem, cc, flags=self.flags)
 
-    def __call__(self, Z, Q, rows, threads=1):
+    def __call__(self, Z: np.ndarray, Q: np.ndarray, rows: np.ndarray,
+                 threads: int = 1) -> np.ndarray:
         """Z after the steps of ``rows``.
 
         Parameters
@@ -402,7 +408,8 @@ _kernels = {}
 _warned = []
 
 
-def kernel_for(key, build_step, required=False, precision="float64", isa=None):
+def kernel_for(key: Hashable, build_step: Callable[[], ca.Function], required: bool = False,
+               precision: str = "float64", isa: str | None = None) -> "VectorKernel | None":
     """The VectorKernel of the step that ``build_step()`` makes, once per key and process.
 
     Parameters
