@@ -404,8 +404,8 @@ class VectorKernel:
         return out.astype(np.float64)
 
 
-_kernels = {}
-_warned = []
+_kernels: dict = {}
+_warned: list = []
 
 
 def kernel_for(key: Hashable, build_step: Callable[[], ca.Function], required: bool = False,

@@ -107,7 +107,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         elif projection_radius is not None:
             projection_radius = validate.positive(projection_radius, "projection_radius", "m")
         # a str other than "default" was refused by validate.positive above
-        self.projection_radius = projection_radius  # type: ignore[assignment]
+        self.projection_radius = projection_radius
         self.A_error = np.block([[np.zeros((4, 4)), np.eye(4)],
                                  [-np.diag(self.kp), -np.diag(self.kd)]])
         from scipy.linalg import solve_continuous_lyapunov  # here: slow to import

@@ -76,11 +76,11 @@ class CascadePD(Controller):
             if np.any(poles.imag != 0):
                 validate.fail(f"poles_{loop}", f"{len(states)} real negative poles",
                               self.poles[loop])
-            poles = poles.real
+            real_poles = poles.real
             Ai = A[np.ix_(states, states)]
             Bi = B[np.ix_(states, [inp])]
             try:
-                k = place_poles(Ai, Bi, poles).gain_matrix.ravel()
+                k = place_poles(Ai, Bi, real_poles).gain_matrix.ravel()
             except ValueError as e:     # e.g. a pole repeated on this single-input chain
                 raise InputError(f"poles_{loop}: expected poles that can be placed on a "
                                  f"single-input chain ({e}), got "

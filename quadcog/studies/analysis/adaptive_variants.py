@@ -14,6 +14,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.controllers import AdaptiveFeedbackLinearization
 from quadcog.controllers.shaping import kinematics, wrap_angle
@@ -46,7 +47,8 @@ class OutputRegulationAdaptive(AdaptiveFeedbackLinearization):
 
     name = "adaptive_output_regulation"
 
-    def output_errors(self, x: ca.SX, ref: ca.SX, p: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+    def output_errors(self, x: ca.SX, ref: ca.SX, p: ca.SX | ca.DM | npt.NDArray[np.float64]
+                      ) -> tuple[ca.SX, ca.SX, ca.SX]:
         """The output errors with phi_d = theta_d = 0.
 
         Parameters
