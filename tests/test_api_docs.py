@@ -34,7 +34,9 @@ def _modules():
 # The modules held to this so far (a module, or a package and everything below it); the rest of
 # the package joins as its docstrings are written.
 CHECKED = ("quadcog.kinds", "quadcog.controllers.registry", "quadcog.trajectories.registry",
-           "quadcog.scenarios.files", "quadcog.scenarios.keys", "quadcog.scenarios.schema")
+           "quadcog.scenarios.files", "quadcog.scenarios.keys", "quadcog.scenarios.schema",
+           "quadcog.sim",
+           )
 MODULES = [m for m in _modules()
            if any(m == c or m.startswith(c + ".") for c in CHECKED)]
 
