@@ -36,6 +36,7 @@ def _modules():
 CHECKED = ("quadcog.kinds", "quadcog.controllers.registry", "quadcog.trajectories.registry",
            "quadcog.scenarios.files", "quadcog.scenarios.keys", "quadcog.scenarios.schema",
            "quadcog.sim",
+           "quadcog.viz",
            )
 MODULES = [m for m in _modules()
            if any(m == c or m.startswith(c + ".") for c in CHECKED)]
