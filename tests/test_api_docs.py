@@ -37,6 +37,7 @@ CHECKED = ("quadcog.kinds", "quadcog.controllers.registry", "quadcog.trajectorie
            "quadcog.scenarios.files", "quadcog.scenarios.keys", "quadcog.scenarios.schema",
            "quadcog.sim",
            "quadcog.viz",
+           "quadcog.identification",
            )
 MODULES = [m for m in _modules()
            if any(m == c or m.startswith(c + ".") for c in CHECKED)]
