@@ -88,6 +88,7 @@ class HoverWindow:
         Returns
         -------
         numpy.ndarray of int, shape (n,)
+            Block numbers from 0 over the segments in turn; -1 outside every block.
         """
         index = np.full(len(t), -1)
         first = 0
@@ -119,6 +120,7 @@ def hover_window(log: FlightLog, band: float = HOVER_BAND, trim: float = HOVER_T
     Returns
     -------
     HoverWindow
+        The plateaus, trimmed, with at least ``MIN_BLOCKS`` blocks.
 
     Raises
     ------
@@ -276,6 +278,7 @@ def t_quantile(dof: int) -> float:
     Returns
     -------
     float
+        The quantile.
     """
     from scipy import stats  # here: slow to import
     return float(stats.t.ppf(0.975, max(int(dof), 1)))

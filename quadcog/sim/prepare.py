@@ -85,10 +85,34 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
 
     Parameters
     ----------
-    controller, trajectory, duration, dt, vehicle, controller_model, cog : see simulate
+    controller : Controller or callable
         As for ``quadcog.simulate``.
-    disturbances, truth, x0, path, limits, progress, check_dt : see simulate
+    trajectory : Trajectory, str or callable
         As for ``quadcog.simulate``.
+    duration : float
+        Seconds.
+    dt : float or None
+        The step (s); None for ``quadcog.config.defaults["simulate.dt"]``.
+    vehicle : Vehicle or None
+        The truth vehicle, as for ``quadcog.simulate``.
+    controller_model : Vehicle or None
+        What the controller believes, as for ``quadcog.simulate``.
+    cog : CogProfile, list of (t, r, ramp) or None
+        The CoG changes (s, m, s).
+    disturbances : sequence of Disturbance
+        Wrench pulses.
+    truth : TruthOptions or None
+        As for ``quadcog.simulate``.
+    x0 : (12,) array_like or None
+        Initial state [m, rad, m/s, rad/s].
+    path : {"compiled", "python"}
+        The step loop.
+    limits : Limits or None
+        As for ``quadcog.simulate``.
+    progress : callable or None
+        ``progress(fraction)``.
+    check_dt : bool
+        Refuse a dt too large for RK4 on the closed loop at the start.
 
     Returns
     -------
@@ -187,8 +211,10 @@ def check_time(duration: Any, dt: Any) -> tuple[float, float]:
 
     Returns
     -------
-    duration, dt : float
-        As floats (s).
+    duration : float
+        The duration (s).
+    dt : float
+        The step (s).
 
     Raises
     ------

@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from quadcog import config
 from quadcog.model.conventions import R_G
-from quadcog.sim.timeline import CogProfile, Disturbance, wrench_table
+from quadcog.sim.timeline import CogProfile, wrench_table
 from quadcog.trajectories.analytic import REF_SIZE, Trajectory
 
 __all__ = ["STEP_INPUTS", "tail_start", "cog_at", "truth_parameters", "Schedule"]
@@ -124,7 +124,7 @@ class Schedule:
 
     @classmethod
     def build(cls, trajectory: Trajectory, duration: float, dt: float,
-              cog: CogProfile | None = None, disturbances: Iterable[Disturbance] | None = (),
+              cog: CogProfile | None = None, disturbances: Iterable[Any] | None = (),
               cog_scale: Callable[[float], float] | None = None) -> "Schedule":
         """Sample a run.
 
