@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench mutations embedded clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded clean
 
 OUT ?= out
 
@@ -67,6 +67,12 @@ test: $(STAMP)
 # copies it into README.md and bench/results.md).
 bench: compile
 	$(PY) bench/run.py
+
+# The peers of `make bench` (absent ones are reported absent): torch's CPU build first (a plain
+# torch requirement pulls a CUDA build), then the bench extra (RotorPy, crazyflow on JAX).
+bench-peers: $(STAMP)
+	$(PY) -m pip install torch==2.13.0
+	$(PY) -m pip install -e '.[bench]'
 
 # Would the tests catch wrong physics? Each deliberate mistake (bench/mutations.py --list) is
 # applied to a copy of the repository, which runs the physics tests; writes

@@ -84,7 +84,7 @@ MUTATIONS = [
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
              "- p[IDX[\"m\"]] * (r @ r * np.eye(3) + np.outer(r, r)))",
              "sign of the products r r^T in the admissibility check's I_G"),
-    Mutation("pseudo_inertia_trace", "quadcog/model/inertial.py",
+    Mutation("pseudo_inertia_trace", "quadcog/model/inertial_parameters.py",
              "J[:3, :3] = 0.5 * np.trace(I) * np.eye(3) - I",
              "J[:3, :3] = np.trace(I) * np.eye(3) - I",
              "the pseudo-inertia built with tr(I_O) instead of tr(I_O) / 2 (I_O in place of "

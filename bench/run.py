@@ -19,7 +19,11 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+# crazyflow refuses to import once scipy is loaded without this (it asks scipy for the array
+# API); set before quadcog imports scipy, it changes nothing for numpy arrays
+os.environ.setdefault("SCIPY_ARRAY_API", "1")
 
+from bench.machine import CHAINS, fma_roofline, loadavg, machine
 import quadcog  # noqa: E402
 from quadcog import AdaptiveFeedbackLinearization, CogProfile, simulate, simulate_batch
 from quadcog.codegen.compiled import compile_function
@@ -246,51 +250,173 @@ def bench_batch(n_flights):
     return cpu1 / steps * 1e9, steps / r2.seconds
 
 
-def bench_vector_limits(ns_per_flight_step):
-    """What bounds the vector kernel: per-lane rates of arithmetic, division and
-    transcendental operations measured through the same kernel (random DAGs), weighted by
-    the op counts of the batch step."""
-    from quadcog.codegen.vector_kernel import VectorKernel
+def bench_vector_limits(ns_per_flight_step, seconds=1.0):
+    """The kernel against the arithmetic bound of its vector unit: a measured loop of
+    independent FMAs at the kernel's flags (bench/machine.py), one thread. Every SX operation
+    of the step is counted as one floating-point operation (a sin is some 20), so the
+    kernel's fraction of the bound is a lower bound of the fraction it reaches."""
     from quadcog.sim.closed_loop import monitored_step, packed
     from quadcog.sim.divergence import Limits
     from quadcog.sim.plant import Actuation
-    print("vector kernel against its op-count limit")
-    counts, times = [], []
-    B, n = 1024, 2000          # n: enough steps for the 10 ms resolution of CPU times
-    for kind in ("arithmetic", "division", "trig"):
-        f = _kernel(kind, n_ops=1500)
-        Z, Q, row = ca.SX.sym("Z", 16), ca.SX.sym("Q", 1), ca.SX.sym("row", 1)
-        # keep the values bounded from step to step (no overflow, no subnormals)
-        out = ca.sin(f(Z)) if kind != "trig" else f(Z)
-        k = VectorKernel(ca.Function(f"v_{kind}", [Z, Q, row], [out]))
-        Z0 = np.tile(np.linspace(0.1, 0.9, 16), (B, 1))
-        k(Z0, np.zeros((B, 1)), np.zeros((5, 1)))
-        c0 = os.times()
-        k(Z0, np.zeros((B, 1)), np.zeros((n, 1)))
-        c1 = os.times()
-        times.append((c1.user - c0.user + c1.system - c0.system) / (B * n))
-        c = _op_classes(ca.Function("c", [Z, Q, row], [out]))
-        counts.append([c["arithmetic"], c["division"], c["trig"]])
-    rates = dict(zip(("arithmetic", "division", "trig"), np.linalg.solve(counts, times)))
-    for c in rates:
-        record(f"vector rate: {c}", f"{rates[c] * 1e9:.3f}", "ns/op per flight", "", "",
-               "1 thread, CPU time, random DAGs through the vector kernel")
+    print("vector kernel against a measured FMA roofline")
+    roof = fma_roofline(seconds=seconds)
+    record(f"roofline: {roof['kind']} loop, {roof['isa']}, 1 thread",
+           f"{roof['flops'] / 1e9:.1f}", "Gflop/s", "", "",
+           f"{CHAINS} independent vector chains, the kernel's flags; an FMA counts 2")
     ctl = AdaptiveFeedbackLinearization()
     step = packed(monitored_step(ctl, Actuation.of(ctl.vehicle), Limits()))
     c = _op_classes(step)
-    parts = {k: c[k] * rates[k] * 1e9 for k in rates}
-    estimate = sum(parts.values())
-    record("vector step: op counts", f"{c['arithmetic']} / {c['division']} / {c['trig']}",
-           "arith / div / trig")
-    record("vector step: estimate from op counts", f"{estimate:.0f}", "ns per flight-step", "",
-           "", " + ".join(f"{k} {v:.0f}" for k, v in parts.items()))
-    record("vector step: measured (1 thread, CPU time)", f"{ns_per_flight_step:.0f}",
-           "ns per flight-step",
-           f"{ns_per_flight_step / estimate:.2f}x estimate")
+    n_ops = sum(c.values())
+    if ns_per_flight_step is None:
+        return roof
+    rate = n_ops / (ns_per_flight_step * 1e-9)
+    record("vector step: SX operations", f"{n_ops}", "per flight-step", "", "",
+           f"arith / div / trig+sqrt: {c['arithmetic']} / {c['division']} / {c['trig']}")
+    record("vector step: operation rate (1 thread, CPU time)", f"{rate / 1e9:.1f}",
+           "Gop/s", f"{rate / roof['flops']:.2f}x roofline", "",
+           f"{ns_per_flight_step:.0f} ns per flight-step; each operation counted as 1 flop")
     nbytes = (2 * step.nnz_in(0) * 2 + step.nnz_in(1)) * 8
     record("vector step: memory traffic", f"{nbytes}", "bytes per flight-step", "", "",
-           f"{nbytes / ns_per_flight_step:.1f} GB/s per thread, from L1 (a block is "
-           f"{16 * nbytes // 1024} KB)")
+           f"{nbytes / ns_per_flight_step:.1f} GB/s per thread, from L1")
+    return roof
+
+
+def bench_isa(n_flights, duration=20.0):
+    """The same batch (1 thread) from the portable build (SSE2 on x86-64) and from the native
+    one: CPU time per flight-step and whether the final states agree bit for bit."""
+    import quadcog.codegen.vector_kernel as qk
+    native = qk.detect_isa()
+    ctl = AdaptiveFeedbackLinearization()
+    vehicles = _batch_vehicles(n_flights)
+    kw = dict(trajectory="hover", duration=duration, cog_shape=lambda t: float(t >= 1.0),
+              threads=1)
+    print(f"{n_flights} flights of {duration:g} s: portable against {native} build")
+    out = {}
+    for isa in dict.fromkeys(("portable", native)):
+        pinned = qk.kernel_isa
+        qk.kernel_isa = lambda _isa=isa: _isa
+        try:
+            simulate_batch(ctl, vehicles[:2], **dict(kw, duration=0.01))       # compile
+            c0 = os.times()
+            r = simulate_batch(ctl, vehicles, **kw)
+            c1 = os.times()
+        finally:
+            qk.kernel_isa = pinned
+        out[isa] = (r, (c1.user - c0.user) + (c1.system - c0.system))
+    steps = n_flights * int(round(duration / 1e-3))
+    (rp, cp), (rn, cn) = out["portable"], out[native]
+    differ = int(np.sum(np.any(rp.final_state != rn.final_state, axis=1)))
+    worst = float(np.max(np.abs(rp.final_state - rn.final_state)
+                         / np.maximum(np.abs(rn.final_state), 1e-300)))
+    record(f"batch: portable build ({qk.lanes_for('portable')} lanes), 1 thread",
+           f"{cp / steps * 1e9:.0f}", "ns per flight-step (CPU)",
+           f"{cp / max(cn, 1e-9):.2f}x {native}", "",
+           f"{native} ({qk.lanes_for(native)} lanes): {cn / steps * 1e9:.0f} ns; final states "
+           f"differ in {differ} of {n_flights} flights, at most {worst:.1e} relative")
+
+
+def bench_float32(n_flights, duration=20.0):
+    """The float32 kernel (measured, not offered: docs/performance.md) against float64 on the
+    same batch of the sweep engine, 1 thread: CPU time per flight-step and the largest
+    relative difference of the metrics of the flights that stay bounded."""
+    from quadcog.sim.vector_batch import fly_batch
+    ctl = AdaptiveFeedbackLinearization()
+    rng = np.random.default_rng(2)
+    D = np.column_stack([rng.uniform(-0.06, 0.06, (n_flights, 2)), np.zeros(n_flights)])
+    vehicles = [quadcog.HUMMINGBIRD] * n_flights
+    kw = dict(duration=duration, cog_times=[(1.0, 0.0)], threads=1)
+    print(f"{n_flights} flights of {duration:g} s: float32 against float64 kernel")
+    out = {}
+    for precision in ("float64", "float32"):
+        fly_batch(ctl, vehicles[:2], D[:2], **dict(kw, duration=0.01), precision=precision)
+        c0 = os.times()
+        r = fly_batch(ctl, vehicles, D, **kw, precision=precision)
+        c1 = os.times()
+        out[precision] = (r, (c1.user - c0.user) + (c1.system - c0.system))
+    steps = n_flights * int(round(duration / 1e-3))
+    (r64, c64), (r32, c32) = out["float64"], out["float32"]
+    ok = ~(r64.diverged | r32.diverged)
+    def worst_rel(m):
+        a, b = getattr(r32, m)[ok], getattr(r64, m)[ok]
+        d = np.where(a == b, 0.0, np.abs(a - b) / np.maximum(np.abs(b), 1e-300))
+        return float(d.max()) if d.size else float("nan")
+    worst = {m: worst_rel(m) for m in ("rms_position_error", "rms_position_error_tail")}
+    record("batch: float32 kernel (measured, not offered), 1 thread",
+           f"{c32 / steps * 1e9:.0f}", "ns per flight-step (CPU)",
+           f"{c64 / max(c32, 1e-9):.2f}x faster than float64", "",
+           f"float64 {c64 / steps * 1e9:.0f} ns; max rel. diff rms "
+           f"{worst['rms_position_error']:.1e}, tail rms {worst['rms_position_error_tail']:.1e}; "
+           f"verdicts differ: {int(np.sum(r64.diverged != r32.diverged))}")
+
+
+def bench_scale(sizes=(10, 100, 1000, 10000), duration=2.0, threads=2):
+    """Cost per flight-step of the kernel and of the whole simulate_batch call at each batch
+    size, and the memory per flight (tracemalloc peak of a separate short run / flights)."""
+    import tracemalloc
+    print(f"scale: adaptive flights of {duration:g} s at 1 kHz, {threads} threads")
+    ctl = AdaptiveFeedbackLinearization()
+    shape = lambda t: float(t >= 0.5 * duration)
+    simulate_batch(ctl, _batch_vehicles(2), "hover", duration=0.01, cog_shape=shape)
+    out = []
+    for n in sizes:
+        vehicles = _batch_vehicles(n)
+        c0, t0 = os.times(), time.perf_counter()
+        r = simulate_batch(ctl, vehicles, "hover", duration=duration, cog_shape=shape,
+                           threads=threads)
+        wall, c1 = time.perf_counter() - t0, os.times()
+        cpu = (c1.user - c0.user) + (c1.system - c0.system)
+        steps = n * int(round(duration / 1e-3))
+        tracemalloc.start()
+        simulate_batch(ctl, vehicles, "hover", duration=0.05, cog_shape=shape, threads=threads)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        record(f"scale: {n} flights x {duration:g} s", f"{r.seconds / steps * 1e9:.1f}",
+               "ns per flight-step (kernel)", f"whole call {wall / steps * 1e9:.1f} ns", "",
+               f"kernel {r.seconds:.3f} s, whole call {wall:.3f} s, CPU {cpu:.2f} s; "
+               f"memory {peak / n / 1024:.2f} KB per flight (peak {peak / 2**20:.1f} MB)")
+        out.append((n, r.seconds / steps, wall / steps, peak / n))
+    return out
+
+
+def bench_crazyflow(n_flights, n_steps, quadcog_rate):
+    """crazyflow (JAX, CPU, float64): first-principles dynamics, its state controller, RK4 at
+    1 kHz; the steps timed after a run of the same length that compiles them."""
+    try:
+        import jax
+        jax.config.update("jax_enable_x64", True)
+        from crazyflow.control import Control
+        from crazyflow.dynamics import Dynamics
+        from crazyflow.sim import Sim
+        from crazyflow.sim.integration import Integrator
+    except ImportError as e:
+        record("peer: crazyflow (JAX)", "absent", "", "", "", f"not installed ({e.name}): "
+               "pip install -e '.[bench]'")
+        return None
+    except RuntimeError as e:           # installed, but refuses to import here
+        record("peer: crazyflow (JAX)", "absent", "", "", "",
+               f"installed but not importable: {str(e).splitlines()[0][:120]}")
+        return None
+    from importlib.metadata import version
+    print(f"crazyflow: {n_flights} worlds x {n_steps} steps at 1 kHz")
+    sim = Sim(n_worlds=n_flights, n_drones=1, dynamics=Dynamics.first_principles,
+              control=Control.state, integrator=Integrator.rk4, freq=1000, state_freq=1000,
+              attitude_freq=1000, device="cpu")
+    cmd = np.zeros((n_flights, 1, 16))
+    cmd[..., 2], cmd[..., 12] = 1.0, 1.0           # hover at 1 m, identity quaternion
+    sim.state_control(cmd)
+    sim.step(n_steps)                               # compiles (jit per step count)
+    jax.block_until_ready(sim.data.states.pos)
+    t0 = time.perf_counter()
+    sim.step(n_steps)
+    jax.block_until_ready(sim.data.states.pos)
+    t = time.perf_counter() - t0
+    rate = n_flights * n_steps / t
+    record(f"peer: crazyflow {version('crazyflow')}, {n_flights} flights x {n_steps} steps",
+           f"{t:.2f}", "s", "", "", f"{rate:.0f} flight-steps/s, JAX {jax.__version__} CPU, "
+           "float64, first-principles + state control, RK4")
+    record("peer: quadcog vector kernel / crazyflow", f"{quadcog_rate / rate:.0f}",
+           "x (flight-steps/s)", "", "", "same flight count, 1 kHz, one run")
+    return rate
 
 
 def bench_rotorpy_batched(n_flights, seconds, quadcog_rate):
@@ -308,8 +434,8 @@ def bench_rotorpy_batched(n_flights, seconds, quadcog_rate):
         from rotorpy.world import World
         import torch
     except ImportError as e:
-        record("peer: rotorpy batched", "n/a", "", "", "", f"not installed ({e.name}): pip "
-               "install '.[peer]' torch==2.13.0 (a CPU build)")
+        record("peer: rotorpy batched", "absent", "", "", "", f"not installed ({e.name}): "
+               "pip install torch==2.13.0 (a CPU build), then pip install -e '.[bench]'")
         return
     print(f"rotorpy simulate_batch: {n_flights} flights, {seconds} s at 1 ms")
     B, dev = n_flights, torch.device("cpu")
@@ -341,8 +467,8 @@ def bench_rotorpy():
     try:
         import rotorpy  # noqa: F401
     except ImportError:
-        record("peer: rotorpy Environment.run, 20 s at 1 ms", "n/a", "", "", "",
-               "rotorpy not installed (pip install '.[peer]')")
+        record("peer: rotorpy Environment.run, 20 s at 1 ms", "absent", "", "", "",
+               "rotorpy not installed (pip install -e '.[bench]')")
         return
     from rotorpy.controllers.quadrotor_control import SE3Control
     from rotorpy.environments import Environment
@@ -367,17 +493,35 @@ def main():
     ap.add_argument("--peer-seconds", type=float, default=0.05,
                     help="simulated seconds of RotorPy's batched run (default 0.05: its "
                          "trajectory arrays grow with every step)")
+    ap.add_argument("--peer-steps", type=int, default=200,
+                    help="steps of crazyflow's timed run (default 200)")
+    ap.add_argument("--scale", type=int, nargs="*", default=[10, 100, 1000, 10000],
+                    help="batch sizes of the scale table (default 10 100 1000 10000)")
     args = ap.parse_args()
-    print(f"quadcog bench on {platform.processor() or platform.machine()}, "
-          f"{os.cpu_count()} cores, CasADi {ca.__version__}, Python {platform.python_version()}")
+    m = machine()
+    load_before = loadavg()
+    print(f"quadcog bench on {m['cpu']} ({m['machine']}), {m['cores']} cores, CasADi "
+          f"{ca.__version__}, Python {platform.python_version()}; load {load_before}")
+    record("machine: CPU", m["cpu"], "", "", "", f"{m['machine']}, {m['cores']} cores")
+    record("machine: vector features", m["features"], "", "", "", "/proc/cpuinfo flags")
+    record("machine: compiler", m["compiler"], "", "", "", "")
+    record("machine: batch kernel build", m["isa"], "", "", "",
+           f"{m['lanes']} flights per block; flags {m['flags']}")
+    record("machine: load before", load_before, "1/5/15 min", "", "", "/proc/loadavg")
     bench_single_call()
     bench_controllers()
     ctl, step = bench_flight()
     bench_op_estimate(ctl, step)
     ns_step, rate = bench_batch(args.flights)
     bench_vector_limits(ns_step)
+    bench_isa(args.flights)
+    bench_float32(args.flights)
+    if args.scale:
+        bench_scale(tuple(args.scale))
     bench_rotorpy_batched(args.flights, args.peer_seconds, rate)
+    bench_crazyflow(args.flights, args.peer_steps, rate)
     bench_rotorpy()
+    record("machine: load after", loadavg(), "1/5/15 min", "", "", "/proc/loadavg")
     lines = ["| measurement | value | unit | ratio | goal | note |", "|---|---|---|---|---|---|"]
     lines += ["| " + " | ".join(map(str, r)) + " |" for r in rows]
     table = "\n".join(lines)
@@ -385,8 +529,8 @@ def main():
     out = args.out
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("# `make bench` results\n\nMedian of repeats, measured in one run on "
-                   f"{os.cpu_count()} cores ({platform.machine()}), "
-                   f"{time.strftime('%Y-%m-%d')}.\n\n" + table + "\n")
+                   f"{m['cpu']} ({m['cores']} cores, {m['machine']}, kernel built for "
+                   f"{m['isa']}), {time.strftime('%Y-%m-%d')}.\n\n" + table + "\n")
     print(f"\nwritten to {out}; `python bench/publish.py bench` copies it into README.md and "
           "bench/results.md")
 

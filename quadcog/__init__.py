@@ -38,7 +38,7 @@ from quadcog.model.conventions import (
 )
 from quadcog.model.functions import Linearization, Model, load
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
-from quadcog.scenarios.files import scenario_names, scenario_path, shipped_scenarios
+from quadcog.scenarios.lookup import scenario_names, scenario_path, shipped_scenarios
 from quadcog.sim.batch import BatchResult, simulate_batch
 from quadcog.sim.divergence import DivergenceCause, Limits
 from quadcog.sim.flight import simulate
@@ -48,7 +48,8 @@ from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
 from quadcog.sweeps import sweep
 from quadcog.trajectories.analytic import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
-from quadcog.vehicles.vehicle import CRAZYFLIE, HUMMINGBIRD, Vehicle, default_parameters, plus_layout, x_layout
+from quadcog.vehicles import CRAZYFLIE, HUMMINGBIRD, Vehicle
+from quadcog.vehicles.vehicle import default_parameters, plus_layout, x_layout
 
 __version__ = "0.1.0"
 

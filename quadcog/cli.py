@@ -6,15 +6,26 @@ for the list, a ``description`` for its own --help, its arguments) and sets ``fu
 ``add_<name>`` to SUBCOMMANDS; errors (QuadcogError, OSError) are turned into one line and
 exit status 2 by ``main``.
 """
+# annotations as text: argparse's subparsers type is generic only to a type checker
+from __future__ import annotations
+
 import argparse
+from collections.abc import Callable, Sequence
 from pathlib import Path
 import sys
 import warnings
 
 from quadcog.errors import QuadcogError
 
+__all__ = ["SUBCOMMANDS", "parser", "main",
+           "add_tour", "cmd_tour", "add_scenarios", "cmd_scenarios", "add_run", "cmd_run",
+           "add_animate", "cmd_animate", "add_paper", "cmd_paper", "add_analyze", "cmd_analyze",
+           "add_export", "cmd_export", "add_sweep", "cmd_sweep", "add_identify", "cmd_identify"]
 
-def _out_dir(path):
+_Subparsers = argparse._SubParsersAction  # the type of ``add_subparsers()``: for the hints
+
+
+def _out_dir(path: str | Path) -> Path:
     """Create the output folder ``path``; QuadcogError naming --out if it cannot be made."""
     try:
         Path(path).mkdir(parents=True, exist_ok=True)
@@ -23,7 +34,7 @@ def _out_dir(path):
     return Path(path)
 
 
-def _positive_int(text):
+def _positive_int(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
@@ -33,34 +44,70 @@ def _positive_int(text):
     return value
 
 
-def add_tour(sub):
+def add_tour(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog tour`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("tour", help="evaluate the generated functions at hover and print them",
                        description="Load the generated model and print every generated "
                                    "function evaluated at hover.")
     p.set_defaults(func=cmd_tour)
 
 
-def cmd_tour(args):
+def cmd_tour(args: argparse.Namespace) -> None:
+    """Run `quadcog tour`: print the generated functions evaluated at hover
+    (``quadcog.studies.tour``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     from quadcog.studies.tour import tour
     tour()
 
 
-def add_scenarios(sub):
+def add_scenarios(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog scenarios`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("scenarios", help="list the shipped scenarios with their descriptions",
                        description="List the scenarios that ship with quadcog; `quadcog run "
                                    "NAME` runs one.")
     p.set_defaults(func=cmd_scenarios)
 
 
-def cmd_scenarios(args):
-    from quadcog.scenarios.files import shipped_scenarios
+def cmd_scenarios(args: argparse.Namespace) -> None:
+    """Run `quadcog scenarios`: list the shipped scenarios with their descriptions.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+    from quadcog.scenarios.lookup import shipped_scenarios
     scenarios = shipped_scenarios()
     width = max(map(len, scenarios), default=0)
     for name, description in scenarios.items():
         print(f"{name:<{width}}  {description}")
 
 
-def add_run(sub):
+def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog run`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser(
         "run", help="fly one scenario (a shipped name or a TOML file) and write its results",
         description="Fly one scenario and write metrics.json, vehicle.json, the sampled\n"
@@ -92,7 +139,15 @@ def add_run(sub):
     p.set_defaults(func=cmd_run)
 
 
-def cmd_run(args):
+def cmd_run(args: argparse.Namespace) -> None:
+    """Run `quadcog run`: fly one scenario and write its results
+    (``quadcog.scenarios.scenario.run_file``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     import json
 
     from quadcog.scenarios.scenario import default_out, run_file
@@ -105,7 +160,14 @@ def cmd_run(args):
              plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate)
 
 
-def add_animate(sub):
+def add_animate(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog animate`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("animate", help="animate a run folder as a 3D GIF",
                        description="Read RUN_DIR (written by `quadcog run`) and write a GIF of "
                                    "the flight in 3D: body axes, rotors, the CoG offset to scale, "
@@ -121,14 +183,29 @@ def add_animate(sub):
     p.set_defaults(func=cmd_animate)
 
 
-def cmd_animate(args):
+def cmd_animate(args: argparse.Namespace) -> None:
+    """Run `quadcog animate`: write the GIF of a run folder
+    (``quadcog.viz.animation.animate_run``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     from quadcog.viz.animation import animate_run
     path = animate_run(args.run_dir, args.output, fps=args.fps, speed=args.speed,
                        max_frames=args.max_frames)
     print(f"wrote {path}")
 
 
-def add_paper(sub):
+def add_paper(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog paper`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("paper", help="reproduce the paper's figures and claims",
                        description="Run the paper's Figs. 3-8 as scenarios, draw each figure "
                                    "and write summary.md / summary.json with a verdict per "
@@ -138,12 +215,27 @@ def add_paper(sub):
     p.set_defaults(func=cmd_paper)
 
 
-def cmd_paper(args):
+def cmd_paper(args: argparse.Namespace) -> None:
+    """Run `quadcog paper`: reproduce the paper's figures and claims
+    (``quadcog.studies.paper.run_paper``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     from quadcog.studies.paper import run_paper
     run_paper(_out_dir(args.out))
 
 
-def add_analyze(sub):
+def add_analyze(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog analyze`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("analyze", help="PD margins, zero dynamics, adaptive design, failure map",
                        description="Cascade PD margins and singular values (python-control), "
                                    "zero dynamics for moving CoG, the adaptive law's Lyapunov "
@@ -158,12 +250,26 @@ def add_analyze(sub):
     p.set_defaults(func=cmd_analyze)
 
 
-def cmd_analyze(args):
+def cmd_analyze(args: argparse.Namespace) -> None:
+    """Run `quadcog analyze`: run the analysis (``quadcog.studies.analysis.analyze``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     from quadcog.studies.analysis import analyze
     analyze(_out_dir(args.out), grid=args.grid, duration=args.duration)
 
 
-def add_export(sub):
+def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog export`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("export", help="write a controller as a C99 module for a flight "
                                       "controller (README: On a flight controller)",
                        description="Write one controller's law as a self-contained C99 module "
@@ -175,13 +281,28 @@ def add_export(sub):
     p.set_defaults(func=cmd_export)
 
 
-def cmd_export(args):
+def cmd_export(args: argparse.Namespace) -> None:
+    """Run `quadcog export`: write a controller as a C99 module
+    (``quadcog.embedded.export_controller``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     from quadcog.embedded import export_controller
     for path in export_controller(args.controller, args.precision, _out_dir(args.out)):
         print(f"wrote {path}")
 
 
-def add_sweep(sub):
+def add_sweep(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog sweep`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("sweep", help="fly a sweep file (TOML) locally or on Dask",
                        description="Fly every flight of a sweep file (scenario keys as lists, "
                                    "ranges or samples) and write one table, a summary and "
@@ -195,12 +316,26 @@ def add_sweep(sub):
     p.set_defaults(func=cmd_sweep)
 
 
-def cmd_sweep(args):
+def cmd_sweep(args: argparse.Namespace) -> None:
+    """Run `quadcog sweep`: fly a sweep file (``quadcog.sweeps.runner.run_cli``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     from quadcog.sweeps.runner import run_cli
     run_cli(args.sweep, _out_dir(args.out), workers=args.workers, scheduler=args.scheduler)
 
 
-def add_identify(sub):
+def add_identify(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog identify`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
     p = sub.add_parser("identify", help="identify a real vehicle's CoG offset and mass from "
                                         "flight logs",
                        description="Estimate the CoG offset r_G and the mass from flight logs "
@@ -224,7 +359,15 @@ def add_identify(sub):
     p.set_defaults(func=cmd_identify)
 
 
-def cmd_identify(args):
+def cmd_identify(args: argparse.Namespace) -> None:
+    """Run `quadcog identify`: identify the CoG offset and mass from flight logs
+    (``quadcog.identification.identify``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
     from quadcog.files import strict_json
     from quadcog.identification import identify
     from quadcog.identification.figure import plot_identification
@@ -245,17 +388,24 @@ def cmd_identify(args):
         print(f"wrote {args.json}")
 
 
-SUBCOMMANDS = [add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
-               add_export, add_sweep, add_identify]
+SUBCOMMANDS: list[Callable[[_Subparsers[argparse.ArgumentParser]], None]] = [
+    add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
+    add_export, add_sweep, add_identify]
 
 
-def _version():
+def _version() -> str:
     from quadcog import __version__
     return f"quadcog {__version__}"
 
 
-def parser():
-    """The argument parser of the `quadcog` command."""
+def parser() -> argparse.ArgumentParser:
+    """The argument parser of the `quadcog` command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        With every subcommand of ``SUBCOMMANDS``.
+    """
     ap = argparse.ArgumentParser(prog="quadcog",
                                  description="Quadrotor with a moving centre of gravity: "
                                              "simulate, reproduce the paper, analyse.")
@@ -266,11 +416,25 @@ def parser():
     return ap
 
 
-def _show_warning(message, category, filename, lineno, file=None, line=None):
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: object = None, line: str | None = None) -> None:
     print(f"quadcog: warning: {message}", file=sys.stderr)
 
 
-def main(argv=None):
+def main(argv: Sequence[str] | None = None) -> int:
+    """The `quadcog` command.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments (default: the command line's).
+
+    Returns
+    -------
+    int
+        The exit status: 0; 2 for an error (QuadcogError, OSError: one line on stderr); 130
+        when interrupted (Ctrl-C).
+    """
     args = parser().parse_args(argv)
     try:
         with warnings.catch_warnings():

@@ -17,8 +17,11 @@ Keys:
 - ``simulate.max_steps``: runs of more steps (duration / dt) are refused before anything is
   allocated (``quadcog.validate.BYTES_PER_STEP`` per step; ``quadcog.validate.step_count``).
 """
+from typing import Any
 
-_FACTORY = {
+__all__ = ["defaults", "reset_defaults", "get"]
+
+_FACTORY: dict[str, Any] = {
     "simulate.dt": 1e-3,
     "limits.max_position_error": 10.0,
     "limits.max_tilt_deg": 85.0,
@@ -26,15 +29,34 @@ _FACTORY = {
     "simulate.max_steps": 10_000_000,
 }
 
-defaults = dict(_FACTORY)
+defaults: dict[str, Any] = dict(_FACTORY)
 
 
-def reset_defaults():
-    """Restore every entry of ``defaults`` to its value at import."""
+def reset_defaults() -> None:
+    """Restore every entry of ``defaults`` to its value at import.
+
+    Returns
+    -------
+    None
+        ``defaults`` is changed in place (the same dict object).
+    """
     defaults.clear()
     defaults.update(_FACTORY)
 
 
-def get(key, value=None):
-    """``value`` when it is given (not None), else ``defaults[key]``."""
+def get(key: str, value: Any = None) -> Any:
+    """``value`` when it is given (not None), else ``defaults[key]``.
+
+    Parameters
+    ----------
+    key : str
+        An entry of ``defaults``, e.g. ``"simulate.dt"``.
+    value : object, optional
+        The value the caller was given; None means "use the default".
+
+    Returns
+    -------
+    object
+        ``value``, or ``defaults[key]`` when ``value`` is None (read now, at the call).
+    """
     return defaults[key] if value is None else value

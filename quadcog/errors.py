@@ -1,4 +1,12 @@
 """Typed errors; every message names the bad value and what was expected."""
+from collections.abc import Iterable
+import os
+
+__all__ = ["QuadcogError", "GeneratedFilesError", "InputError", "ParameterError", "CompileError",
+           "QuadcogWarning", "EulerSingularityError", "TargetError", "ExportError",
+           "ScenarioError", "OverrideError", "ReferenceWarning", "KernelError", "SweepError",
+           "PhysicalConsistencyError", "MissingDependencyError", "LogError", "LogFormatError",
+           "LogCRCError", "LogSignalError", "IdentificationError"]
 
 
 class QuadcogError(Exception):
@@ -51,7 +59,7 @@ class ReferenceWarning(QuadcogWarning):
 
 class KernelError(QuadcogError):
     """The vector kernel cannot be built here (no compiler, no libmvec, an operation without
-    a C form in quadcog.codegen.sx_to_c)."""
+    a C form in quadcog.codegen.sx_to_c, an instruction set this CPU does not have)."""
 
 
 class SweepError(InputError):
@@ -78,20 +86,45 @@ class LogFormatError(LogError):
 
 
 class LogCRCError(LogFormatError):
-    """A Crazyflie uSD log whose CRC-32 does not match; ``path``, ``expected`` (stored in the
-    file) and ``found`` (computed) are attributes."""
+    """A Crazyflie uSD log whose CRC-32 does not match.
 
-    def __init__(self, path, expected, found):
+    ``path``, ``expected`` (stored in the file) and ``found`` (computed) are attributes.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The log file.
+    expected : int
+        The CRC-32 the file stores.
+    found : int
+        The CRC-32 its content gives.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], expected: int, found: int) -> None:
         self.path, self.expected, self.found = str(path), int(expected), int(found)
         super().__init__(f"{self.path}: CRC-32 mismatch: the file stores 0x{self.expected:08x}, "
                          f"its content gives 0x{self.found:08x} (damaged or truncated file)")
 
 
 class LogSignalError(LogError):
-    """A flight log lacks a signal that was asked for; ``signal``, ``source`` and ``available``
-    (the signals it has) are attributes."""
+    """A flight log lacks a signal that was asked for.
 
-    def __init__(self, message, signal=None, source=None, available=()):
+    ``signal``, ``source`` and ``available`` (the signals it has) are attributes.
+
+    Parameters
+    ----------
+    message : str
+        The message, naming the log and the signal.
+    signal : str, optional
+        The signal asked for.
+    source : str, optional
+        The log (its path or name).
+    available : iterable of str, optional
+        The signals the log has.
+    """
+
+    def __init__(self, message: str, signal: str | None = None, source: str | None = None,
+                 available: Iterable[str] = ()) -> None:
         self.signal, self.source, self.available = signal, source, tuple(available)
         super().__init__(message)
 

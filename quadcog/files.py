@@ -7,6 +7,7 @@ mix of the two. ``strict_json`` writes ``null`` where a number is not finite (JS
 or Infinity). ``write_csv`` formats the rows block by block, so memory does not grow with the
 length of the run beyond the arrays it is given.
 """
+from collections.abc import Iterator, Sequence
 import contextlib
 import csv
 import json
@@ -16,19 +17,37 @@ import os
 from pathlib import Path
 import signal
 import threading
+from types import TracebackType
+from typing import Any, Literal, TextIO
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import QuadcogError
+
+__all__ = ["CSV_BLOCK", "CSV_DECIMALS", "plain_value", "strict_json", "rounded", "write_csv",
+           "plot_text", "RunFiles", "atomic_write"]
 
 CSV_BLOCK = 1024            # rows formatted at a time
 CSV_DECIMALS = 10           # values are rounded to this many decimals ...
 _ROUND_BELOW = 1e290        # ... when that cannot overflow (|v| * 10^10 < float max)
 
 
-def plain_value(value):
+def plain_value(value: Any) -> Any:
     """``value`` as plain JSON data: numpy scalars and arrays to Python numbers and lists,
-    non-finite floats to None."""
+    non-finite floats to None.
+
+    Parameters
+    ----------
+    value : object
+        Nested dicts, lists, tuples, arrays, numbers, paths and strings.
+
+    Returns
+    -------
+    object
+        The same structure of dicts (str keys), lists, bools, ints, floats (finite) or None,
+        strings and whatever else was given as it was.
+    """
     if isinstance(value, dict):
         return {str(k): plain_value(v) for k, v in value.items()}
     if isinstance(value, (list, tuple, np.ndarray)):
@@ -45,23 +64,65 @@ def plain_value(value):
     return value
 
 
-def strict_json(value):
-    """JSON text of ``value`` (indented, newline-terminated): standard JSON only, ``null``
-    where a number is NaN or infinite."""
+def strict_json(value: Any) -> str:
+    """JSON text of ``value`` (indented, newline-terminated).
+
+    Parameters
+    ----------
+    value : object
+        Anything ``plain_value`` turns into JSON data.
+
+    Returns
+    -------
+    str
+        Standard JSON only, ``null`` where a number is NaN or infinite.
+    """
     return json.dumps(plain_value(value), indent=2, allow_nan=False) + "\n"
 
 
-def rounded(block):
-    """``block`` rounded to CSV_DECIMALS decimals where that is exact arithmetic (np.round
-    multiplies by 10^decimals, which overflows for |v| above ~1e298: those stay as they are)."""
+def rounded(block: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """``block`` rounded to CSV_DECIMALS decimals where that is exact arithmetic.
+
+    np.round multiplies by 10^decimals, which overflows for |v| above ~1e298: those stay as
+    they are.
+
+    Parameters
+    ----------
+    block : numpy.ndarray
+        Floats of any shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        A new array of the same shape.
+    """
     with np.errstate(over="ignore", invalid="ignore"):
         return np.where(np.abs(block) < _ROUND_BELOW, np.round(block, CSV_DECIMALS), block)
 
 
-def write_csv(fh, header, columns, n_rows):
-    """Write ``header`` and ``n_rows`` rows to the text file ``fh``; ``columns`` are arrays of
-    shape (n_rows,) or (n_rows, k), concatenated side by side. Rows are formatted CSV_BLOCK at a
-    time (Python's float repr after rounding), so the extra memory is one block."""
+def write_csv(fh: TextIO, header: Sequence[str], columns: Sequence[npt.NDArray[Any]],
+              n_rows: int) -> None:
+    """Write ``header`` and ``n_rows`` rows to the text file ``fh``.
+
+    Rows are formatted CSV_BLOCK at a time (Python's float repr after rounding), so the extra
+    memory is one block.
+
+    Parameters
+    ----------
+    fh : file object
+        A text file open for writing.
+    header : sequence of str
+        The column names (the first line).
+    columns : sequence of numpy.ndarray
+        Arrays of shape (n_rows,) or (n_rows, k), concatenated side by side.
+    n_rows : int
+        The number of rows to write.
+
+    Returns
+    -------
+    None
+        The rows are written to ``fh``.
+    """
     writer = csv.writer(fh, lineterminator="\n")
     writer.writerow(header)
     for start in range(0, n_rows, CSV_BLOCK):
@@ -72,7 +133,7 @@ def write_csv(fh, header, columns, n_rows):
 
 
 @contextlib.contextmanager
-def _no_interrupt():
+def _no_interrupt() -> Iterator[None]:
     """Hold off SIGINT (Ctrl-C) for the block; it is delivered right after."""
     main = threading.current_thread() is threading.main_thread()
     if main and hasattr(signal, "pthread_sigmask"):
@@ -85,9 +146,21 @@ def _no_interrupt():
         yield
 
 
-def plot_text(text):
-    """``text`` shown literally in a matplotlib title or label: ``$`` would start mathtext,
-    and a stray one makes savefig fail."""
+def plot_text(text: object) -> str:
+    """``text`` shown literally in a matplotlib title or label.
+
+    ``$`` would start mathtext, and a stray one makes savefig fail.
+
+    Parameters
+    ----------
+    text : object
+        A title or label (converted with ``str``).
+
+    Returns
+    -------
+    str
+        The text with every ``$`` escaped.
+    """
     return str(text).replace("$", r"\$")
 
 
@@ -98,13 +171,18 @@ class RunFiles:
     when the block ends without an exception, every file is renamed to its final name; on any
     exception (Ctrl-C included) the temporary files are removed and the folder keeps what it
     had.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output folder (created on entering the block).
     """
 
-    def __init__(self, out):
+    def __init__(self, out: str | os.PathLike[str]) -> None:
         self.out = Path(out)
-        self._pending = {}
+        self._pending: dict[str, Path] = {}
 
-    def __enter__(self):
+    def __enter__(self) -> "RunFiles":
         try:
             self.out.mkdir(parents=True, exist_ok=True)
         except OSError as e:
@@ -112,15 +190,27 @@ class RunFiles:
                 from None
         return self
 
-    def path(self, name):
-        """Where to write the file ``name``: a hidden temporary name in the same folder, with
-        the same suffix (so that writers that go by the suffix, like savefig, still work)."""
+    def path(self, name: str | os.PathLike[str]) -> Path:
+        """Where to write the file ``name``.
+
+        Parameters
+        ----------
+        name : str or os.PathLike
+            The file's final name in the folder (a directory part is dropped).
+
+        Returns
+        -------
+        pathlib.Path
+            A hidden temporary name in the same folder, with the same suffix (so that writers
+            that go by the suffix, like savefig, still work).
+        """
         name = Path(name).name
         tmp = self.out / f".{Path(name).stem}.partial-{os.getpid()}{Path(name).suffix}"
         self._pending[name] = tmp
         return tmp
 
-    def __exit__(self, kind, value, tb):
+    def __exit__(self, kind: type[BaseException] | None, value: BaseException | None,
+                 tb: TracebackType | None) -> Literal[False]:
         if kind is None:
             with _no_interrupt():
                 for name, tmp in self._pending.items():
@@ -132,8 +222,21 @@ class RunFiles:
         return False
 
 
-def atomic_write(path, text):
-    """Write ``text`` to ``path`` through a temporary file and a rename (all or nothing)."""
+def atomic_write(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename (all or nothing).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write.
+    text : str
+        Its new content.
+
+    Returns
+    -------
+    None
+        ``path`` holds ``text`` after the rename.
+    """
     tmp = Path(str(path) + ".tmp")
     tmp.write_text(text)
     os.replace(tmp, path)

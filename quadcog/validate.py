@@ -11,11 +11,14 @@ not 1 s), strings, complex values (whose imaginary part numpy would drop), ``Non
 integers beyond the float range are refused; ``numpy`` integer and float scalars
 (``np.int64(1)``, ``np.float32(0.5)``) are accepted.
 """
+from collections.abc import Iterable, Sequence
 import math
 import numbers
 import operator
+from typing import Any, NoReturn
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import InputError
 
@@ -25,8 +28,20 @@ __all__ = ["plain", "fail", "real", "positive", "nonnegative", "integer", "flag"
 _MAX_ITEMS_SHOWN = 8
 
 
-def plain(value):
-    """``value`` written for a message: plain numbers, short lists, a type name otherwise."""
+def plain(value: object) -> str:
+    """``value`` written for a message: plain numbers, short lists, a type name otherwise.
+
+    Parameters
+    ----------
+    value : object
+        Any value a caller passed.
+
+    Returns
+    -------
+    str
+        Plain numbers (``1e-09``, ``nan``, never a numpy repr), short lists and tuples of
+        them, a shortened string repr, or a description such as ``"a table with keys a, b"``.
+    """
     if isinstance(value, (bool, np.bool_)):
         return str(bool(value))
     if isinstance(value, numbers.Integral):
@@ -59,8 +74,26 @@ def plain(value):
     return f"a {type(value).__name__}"
 
 
-def fail(where, what, value, error=InputError):
-    """Raise ``error("{where}: expected {what}, got {plain(value)}")``."""
+def fail(where: str, what: str, value: object,
+         error: type[Exception] = InputError) -> NoReturn:
+    """Raise ``error("{where}: expected {what}, got {plain(value)}")``.
+
+    Parameters
+    ----------
+    where : str
+        The argument name or scenario key, the start of the message.
+    what : str
+        What was expected, e.g. ``"a positive number (s)"``.
+    value : object
+        What was given (written with ``plain``).
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Raises
+    ------
+    InputError
+        Always (or ``error``).
+    """
     raise error(f"{where}: expected {what}, got {plain(value)}")
 
 
@@ -86,8 +119,9 @@ def _describe(lo, hi, lo_open, hi_open, unit):
     return f"{text} ({unit})" if unit else text
 
 
-def real(value, where, lo=None, hi=None, lo_open=False, hi_open=False, unit=None,
-         error=InputError):
+def real(value: object, where: str, lo: float | None = None, hi: float | None = None,
+         lo_open: bool = False, hi_open: bool = False, unit: str | None = None,
+         error: type[Exception] = InputError) -> float:
     """A finite real number as ``float``, optionally within bounds.
 
     Parameters
@@ -97,7 +131,9 @@ def real(value, where, lo=None, hi=None, lo_open=False, hi_open=False, unit=None
     where : str
         The argument name or scenario key, used as the start of the message.
     lo, hi : float, optional
-        Bounds; ``lo_open`` / ``hi_open`` make them strict.
+        Bounds (None: unbounded on that side).
+    lo_open, hi_open : bool, optional
+        Make ``lo`` / ``hi`` strict bounds (default: inclusive).
     unit : str, optional
         Unit named in the message, e.g. ``"s"``.
     error : type, optional
@@ -106,12 +142,18 @@ def real(value, where, lo=None, hi=None, lo_open=False, hi_open=False, unit=None
     Returns
     -------
     float
+        ``value`` as a Python float.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) when ``value`` is not a finite real number within the bounds.
     """
     what = _describe(lo, hi, lo_open, hi_open, unit)
     if not _is_real_scalar(value):
         fail(where, what, value, error)
     try:
-        x = float(value)
+        x = float(value)                # type: ignore[arg-type]  # a real number (checked above)
     except OverflowError:               # an int beyond the float range
         fail(where, what, value, error)
     if not math.isfinite(x):
@@ -123,18 +165,87 @@ def real(value, where, lo=None, hi=None, lo_open=False, hi_open=False, unit=None
     return x
 
 
-def positive(value, where, unit=None, error=InputError):
-    """A finite number > 0 as ``float``."""
+def positive(value: object, where: str, unit: str | None = None,
+             error: type[Exception] = InputError) -> float:
+    """A finite number > 0 as ``float``.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    where : str
+        The argument name or scenario key, used as the start of the message.
+    unit : str, optional
+        Unit named in the message, e.g. ``"s"``.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    float
+        ``value`` as a Python float.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) when ``value`` is not a finite number > 0.
+    """
     return real(value, where, lo=0.0, lo_open=True, unit=unit, error=error)
 
 
-def nonnegative(value, where, unit=None, error=InputError):
-    """A finite number >= 0 as ``float``."""
+def nonnegative(value: object, where: str, unit: str | None = None,
+                error: type[Exception] = InputError) -> float:
+    """A finite number >= 0 as ``float``.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    where : str
+        The argument name or scenario key, used as the start of the message.
+    unit : str, optional
+        Unit named in the message, e.g. ``"s"``.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    float
+        ``value`` as a Python float.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) when ``value`` is not a finite number >= 0.
+    """
     return real(value, where, lo=0.0, unit=unit, error=error)
 
 
-def integer(value, where, lo=None, hi=None, error=InputError):
-    """An ``int`` (Python or numpy integer, not a bool, not a float) within [lo, hi]."""
+def integer(value: object, where: str, lo: int | None = None, hi: int | None = None,
+            error: type[Exception] = InputError) -> int:
+    """An ``int`` (Python or numpy integer, not a bool, not a float) within [lo, hi].
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    where : str
+        The argument name or scenario key, used as the start of the message.
+    lo, hi : int, optional
+        Inclusive bounds (None: unbounded on that side).
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    int
+        ``value`` as a Python int.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) when ``value`` is not an integer within the bounds.
+    """
     bounds = (f" >= {lo}" if hi is None else f" in [{lo}, {hi}]") if lo is not None else (
         f" <= {hi}" if hi is not None else "")
     what = f"an integer{bounds}"
@@ -146,16 +257,60 @@ def integer(value, where, lo=None, hi=None, error=InputError):
     return n
 
 
-def flag(value, where, error=InputError):
-    """``True`` or ``False`` (Python or numpy bool), as ``bool``; 0 and 1 are refused."""
+def flag(value: object, where: str, error: type[Exception] = InputError) -> bool:
+    """``True`` or ``False`` (Python or numpy bool), as ``bool``; 0 and 1 are refused.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    where : str
+        The argument name or scenario key, used as the start of the message.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    bool
+        ``value`` as a Python bool.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) when ``value`` is not a bool.
+    """
     if not isinstance(value, (bool, np.bool_)):
         fail(where, "true or false", value, error)
     return bool(value)
 
 
-def choice(value, where, options, error=InputError):
+def choice(value: object, where: str, options: Iterable[Any],
+           error: type[Exception] = InputError) -> Any:
     """``value`` if it equals one of ``options`` (and has the same type: 1 is not True).
-    Safe for unhashable values (a list or a table given where a name is expected)."""
+
+    Safe for unhashable values (a list or a table given where a name is expected).
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    where : str
+        The argument name or scenario key, used as the start of the message.
+    options : iterable
+        The accepted values, listed in the message.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    object
+        ``value`` itself.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) when ``value`` is none of ``options``.
+    """
     for option in options:
         if type(value) is type(option) and value == option:
             return value
@@ -192,7 +347,9 @@ def _shape_text(shape):
     return f"({dims[0]},)" if len(dims) == 1 else f"({', '.join(dims)})"
 
 
-def array(value, where, shape=None, finite=True, what=None, error=InputError):
+def array(value: npt.ArrayLike, where: str, shape: Sequence[int | None] | None = None,
+          finite: bool = True, what: str | None = None,
+          error: type[Exception] = InputError) -> npt.NDArray[np.float64]:
     """A float64 array (a new copy) of real numbers.
 
     Parameters
@@ -209,10 +366,18 @@ def array(value, where, shape=None, finite=True, what=None, error=InputError):
         Refuse NaN and infinities (default).
     what : str, optional
         What to call the expected value in messages (default e.g. "an array of shape (3,)").
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
 
     Returns
     -------
-    numpy.ndarray
+    numpy.ndarray of float64
+        A new array of ``shape``.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) naming the bad entry, the shape or the type.
     """
     what = what or ("an array of real numbers" if shape is None
                     else f"an array of shape {_shape_text(shape)}")
@@ -241,8 +406,33 @@ def array(value, where, shape=None, finite=True, what=None, error=InputError):
     return a
 
 
-def vector(value, where, n, finite=True, error=InputError):
-    """A float64 vector of shape (n,); a column (n, 1) is accepted and flattened."""
+def vector(value: npt.ArrayLike, where: str, n: int, finite: bool = True,
+           error: type[Exception] = InputError) -> npt.NDArray[np.float64]:
+    """A float64 vector of shape (n,); a column (n, 1) is accepted and flattened.
+
+    Parameters
+    ----------
+    value : (n,) or (n, 1) array_like
+        Real numbers (not bools, not complex, not strings).
+    where : str
+        Name for messages; a bad entry is named ``where[i]``.
+    n : int
+        The length expected.
+    finite : bool, optional
+        Refuse NaN and infinities (default).
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    (n,) numpy.ndarray of float64
+        A new array.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) naming the bad entry, the shape or the type.
+    """
     a = array(value, where, None, finite=False, what=f"an array of shape ({n},)", error=error)
     if a.shape not in ((n,), (n, 1)):
         raise error(f"{where}: expected an array of shape ({n},), got shape {a.shape}"
@@ -255,9 +445,32 @@ def vector(value, where, n, finite=True, error=InputError):
     return a
 
 
-def poles(value, where, n, error=InputError):
-    """``n`` closed-loop poles (1/s) as a complex array: real numbers or complex ones in
-    conjugate pairs, all finite with negative real part (strings, bools, NaN refused)."""
+def poles(value: object, where: str, n: int,
+          error: type[Exception] = InputError) -> npt.NDArray[np.complex128]:
+    """``n`` closed-loop poles (1/s) as a complex array.
+
+    Parameters
+    ----------
+    value : (n,) sequence or numpy.ndarray
+        Real numbers or complex ones in conjugate pairs, all finite with negative real part
+        (strings, bools, NaN refused), in 1/s.
+    where : str
+        Name for messages; a bad entry is named ``where[k]``.
+    n : int
+        The number of poles expected.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    (n,) numpy.ndarray of complex128
+        The poles (1/s).
+
+    Raises
+    ------
+    InputError
+        (or ``error``) naming the bad pole, the count, or a missing conjugate.
+    """
     what = f"{n} finite poles with negative real part (complex ones in conjugate pairs)"
     items = value.tolist() if isinstance(value, np.ndarray) else value
     if not isinstance(items, (list, tuple)) or len(items) != n:
@@ -285,11 +498,35 @@ def poles(value, where, n, error=InputError):
 BYTES_PER_STEP = 576
 
 
-def step_count(duration, dt, max_steps, where=None, error=InputError):
+def step_count(duration: float, dt: float, max_steps: int, where: str | None = None,
+               error: type[Exception] = InputError) -> int:
     """The number of steps ``round(duration / dt)``, refused when it is not finite or above
-    ``max_steps``; the message gives the count and the memory it would take. ``duration``
-    and ``dt`` (s) must already be positive floats; ``where`` (e.g. the scenario file) is put
-    in front of the message."""
+    ``max_steps``; the message gives the count and the memory it would take.
+
+    Parameters
+    ----------
+    duration : float
+        Length of the run (s), already checked to be a positive float.
+    dt : float
+        Step (s), already checked to be a positive float.
+    max_steps : int
+        The most steps allowed (``quadcog.config.defaults["simulate.max_steps"]``).
+    where : str, optional
+        Put in front of the message (e.g. the scenario file).
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    int
+        ``round(duration / dt)``.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) when the count is not finite or above ``max_steps``, giving the memory
+        it would take (``BYTES_PER_STEP`` per step).
+    """
     n = duration / dt
     if not math.isfinite(n) or n > max_steps:
         count = (f"{n:.3g} steps, about {_bytes(n * BYTES_PER_STEP)} of memory"

@@ -14,7 +14,7 @@ import numpy as np
 
 import quadcog
 from quadcog.model.conventions import B_U, FUNCTIONS, IDX, OUTPUT_ROWS, hover_trim, rotation_matrix
-from quadcog.model.inertial import box, inertial_arguments
+from quadcog.model.inertial_parameters import box, inertial_arguments
 from quadcog.model.sampling import random_points
 
 SEED = 20110828

@@ -8,7 +8,7 @@ from derive import symbols as sym
 from derive.contract import FUNCTIONS as SPECS
 from derive.contract import VECTORS
 from quadcog.model.conventions import FUNCTIONS
-from quadcog.model.inertial import box
+from quadcog.model.inertial_parameters import box
 
 RTOL = 1e-12
 

@@ -10,7 +10,7 @@ import quadcog
 from quadcog import CRAZYFLIE, HUMMINGBIRD, Sensed, Sensing, make_controller, simulate
 from quadcog.errors import IdentificationError, InputError
 from quadcog.identification import JSON_KEYS, identify
-from quadcog.identification.flight import hover_window, rotor_thrusts
+from quadcog.identification.segments import hover_window, rotor_thrusts
 from quadcog.identification.simulated import simulated_log
 from quadcog.logs import LOG_FORMATS, FlightLog, read_log, write_log
 from quadcog.vehicles.rotor_model import (
@@ -257,7 +257,7 @@ def test_speed_proportional_moment_is_not_taken_for_the_cog():
     """Blocks flown forward at +0.47 m/s and back at -0.47 m/s (as the CrazyPAD flights) with
     a rotor moment proportional to the speed, 2 mm of apparent x_G per m/s, and unequal time
     each way: the mean of the blocks is biased, the zero-speed intercept is not."""
-    from quadcog.identification.flight import speed_corrected
+    from quadcog.identification.segments import speed_corrected
     r = np.array([-0.0012, 0.0005, 0.0])
     v = np.r_[np.full(6, 0.47), np.full(3, -0.47)]
     noise = 1e-5 * np.sin(np.arange(9.0))

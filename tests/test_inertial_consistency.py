@@ -1,4 +1,4 @@
-"""Physical consistency of the ten inertial parameters (quadcog.model.inertial), against oracles
+"""Physical consistency of the ten inertial parameters (quadcog.model.inertial_parameters), against oracles
 written here: the second moments of point-mass clouds summed particle by particle, the
 triangle inequality of the principal inertias about the CoG, the parallel-axis theorem and a
 box integrated numerically as a grid of point masses."""
@@ -7,7 +7,7 @@ import pytest
 
 import quadcog
 from quadcog.errors import InputError, ParameterError, PhysicalConsistencyError
-from quadcog.model.inertial import (
+from quadcog.model.inertial_parameters import (
     PI_NAMES,
     box,
     check_physically_consistent,

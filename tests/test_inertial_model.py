@@ -15,7 +15,14 @@ import pytest
 import quadcog
 from quadcog.errors import PhysicalConsistencyError
 from quadcog.model.conventions import B_U, IDX, R_G
-from quadcog.model.inertial import N_PI, box, combine, inertial_arguments, is_physically_consistent, point_mass
+from quadcog.model.inertial_parameters import (
+    N_PI,
+    box,
+    combine,
+    inertial_arguments,
+    is_physically_consistent,
+    point_mass,
+)
 from quadcog.model.parameters import with_cog
 
 RTOL = 1e-12

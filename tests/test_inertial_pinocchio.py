@@ -20,7 +20,7 @@ import pinocchio as pin
 import pytest
 
 from quadcog.model.conventions import B_U, rotation_matrix
-from quadcog.model.inertial import box, combine, point_mass
+from quadcog.model.inertial_parameters import box, combine, point_mass
 from quadcog.model.sampling import random_state
 
 RTOL = 1e-12

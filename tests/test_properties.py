@@ -14,7 +14,7 @@ import pytest
 
 import quadcog
 from quadcog.errors import QuadcogError
-from quadcog.scenarios.files import scenario_names, scenario_path
+from quadcog.scenarios.lookup import scenario_names, scenario_path
 from quadcog.scenarios.scenario import parse
 
 # hypothesis caches under .hypothesis/ even without a database: keep the checkout clean

@@ -39,7 +39,9 @@ def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
     run = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(run)
     for name in ("bench_single_call", "bench_controllers", "bench_op_estimate",
-                 "bench_vector_limits", "bench_rotorpy_batched", "bench_rotorpy"):
+                 "bench_vector_limits", "bench_rotorpy_batched", "bench_rotorpy",
+                 "bench_scale", "bench_crazyflow", "bench_isa",
+                 "bench_float32"):
         monkeypatch.setattr(run, name, lambda *args: None)
     monkeypatch.setattr(run, "bench_flight", lambda: (None, None))
     monkeypatch.setattr(run, "bench_batch", lambda n: (1.0, 1.0))

@@ -141,7 +141,7 @@ def test_run_time_error_names_the_file(tmp_path):
 
 
 def test_shipped_scenarios_by_name(tmp_path, monkeypatch):
-    from quadcog.scenarios.files import scenario_path, shipped_scenarios
+    from quadcog.scenarios.lookup import scenario_path, shipped_scenarios
     listed = shipped_scenarios()
     # every figure of the paper ships, with its description read from the file
     assert {c.scenario for c in CLAIMS} <= set(listed)

@@ -4,3 +4,5 @@ to C (``sx_to_c``) and the vectorized batch kernel (``vector_kernel``).
 
 Imports only the floor (``quadcog.errors``, ``quadcog.config``, ``quadcog.paths``).
 """
+
+__all__: list[str] = []         # the modules are imported by name: quadcog.codegen.compiler, ...

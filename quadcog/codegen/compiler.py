@@ -13,6 +13,7 @@ is removed at exit. Build folders are temporary folders removed on any error, Ct
 included; those of builds killed outright are removed by the next build in the same cache.
 """
 import atexit
+from collections.abc import Sequence
 import contextlib
 import fcntl
 import functools
@@ -29,6 +30,9 @@ import warnings
 from quadcog.errors import CompileError, QuadcogWarning
 from quadcog.paths import cache_dir
 
+__all__ = ["FLAGS", "DIGEST_SUFFIX", "find_compiler", "library_path", "file_digest",
+           "is_verified", "remove_stale_build_folders", "compile_library"]
+
 # -fno-math-errno lets sqrt inline and changes no value (errno is never read here).
 FLAGS = ("-O3", "-fno-math-errno", "-shared", "-fPIC")
 DIGEST_SUFFIX = ".sha256"
@@ -37,8 +41,14 @@ _STALE_AFTER = 24 * 3600.0     # s; build folders of another host are removed af
 _UNNAMED_STALE_AFTER = 3600.0  # s; ... and those without an owner (earlier versions)
 
 
-def find_compiler():
-    """Path of $CC (default ``cc``), or None when there is no C compiler."""
+def find_compiler() -> str | None:
+    """The C compiler.
+
+    Returns
+    -------
+    str or None
+        Path of $CC (default ``cc``), or None when there is no C compiler.
+    """
     return shutil.which(os.environ.get("CC", "cc"))
 
 
@@ -61,15 +71,46 @@ def _exclusive(lock_path):
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
-def library_path(source_bytes, stem, cc, flags=FLAGS, folder=None):
-    """Where the library built from ``source_bytes`` lives in the cache."""
+def library_path(source_bytes: bytes, stem: str, cc: str, flags: Sequence[str] = FLAGS,
+                 folder: str | os.PathLike[str] | None = None) -> Path:
+    """Where the library built from ``source_bytes`` lives in the cache.
+
+    Parameters
+    ----------
+    source_bytes : bytes
+        The C source.
+    stem : str
+        Name of the library.
+    cc : str
+        The compiler (its ``--version`` is part of the key).
+    flags : sequence of str, optional
+        Compiler flags (part of the key).
+    folder : str or os.PathLike, optional
+        The cache folder (default ``quadcog.paths.cache_dir()``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``<folder>/<stem>-<key>.so``, the key a SHA-256 of source, compiler and flags.
+    """
     key = hashlib.sha256(source_bytes + b"\0" + _compiler_identity(cc).encode()
                          + b"\0" + " ".join(flags).encode()).hexdigest()[:20]
     return Path(folder or cache_dir()) / f"{stem}-{key}.so"
 
 
-def file_digest(path):
-    """SHA-256 (hex) of a file's contents."""
+def file_digest(path: str | os.PathLike[str]) -> str:
+    """SHA-256 of a file's contents.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    str
+        64 hex digits.
+    """
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -81,8 +122,19 @@ def _digest_path(lib):
     return lib.with_name(lib.name + DIGEST_SUFFIX)
 
 
-def is_verified(lib):
-    """True when ``lib`` is a regular file whose SHA-256 is the one recorded after its build."""
+def is_verified(lib: Path) -> bool:
+    """Whether ``lib`` is a library the cache built and nobody changed since.
+
+    Parameters
+    ----------
+    lib : pathlib.Path
+        A library path in the cache.
+
+    Returns
+    -------
+    bool
+        True when ``lib`` is a regular file whose SHA-256 is the one recorded after its build.
+    """
     try:
         recorded = _digest_path(lib).read_text().strip()
         return lib.is_file() and not lib.is_symlink() and file_digest(lib) == recorded
@@ -91,8 +143,8 @@ def is_verified(lib):
 
 
 # -- the fallback when the cache folder cannot be used ------------------------------------
-_private = None
-_warned = set()
+_private: Path | None = None
+_warned: set[Path] = set()
 
 
 def _private_cache():
@@ -135,11 +187,24 @@ def _alive(pid):
     return True
 
 
-def remove_stale_build_folders(folder):
-    """Remove build folders left by builds that were killed: their process is gone (same
-    host), or they are older than a day (another host) or an hour (no owner in the name, from
-    earlier versions). Returns the paths removed."""
-    removed, host = [], socket.gethostname()
+def remove_stale_build_folders(folder: str | os.PathLike[str]) -> list[Path]:
+    """Remove build folders left by builds that were killed.
+
+    Those are the ones whose process is gone (same host), or older than a day (another host)
+    or an hour (no owner in the name, from earlier versions).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The cache folder.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The paths removed.
+    """
+    removed: list[Path] = []
+    host = socket.gethostname()
     try:        # ours, and the unnamed ones of earlier versions (.<stem>-build-*)
         entries = [*Path(folder).glob(_BUILD_PREFIX + "*"), *Path(folder).glob(".*-build-*")]
     except OSError:
@@ -210,7 +275,9 @@ def _build_into(source_bytes, stem, cc, flags, out):
     return out
 
 
-def compile_library(source_bytes, stem, cc=None, flags=FLAGS, folder=None):
+def compile_library(source_bytes: bytes, stem: str, cc: str | None = None,
+                    flags: Sequence[str] = FLAGS,
+                    folder: str | os.PathLike[str] | None = None) -> Path:
     """Build (or find, verified, in the cache) the shared library of one C translation unit.
 
     Parameters
@@ -221,9 +288,9 @@ def compile_library(source_bytes, stem, cc=None, flags=FLAGS, folder=None):
         Name of the library (``<stem>-<key>.so``).
     cc : str, optional
         The compiler (default ``find_compiler()``).
-    flags : tuple of str, optional
+    flags : sequence of str, optional
         Compiler flags (part of the cache key).
-    folder : path, optional
+    folder : str or os.PathLike, optional
         The cache folder (default ``quadcog.paths.cache_dir()``).
 
     Returns

@@ -1,23 +1,28 @@
 """C from a CasADi SX Function: the one table of operations and the walk over its instructions.
 
 Both C emitters of quadcog use this module: ``quadcog.embedded.emit`` (straight-line C99 for a
-flight controller, in double or float32) and ``quadcog.codegen.vector_kernel`` (the vectorized batch kernel,
-flights in the vector lanes). Every instruction of the SX algorithm becomes one C statement on a
-local scalar ``w<slot>`` (CasADi's work-vector slots, already reused). What differs between
-the two is a ``Target``: how constants are written (and so the literals 1 and 0 of the logic),
-the suffix of the math functions (``sinf`` for float32), and whether fmin/fmax are calls or
-selects; how inputs are read and outputs written is given to ``walk`` by the caller.
+flight controller, in double or float32) and ``quadcog.codegen.vector_kernel`` (the vectorized
+batch kernel, flights in the vector lanes). Every instruction of the SX algorithm becomes one
+C statement on a local scalar ``w<slot>`` (CasADi's work-vector slots, already reused). What
+differs between the two is a ``Target``: how constants are written (and so the literals 1 and 0
+of the logic), the suffix of the math functions (``sinf`` for float32), and whether fmin/fmax
+are calls or selects; how inputs are read and outputs written is given to ``walk`` by the
+caller.
 
 Logic (comparisons, not, and, or, if_else_zero, sign) is written as selects on the floating
 type, never as _Bool or int temporaries: a select vectorizes, and it is valid C99 on a
 flight controller.
 """
+from collections.abc import Callable
 import re
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import casadi as ca
+import numpy as np
 
 from quadcog.errors import QuadcogError
+
+__all__ = ["OPERATIONS", "SELECTS", "Target", "Walk", "op_name", "template", "walk"]
 
 # operation -> C expression of the operands {0}, {1}; {one} and {zero} are the target's literals
 # of 1 and 0; {f} is the suffix of the math functions ("f" in float32: sinf, fminf).
@@ -60,49 +65,116 @@ _CALL = re.compile(r"^(\w+)\{f\}\((.*)\)$")
 
 
 class Target(NamedTuple):
-    """What the C of one target differs in: ``literal(value) -> str`` (a constant as C text;
-    it may raise for a constant the target cannot hold), ``suffix`` of the math functions,
-    ``selects`` (fmin/fmax as SELECTS instead of calls) and ``error``, the QuadcogError
-    subclass raised for an operation with no C form."""
+    """What the C of one target differs in.
+
+    Parameters
+    ----------
+    literal : callable
+        ``literal(value) -> str``: a constant as C text; it may raise for a constant the
+        target cannot hold.
+    suffix : str, optional
+        Suffix of the math functions (``"f"`` in float32: ``sinf``).
+    selects : bool, optional
+        Write fmin/fmax as SELECTS instead of calls.
+    error : type, optional
+        The QuadcogError subclass raised for an operation with no C form.
+    """
     literal: Callable[[float], str]
     suffix: str = ""
     selects: bool = False
-    error: type = QuadcogError
+    error: type[QuadcogError] = QuadcogError
 
 
 class Walk(NamedTuple):
-    """The C of an SX Function: ``statements`` (one per instruction, in order, unindented),
-    ``slots`` (the work slots written: declare ``w<slot>`` for each), ``inputs`` (the indices of
-    the inputs read) and ``calls`` ({C function without suffix: number of arguments})."""
-    statements: list
-    slots: set
-    inputs: set
-    calls: dict
+    """The C of an SX Function.
+
+    Parameters
+    ----------
+    statements : list of str
+        One per instruction, in order, unindented.
+    slots : set of int
+        The work slots written: declare ``w<slot>`` for each.
+    inputs : set of int
+        The indices of the inputs read.
+    calls : dict of str to int
+        {C function without suffix: number of arguments}.
+    """
+    statements: list[str]
+    slots: set[int]
+    inputs: set[int]
+    calls: dict[str, int]
 
 
-def op_name(op):
-    """CasADi's name of an operation code ('OP_SIN'), or the number if it has none."""
+def op_name(op: int) -> str:
+    """CasADi's name of an operation code.
+
+    Parameters
+    ----------
+    op : int
+        A CasADi operation code (``casadi.OP_SIN``, ...).
+
+    Returns
+    -------
+    str
+        Its name ('OP_SIN'), or the number if it has none.
+    """
     return _NAMES.get(op, str(op))
 
 
 _NAMES = {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")}
 
 
-def template(op, target):
-    """The C template of ``op`` for ``target`` (see OPERATIONS), or None if there is none."""
+def template(op: int, target: Target) -> str | None:
+    """The C template of ``op`` for ``target`` (see OPERATIONS).
+
+    Parameters
+    ----------
+    op : int
+        A CasADi operation code.
+    target : Target
+        The target (its ``selects`` chooses SELECTS for fmin/fmax).
+
+    Returns
+    -------
+    str or None
+        The template with operands ``{0}``, ``{1}`` and ``{one}``, ``{zero}``, ``{f}``, or
+        None if the operation has no C form.
+    """
     if target.selects and op in SELECTS:
         return SELECTS[op]
     return OPERATIONS.get(op)
 
 
-def walk(fn, target, read, write):
-    """Walk the instructions of the SX Function ``fn`` into C statements (a ``Walk``).
+def walk(fn: ca.Function, target: Target, read: Callable[[int, int], str],
+         write: Callable[[int, int], str]) -> Walk:
+    """Walk the instructions of the SX Function ``fn`` into C statements.
 
-    ``read(i, nz)`` is the C expression of nonzero ``nz`` of input ``i``; ``write(i, nz)`` is
-    the C lvalue of nonzero ``nz`` of output ``i``. An operation without a C form raises
-    ``target.error`` naming it."""
+    Parameters
+    ----------
+    fn : casadi.Function
+        An SX Function.
+    target : Target
+        How constants and math functions are written.
+    read : callable
+        ``read(i, nz)`` is the C expression of nonzero ``nz`` of input ``i``.
+    write : callable
+        ``write(i, nz)`` is the C lvalue of nonzero ``nz`` of output ``i``.
+
+    Returns
+    -------
+    Walk
+        The statements, the work slots written, the inputs read and the math calls.
+
+    Raises
+    ------
+    QuadcogError
+        ``target.error``, naming an operation without a C form.
+    """
     one, zero = target.literal(1.0), target.literal(0.0)
-    statements, slots, inputs, calls = [], set(), set(), {}
+    statements: list[str] = []
+    slots: set[int] = set()
+    inputs: set[int] = set()
+    calls: dict[str, int] = {}
     for k in range(fn.n_instructions()):
         op = fn.instruction_id(k)
         ins, outs = fn.instruction_input(k), fn.instruction_output(k)
@@ -120,8 +192,9 @@ def walk(fn, target, read, write):
             form = template(op, target)
             if form is None:
                 raise target.error(f"{fn.name()}: CasADi operation {op_name(op)} (instruction "
-                                   f"{k}) has no C form in quadcog.codegen.sx_to_c; rewrite the function "
-                                   "without it, or add it to quadcog.codegen.sx_to_c.OPERATIONS")
+                                   f"{k}) has no C form in quadcog.codegen.sx_to_c; rewrite the "
+                                   "function without it, or add it to "
+                                   "quadcog.codegen.sx_to_c.OPERATIONS")
             call = _CALL.match(form)
             if call:
                 calls[call.group(1)] = call.group(2).count(",") + 1
@@ -129,3 +202,24 @@ def walk(fn, target, read, write):
         statements.append(f"w{outs[0]} = {rhs};")
         slots.add(outs[0])
     return Walk(statements, slots, inputs, calls)
+
+
+def float32_literal(value: float) -> str:
+    """The C float literal of the float32 nearest to ``value``: the shortest text that
+    round-trips, with an ``f`` suffix (the same text on every machine).
+
+    Parameters
+    ----------
+    value : float
+        A finite number.
+
+    Returns
+    -------
+    str
+        E.g. ``"0.1f"``, ``"1.5e-7f"``.
+    """
+    text = np.format_float_scientific(np.float32(value), unique=True, trim="0")
+    mantissa, exponent = text.split("e")
+    exp = int(exponent)
+    mantissa = mantissa if "." in mantissa else mantissa + ".0"
+    return f"{mantissa}e{exp}f" if exp else f"{mantissa}f"

@@ -4,31 +4,75 @@ A batch step is a CasADi SX Function ``step(Z, Q, row) -> Z_next``: Z the state 
 (with its metric accumulators), Q its constant parameters, row the step's entry of the step
 table (shared by all flights). This module emits C from the step's SX instructions (the
 operations and the walk are quadcog.codegen.sx_to_c's, shared with the embedded export) with the flight
-index as the innermost loop of every operation: flights go in blocks of ``LANES``, the
+index as the innermost loop of every operation: flights go in blocks of ``lanes``, the
 whole step is one ``#pragma omp simd`` loop over a block, and gcc turns every operation into a
 vector instruction, with glibc's libmvec for sin, cos, tan and atan2. A block's state stays in
 the L1 cache for all its steps, so memory traffic is a few hundred bytes per flight.
 
-The C is compiled through the build cache (its key holds the flags), loaded with ctypes (which
-releases the GIL), and called from ``threads`` Python threads, each on its own share of the
-blocks: the thread count asked for is the thread count used. A flight's bits do not depend on
-the block it is in (every lane runs the same vector code; a partial block is padded), so
-results are the same for any batch size, thread count or chunking.
+Instruction set. The kernel is compiled on the user's machine for the widest vector unit its
+CPU reports (``detect_isa``: AVX-512, AVX2 + FMA, SSE2 on x86-64; the compiler's defaults
+elsewhere), with the flags of ``ISA_FLAGS`` and a block of ``VECTORS_PER_BLOCK`` vectors
+(``lanes_for``: 16 doubles with AVX2, 32 with AVX-512, twice that in float32). The ISA is part
+of the library's name and its flags are part of the compile-cache key. Where the compiler
+refuses the ISA's flags, the kernel is built once more with the portable flags (one
+QuadcogWarning). Contraction of ``a*b + c`` into an FMA is off (``-ffp-contract=off``): the
+kernel then rounds every operation as CasADi and the compiled single-flight path do, which the
+sensing noise needs (its hash ``fract(sin(a t + b) * 43758.5453)`` turns the one rounding an
+FMA saves into a difference of 1e-7 in the noise). What still differs between instruction sets
+and from the single-flight path is libmvec's sin/cos/tan/atan2 (within 4 ulp of glibc's, and
+its SSE, AVX2 and AVX-512 variants are different code).
+
+Precision. ``precision="float32"`` emits the same step in float (sinf, float literals), with
+twice the lanes per vector; the state, parameters and step table are rounded to float32 on
+the way in and widened on the way out (docs/performance.md has its accuracy).
+
+The C is compiled through the build cache, loaded with ctypes (which releases the GIL), and
+called from ``threads`` Python threads, each on its own share of the blocks: the thread count
+asked for is the thread count used. A flight's bits do not depend on the block it is in (every
+lane runs the same vector code; a partial block is padded), so results are the same for any
+batch size, thread count or chunking.
 """
+from collections.abc import Callable, Hashable
 import ctypes
+import functools
 import hashlib
 import math
+import os
 import platform
 import threading
 import warnings
 
+import casadi as ca
 import numpy as np
 
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
-from quadcog.errors import CompileError, KernelError, QuadcogWarning
+from quadcog.errors import CompileError, InputError, KernelError, QuadcogWarning
 
-LANES = 16         # flights per block: four AVX2 vectors of doubles per operation
+__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
+           "ISA_ENV", "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c",
+           "kernel_for", "kernel_isa", "lanes_for", "vector_flags"]
+
+PRECISIONS = ("float64", "float32")
+# instruction sets, widest first: "portable" is the compiler's default target (SSE2 on x86-64)
+ISAS = ("avx512", "avx2", "sse2", "portable")
+# the /proc/cpuinfo flags an ISA needs. -mfma: with -ffp-contract=off no FMA appears in the step
+# itself, only inside libmvec's functions and in `make bench`'s roofline loop
+_CPU_NEEDS = {"avx512": ("avx512f", "avx512dq", "avx512vl", "avx512bw", "fma"),
+              "avx2": ("avx2", "fma"), "sse2": ("sse2",), "portable": ()}
+ISA_FLAGS = {"avx512": ("-mavx512f", "-mavx512dq", "-mavx512vl", "-mavx512bw", "-mfma",
+                        # gcc 12 prefers 256-bit vectors even with AVX-512 unless told
+                        "-mprefer-vector-width=512"),
+             "avx2": ("-mavx2", "-mfma"), "sse2": ("-msse2",), "portable": ()}
+# pins the ISA (e.g. "portable": the workers of one sweep on different CPUs then agree in
+# every bit); unset, the CPU's widest is used
+ISA_ENV = "QUADCOG_KERNEL_ISA"
+VECTOR_BITS = {"avx512": 512, "avx2": 256, "sse2": 128, "portable": 128}
+VECTORS_PER_BLOCK = 4   # independent vectors per operation: enough to hide a few cycles' latency
+_BYTES = {"float64": 8, "float32": 4}
+C_TYPE = {"float64": "double", "float32": "float"}
+NUMPY_TYPE = {"float64": np.float64, "float32": np.float32}
+LANES = VECTORS_PER_BLOCK * VECTOR_BITS["avx2"] // 64   # 16: the AVX2 block of doubles
 
 # functions libmvec provides in vector form (glibc >= 2.35 for tan, atan2, erf, hypot, ...)
 _VECTOR_MATH = ("sin", "cos", "tan", "exp", "log", "pow", "atan2", "atan", "asin", "acos",
@@ -45,66 +89,202 @@ def _literal(v):
     return repr(v)
 
 
-# exact double literals, fmin/fmax as selects (a call would stop the vectorizer)
-_TARGET = sxc.Target(literal=_literal, suffix="", selects=True, error=KernelError)
+def _literal32(v):
+    """A C float literal: the float32 nearest to ``v`` (shortest round-trip text, the embedded
+    export's), inf beyond the float range, NaN spelled for C."""
+    v = float(v)
+    if math.isnan(v):
+        return "__builtin_nanf(\"\")"
+    if abs(v) >= _FLOAT32_MAX:    # beyond the float range (or inf): rounds to inf
+        return "__builtin_inff()" if v > 0 else "(-__builtin_inff())"
+    return sxc.float32_literal(v)
 
 
-def vector_flags():
-    """Compiler flags for this CPU: AVX2 + FMA where /proc/cpuinfo lists them (x86-64), else
-    the baseline. No -ffast-math: IEEE arithmetic, only errno and traps are given up (which
-    lets sqrt and the libmvec calls vectorize)."""
-    flags = ["-O3", "-fno-math-errno", "-fno-trapping-math", "-fopenmp-simd", "-fno-builtin-sin",
-             "-fno-builtin-cos", "-shared", "-fPIC"]
-    if platform.machine() in ("x86_64", "AMD64"):
-        try:
-            with open("/proc/cpuinfo") as fh:
-                cpu = next((line for line in fh if line.startswith("flags")), "").split()
-        except OSError:
-            cpu = []
-        if "avx2" in cpu and "fma" in cpu:
-            flags[1:1] = ["-mavx2", "-mfma"]
-    return tuple(flags)
+# the largest double that rounds to a finite float (half an ulp above FLT_MAX rounds to inf)
+_FLOAT32_MAX = float(np.finfo(np.float32).max) * (1 + 2.0 ** -25)
+# exact literals, fmin/fmax as selects (a call would stop the vectorizer)
+_TARGETS = {"float64": sxc.Target(literal=_literal, suffix="", selects=True, error=KernelError),
+            "float32": sxc.Target(literal=_literal32, suffix="f", selects=True,
+                                  error=KernelError)}
 
 
-def emit_c(step, name="qc_kernel", lanes=LANES):
-    """C source of ``void name(long n_steps, const double *rows, double *Z, const double *Q,
-    long n_blocks)`` for the SX Function ``step(Z, Q, row) -> Z_next``.
+def _check_precision(precision, where="precision"):
+    if not isinstance(precision, str) or precision not in PRECISIONS:
+        raise InputError(f"{where} must be one of {', '.join(map(repr, PRECISIONS))}, got "
+                         f"{precision!r}")
+    return precision
 
-    Layouts (C order): rows (n_steps, n_row); Z (n_blocks, nZ, lanes), updated in place;
-    Q (n_blocks, nQ, lanes)."""
+
+def _check_isa(isa, where="isa"):
+    if not isinstance(isa, str) or isa not in ISAS:
+        raise InputError(f"{where} must be one of {', '.join(map(repr, ISAS))}, got {isa!r}")
+    return isa
+
+
+@functools.lru_cache(maxsize=None)
+def cpu_features() -> frozenset[str]:
+    """The CPU's feature flags as /proc/cpuinfo lists them.
+
+    Returns
+    -------
+    frozenset of str
+        E.g. {"sse2", "avx2", "fma", ...}; empty where /proc/cpuinfo has no flags line (not
+        Linux, or not x86).
+    """
+    try:
+        with open("/proc/cpuinfo") as fh:
+            line = next((ln for ln in fh if ln.startswith("flags")), "")
+    except OSError:
+        return frozenset()
+    return frozenset(line.partition(":")[2].split())
+
+
+def detect_isa(features: frozenset[str] | set[str] | None = None,
+               machine: str | None = None) -> str:
+    """The widest instruction set of ``ISAS`` that the CPU can run.
+
+    Parameters
+    ----------
+    features : set of str, optional
+        CPU feature flags (default ``cpu_features()``).
+    machine : str, optional
+        ``platform.machine()`` (default: this machine's).
+
+    Returns
+    -------
+    str
+        "avx512", "avx2" or "sse2" on x86-64 by the features (AVX-512 F, DQ, VL, BW; AVX2 and
+        FMA; SSE2), else "portable".
+    """
+    features = cpu_features() if features is None else set(features)
+    machine = platform.machine() if machine is None else machine
+    if machine not in ("x86_64", "AMD64"):
+        return "portable"
+    for isa in ("avx512", "avx2", "sse2"):
+        if all(f in features for f in _CPU_NEEDS[isa]):
+            return isa
+    return "portable"
+
+
+def kernel_isa() -> str:
+    """The instruction set the kernel is built for.
+
+    Returns
+    -------
+    str
+        $QUADCOG_KERNEL_ISA (``ISA_ENV``) when it is set, checked to be one of ``ISAS``; else
+        ``detect_isa()``.
+    """
+    env = os.environ.get(ISA_ENV)
+    if env:
+        return _check_isa(env, f"${ISA_ENV}")
+    return detect_isa()
+
+
+def lanes_for(isa: str, precision: str = "float64") -> int:
+    """Flights per block: ``VECTORS_PER_BLOCK`` vectors of the ISA's width.
+
+    Parameters
+    ----------
+    isa : str
+        One of ``ISAS``.
+    precision : str
+        "float64" or "float32" (twice the lanes per vector).
+
+    Returns
+    -------
+    int
+        8, 16 or 32 doubles for SSE2 / portable, AVX2, AVX-512; twice that in float32.
+    """
+    _check_isa(isa)
+    return VECTORS_PER_BLOCK * VECTOR_BITS[isa] // (8 * _BYTES[_check_precision(precision)])
+
+
+def vector_flags(isa: str | None = None, precision: str = "float64") -> tuple[str, ...]:
+    """Compiler flags of the kernel for an instruction set.
+
+    No -ffast-math: IEEE arithmetic, only errno and traps are given up (which lets sqrt and
+    the libmvec calls vectorize), and no FMA contraction (the module docstring says why).
+
+    Parameters
+    ----------
+    isa : str, optional
+        One of ``ISAS`` (default ``kernel_isa()``).
+    precision : str
+        "float64" or "float32" (which math builtins to turn off: gcc merges sin and cos into a
+        sincos that has no vector form).
+
+    Returns
+    -------
+    tuple of str
+        The flags, ``-shared -fPIC`` included.
+    """
+    isa = kernel_isa() if isa is None else _check_isa(isa)
+    f = "f" if _check_precision(precision) == "float32" else ""
+    return ("-O3", *ISA_FLAGS[isa], "-ffp-contract=off", "-fno-math-errno",
+            "-fno-trapping-math", "-fopenmp-simd", f"-fno-builtin-sin{f}",
+            f"-fno-builtin-cos{f}", "-shared", "-fPIC")
+
+
+def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
+           precision: str = "float64") -> str:
+    """C source of the kernel of the SX Function ``step(Z, Q, row) -> Z_next``.
+
+    Parameters
+    ----------
+    step : casadi.Function
+        An SX Function of three inputs (Z, Q, row) and one output of Z's size.
+    name : str
+        Name of the C function: ``void name(long n_steps, const real *rows, real *Z,
+        const real *Q, long n_blocks)``, real the C type of ``precision``.
+    lanes : int
+        Flights per block.
+    precision : str
+        "float64" (double) or "float32" (float, sinf, float literals).
+
+    Returns
+    -------
+    str
+        The C. Layouts (C order): rows (n_steps, n_row); Z (n_blocks, nZ, lanes), updated in
+        place; Q (n_blocks, nQ, lanes).
+    """
+    precision = _check_precision(precision)
     if not step.is_a("SXFunction"):
         raise KernelError(f"{step.name()}: expected an SX Function")
     nZ, nQ, nR = (step.nnz_in(i) for i in range(3))
     if step.nnz_out(0) != nZ or step.n_in() != 3 or step.n_out() != 1:
         raise KernelError(f"{step.name()}: expected step(Z, Q, row) -> Z_next of equal size")
+    target = _TARGETS[precision]
     inputs = (lambda nz: f"z[{nz * lanes}+j]", lambda nz: f"q[{nz * lanes}+j]",
               lambda nz: f"row[{nz}]")
-    c = sxc.walk(step, _TARGET, read=lambda i, nz: inputs[i](nz),
+    c = sxc.walk(step, target, read=lambda i, nz: inputs[i](nz),
                  write=lambda i, nz: f"zn[{nz * lanes}+j]")
+    real, sfx = C_TYPE[precision], target.suffix
     # const + simd: gcc may call libmvec's vector versions (flags: -fno-builtin-sin/cos, or
     # gcc merges sin and cos into a sincos that has no vector form); sqrt, fabs, floor, ceil
     # and copysign are inlined as vector instructions
-    decls = "".join(f"double {f}({', '.join(['double'] * n)})"
+    decls = "".join(f"{real} {f}{sfx}({', '.join([real] * n)})"
                     + (" __attribute__((const, __simd__(\"notinbranch\")))"
                        if f in _VECTOR_MATH else "") + ";\n"
                     for f, n in sorted(c.calls.items()))
     work = ", ".join(f"w{i}" for i in range(step.sz_w()))
     lines = "\n      ".join(c.statements)
-    return f"""/* quadcog vector kernel for {step.name()}: generated, do not edit. */
+    return f"""/* quadcog vector kernel for {step.name()} ({precision}): generated, do not edit. */
+typedef {real} real;
 {decls}#define LANES {lanes}
 #define NZ {nZ}
 #define NQ {nQ}
 #define NR {nR}
-void {name}(long n_steps, const double *rows, double *Z, const double *Q, long n_blocks) {{
+void {name}(long n_steps, const real *rows, real *Z, const real *Q, long n_blocks) {{
   for (long b = 0; b < n_blocks; ++b) {{
-    double *z = Z + b * NZ * LANES;
-    const double *q = Q + b * NQ * LANES;
-    double zn[NZ * LANES] __attribute__((aligned(64)));
+    real *z = Z + b * NZ * LANES;
+    const real *q = Q + b * NQ * LANES;
+    real zn[NZ * LANES] __attribute__((aligned(64)));
     for (long k = 0; k < n_steps; ++k) {{
-      const double *row = rows + k * NR;
+      const real *row = rows + k * NR;
       #pragma omp simd
       for (long j = 0; j < LANES; ++j) {{
-      double {work};
+      real {work};
       {lines}
       }}
       for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];
@@ -115,26 +295,85 @@ void {name}(long n_steps, const double *rows, double *Z, const double *Q, long n
 
 
 class VectorKernel:
-    """A compiled vector kernel: ``kernel(Z (B, nZ), Q (B, nQ), rows (n, n_row), threads)``
-    returns Z after the n steps (B, nZ)."""
+    """A compiled vector kernel.
 
-    def __init__(self, step, lanes=LANES):
+    ``kernel(Z (B, nZ), Q (B, nQ), rows (n, n_row), threads)`` returns Z after the n steps
+    (B, nZ), in float64 whatever the precision.
+
+    Parameters
+    ----------
+    step : casadi.Function
+        The SX step ``step(Z, Q, row) -> Z_next``.
+    lanes : int, optional
+        Flights per block (default ``lanes_for(isa, precision)``).
+    isa : str, optional
+        One of ``ISAS`` (default ``kernel_isa()``); one the CPU cannot run is refused.
+    precision : str
+        "float64" or "float32".
+
+    Attributes
+    ----------
+    isa, precision, lanes, flags, library
+        The instruction set built for ("portable" after a refused flag), the precision, the
+        flights per block, the compiler flags and the library's path.
+    """
+
+    def __init__(self, step: ca.Function, lanes: int | None = None, isa: str | None = None,
+                 precision: str = "float64") -> None:
         cc = find_compiler()
         if cc is None:
             raise KernelError("no C compiler")
-        self.lanes = lanes
+        self.precision = _check_precision(precision)
+        native = detect_isa()
+        isa = kernel_isa() if isa is None else _check_isa(isa)
+        if ISAS.index(isa) < ISAS.index(native):
+            raise KernelError(f"isa={isa!r}: this CPU runs at most {native!r} (CPU flags of "
+                              "/proc/cpuinfo); its instructions would stop the process")
         self.nZ, self.nQ, self.nR = (step.nnz_in(i) for i in range(3))
-        source = emit_c(step, "qc_kernel", lanes).encode()
-        stem = "vector_kernel_" + hashlib.sha256(source).hexdigest()[:12]
-        self.library = compile_library(source, stem, cc,
-                                       flags=vector_flags() + ("-Wl,--no-as-needed", "-lmvec"))
+        try:
+            self._build(step, cc, isa, lanes)
+        except CompileError as e:
+            if isa == "portable":
+                raise
+            warnings.warn(f"the compiler refused the {isa} flags ({str(e)[-300:]}); the vector "
+                          "kernel is built with the portable flags (slower)", QuadcogWarning,
+                          stacklevel=2)
+            self._build(step, cc, "portable", lanes)
         self._fn = ctypes.CDLL(str(self.library)).qc_kernel
         self._fn.restype = None
         self._fn.argtypes = [ctypes.c_long, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
                              ctypes.c_long]
 
-    def __call__(self, Z, Q, rows, threads=1):
-        Z, Q = np.asarray(Z, dtype=float), np.asarray(Q, dtype=float)
+    def _build(self, step, cc, isa, lanes):
+        self.isa = isa
+        self.lanes = lanes_for(isa, self.precision) if lanes is None else int(lanes)
+        self.flags = vector_flags(isa, self.precision) + ("-Wl,--no-as-needed", "-lmvec")
+        source = emit_c(step, "qc_kernel", self.lanes, self.precision).encode()
+        # the ISA in the name too: the flags are in the cache key already
+        stem = f"vector_kernel_{isa}_" + hashlib.sha256(source).hexdigest()[:12]
+        self.library = compile_library(source, stem, cc, flags=self.flags)
+
+    def __call__(self, Z: np.ndarray, Q: np.ndarray, rows: np.ndarray,
+                 threads: int = 1) -> np.ndarray:
+        """Z after the steps of ``rows``.
+
+        Parameters
+        ----------
+        Z : (B, nZ) array
+            The flights' states (with their accumulators).
+        Q : (B, nQ) array
+            The flights' constant parameters.
+        rows : (n, n_row) array
+            The step table, shared by all flights.
+        threads : int
+            Threads that share the blocks.
+
+        Returns
+        -------
+        (B, nZ) float64 array
+        """
+        real = NUMPY_TYPE[self.precision]
+        Z, Q = np.asarray(Z, dtype=real), np.asarray(Q, dtype=real)
         B, L = Z.shape[0], self.lanes
         n_blocks = -(-B // L)
         pad = n_blocks * L - B
@@ -143,7 +382,7 @@ class VectorKernel:
             Q = np.vstack([Q, np.repeat(Q[-1:], pad, axis=0)])
         Zb = np.ascontiguousarray(Z.reshape(n_blocks, L, self.nZ).transpose(0, 2, 1))
         Qb = np.ascontiguousarray(Q.reshape(n_blocks, L, self.nQ).transpose(0, 2, 1))
-        rows = np.ascontiguousarray(rows, dtype=float)
+        rows = np.ascontiguousarray(rows, dtype=real)
         n = rows.shape[0]
         threads = max(1, min(int(threads), n_blocks))
         bounds = np.linspace(0, n_blocks, threads + 1).round().astype(int)
@@ -161,22 +400,43 @@ class VectorKernel:
                 th.start()
             for th in pool:
                 th.join()
-        return Zb.transpose(0, 2, 1).reshape(n_blocks * L, self.nZ)[:B].copy()
+        out = Zb.transpose(0, 2, 1).reshape(n_blocks * L, self.nZ)[:B]
+        return out.astype(np.float64)
 
 
 _kernels = {}
 _warned = []
 
 
-def kernel_for(key, build_step, required=False):
-    """The VectorKernel of the step that ``build_step()`` makes, once per ``key`` and process.
+def kernel_for(key: Hashable, build_step: Callable[[], ca.Function], required: bool = False,
+               precision: str = "float64", isa: str | None = None) -> "VectorKernel | None":
+    """The VectorKernel of the step that ``build_step()`` makes, once per key and process.
 
-    Without a C compiler, or where the C does not build (no libmvec: not glibc on x86-64),
-    returns None after one QuadcogWarning (callers then use CasADi's map), or raises
-    KernelError when ``required``."""
+    Parameters
+    ----------
+    key : hashable
+        What identifies the step (the precision and ISA are added to it).
+    build_step : callable
+        ``build_step() -> casadi.Function``, the SX step.
+    required : bool
+        Raise KernelError instead of returning None where the kernel cannot be built.
+    precision : str
+        "float64" or "float32".
+    isa : str, optional
+        One of ``ISAS`` (default ``kernel_isa()``).
+
+    Returns
+    -------
+    VectorKernel or None
+        None (after one QuadcogWarning) without a C compiler, or where the C does not build
+        (no libmvec: not glibc on x86-64); callers then use CasADi's map.
+    """
+    precision = _check_precision(precision)
+    isa = kernel_isa() if isa is None else _check_isa(isa)
+    key = (key, precision, isa)
     if key not in _kernels:
         try:
-            _kernels[key] = VectorKernel(build_step())
+            _kernels[key] = VectorKernel(build_step(), isa=isa, precision=precision)
         except (KernelError, CompileError) as e:
             if required:
                 raise KernelError(f"the vector kernel cannot be built here: {e}") from None

@@ -23,11 +23,27 @@ from quadcog.model.functions import Model
 from quadcog.model.parameters import LARGEST
 from quadcog.vehicles.vehicle import Vehicle
 
+__all__ = ["AdaptiveFeedbackLinearization", "admissible_estimate_radius"]
 
-def admissible_estimate_radius(vehicle, margin=0.95):
-    """min(arm length, margin * sqrt(min(Ixx, Iyy, Izz) / m)) in m for a Vehicle: any r_hat in
-    this ball keeps the inertia about the estimated CoG positive definite (m |r|^2 < min I
-    suffices)."""
+
+def admissible_estimate_radius(vehicle: Vehicle, margin: float = 0.95) -> float:
+    """The radius of the ball of CoG estimates that keep the model's inertia admissible.
+
+    Any r_hat in this ball keeps the inertia about the estimated CoG positive definite
+    (m |r|^2 < min I suffices).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The controller's model of the vehicle.
+    margin : float
+        Fraction of sqrt(min(Ixx, Iyy, Izz) / m) allowed, default 0.95.
+
+    Returns
+    -------
+    float
+        min(arm length, margin * sqrt(min(Ixx, Iyy, Izz) / m)) (m).
+    """
     smallest = min(vehicle.Ixx, vehicle.Iyy, vehicle.Izz)
     return float(min(vehicle.arm_length, margin * np.sqrt(smallest / vehicle.m)))
 
@@ -35,20 +51,38 @@ def admissible_estimate_radius(vehicle, margin=0.95):
 class AdaptiveFeedbackLinearization(FeedbackLinearization):
     """Feedback linearization with an online estimate r_hat (m) of the CoG offset.
 
-    gamma: adaptation gain, a number or 3 numbers (diagonal of Gamma). The default 0.01
-        recovers a [6, 6, 0] cm step at hover (3.7 cm tail RMS, estimates within 1 %); 0.03
-        leaves a 14 cm tail and 0.05 diverges (see README, "Choosing gamma").
-    Q: the 8x8 positive definite matrix of the Lyapunov equation (default identity).
-    projection_radius: keep |r_hat| <= this radius (m) by projection. Default: the arm length,
-        but never beyond 95 % of sqrt(min(Ixx, Iyy, Izz) / m), inside which every estimate
-        keeps M_hat positive definite (9.6 cm for the default vehicle; beyond it M_hat turns
-        singular and the law blows up). None switches projection off: the paper's law.
-    Other arguments as FeedbackLinearization.
+    Parameters
+    ----------
+    vehicle : Vehicle, optional
+        The controller's model of the vehicle (default: the Hummingbird with r_G = 0); r_hat
+        starts at its r_G.
+    model : quadcog.model.functions.Model, optional
+        The generated functions (default ``quadcog.load()``).
+    gamma : float or (3,) sequence of float
+        Adaptation gain, a number or 3 numbers (diagonal of Gamma). The default 0.01 recovers
+        a [6, 6, 0] cm step at hover (3.7 cm tail RMS, estimates within 1 %); 0.03 leaves a
+        14 cm tail and 0.05 diverges (see README, "Choosing gamma").
+    Q : (8, 8) array_like, optional
+        The positive definite matrix of the Lyapunov equation (default identity).
+    projection_radius : float or None or "default"
+        Keep |r_hat| <= this radius (m) by projection. Default: the arm length, but never
+        beyond 95 % of sqrt(min(Ixx, Iyy, Izz) / m), inside which every estimate keeps M_hat
+        positive definite (9.6 cm for the default vehicle; beyond it M_hat turns singular and
+        the law blows up). None switches projection off: the paper's law.
+    **kwargs
+        The other arguments, as FeedbackLinearization (its poles and ``max_tilt``).
+
+    Raises
+    ------
+    InputError
+        When a setting is out of range (gamma not positive, Q not symmetric positive
+        definite, a radius not positive).
     """
 
     name = "adaptive_feedback_linearization"
     n_state = 3
     estimates_cog = True          # c starts with r_hat (results report it as the estimate)
+    projection_radius: float | None
 
     def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
                  gamma: NumberOrVec3 = 0.01, Q: npt.ArrayLike | None = None,
@@ -56,12 +90,12 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         super().__init__(vehicle, model, **kwargs)
         what = "a positive number or 3 positive numbers (the diagonal of Gamma)"
         if isinstance(gamma, (list, tuple, np.ndarray)):
-            gamma = validate.array(gamma, "gamma", (3,), what=what)
+            gains = validate.array(gamma, "gamma", (3,), what=what)
         else:
-            gamma = np.full(3, validate.positive(gamma, "gamma"))
-        if not np.all((gamma > 0) & (gamma <= LARGEST)):
-            validate.fail("gamma", what + f" up to {LARGEST:g}", gamma.tolist())
-        self.gamma = gamma
+            gains = np.full(3, validate.positive(gamma, "gamma"))
+        if not np.all((gains > 0) & (gains <= LARGEST)):
+            validate.fail("gamma", what + f" up to {LARGEST:g}", gains.tolist())
+        self.gamma = gains
         Q = np.eye(8) if Q is None else validate.array(Q, "Q", (8, 8))
         if not (np.allclose(Q, Q.T) and np.linalg.eigvalsh(0.5 * (Q + Q.T))[0] > 0):
             raise InputError(f"Q: expected a symmetric positive definite 8x8 matrix, got one "
@@ -72,18 +106,47 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
             projection_radius = admissible_estimate_radius(self.vehicle)
         elif projection_radius is not None:
             projection_radius = validate.positive(projection_radius, "projection_radius", "m")
-        self.projection_radius = projection_radius
+        # a str other than "default" was refused by validate.positive above
+        self.projection_radius = projection_radius  # type: ignore[assignment]
         self.A_error = np.block([[np.zeros((4, 4)), np.eye(4)],
                                  [-np.diag(self.kp), -np.diag(self.kd)]])
         from scipy.linalg import solve_continuous_lyapunov  # here: slow to import
         self.P = solve_continuous_lyapunov(self.A_error.T, -Q)
 
-    def initial_state(self):
-        """r_hat at t = 0: the CoG of the controller's model (zero unless it believes one)."""
+    def initial_state(self) -> npt.NDArray[np.float64]:
+        """r_hat at t = 0: the CoG of the controller's model (zero unless it believes one).
+
+        Returns
+        -------
+        (3,) numpy.ndarray
+            r_hat (m).
+        """
         return self.vehicle.r_G
 
-    def parts(self, x, ref, r_hat):
-        """(U, e_s, Phi, B) of the law at estimate r_hat (SX); the pieces of the update."""
+    def parts(self, x: ca.SX, ref: ca.SX,
+              r_hat: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+        """The law at estimate r_hat and the pieces of the update.
+
+        Parameters
+        ----------
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        ref : casadi.SX
+            Reference row (14,).
+        r_hat : casadi.SX
+            The CoG estimate (3,) (m).
+
+        Returns
+        -------
+        U : casadi.SX
+            Input (4x1) [U1 (N), U2, U3, U4 (N m)] of the feedback linearization on r_hat.
+        e_s : casadi.SX
+            Output error [e; e_dot] (8,).
+        Phi : casadi.SX
+            Regressor (6x3) of the equations of motion in r at nu_dot_star.
+        B : casadi.SX
+            [0; H M_hat^{-1}] (8x6).
+        """
         p_hat = self.nominal_with_cog(r_hat)
         f = self.model.casadi_function
         e, e_dot, y_ddot_d = self.output_errors(x, ref, p_hat)
@@ -99,24 +162,68 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         B = ca.vertcat(ca.SX.zeros(4, 6), H @ M_inv)
         return U, ca.vertcat(e, e_dot), Phi, B
 
-    def expression(self, t, x, ref, c):
+    def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The adaptive law (see the module docstring) as CasADi expressions.
+
+        Parameters
+        ----------
+        t : casadi.SX
+            Time (s), unused.
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        ref : casadi.SX
+            Reference row (14,).
+        c : casadi.SX
+            The controller state: r_hat (3,) (m).
+
+        Returns
+        -------
+        U : casadi.SX
+            Input (4x1) [U1 (N), U2, U3, U4 (N m)].
+        c_dot : casadi.SX
+            r_hat_dot (3x1) (m/s), with the radial part removed on the projection sphere.
+        """
         U, e_s, Phi, B = self.parts(x, ref, c)
         r_dot = -ca.DM(self.gamma) * (Phi.T @ (B.T @ (ca.DM(self.P) @ e_s)))
         if self.projection_radius is not None:
             R2 = self.projection_radius ** 2
             outward = ca.dot(c, r_dot)
             radial = c * outward / ca.fmax(ca.dot(c, c), 1e-12)
-            r_dot = ca.if_else(ca.logic_and(ca.dot(c, c) >= R2, outward > 0), r_dot - radial, r_dot)
+            r_dot = ca.if_else(ca.logic_and(ca.dot(c, c) >= R2, outward > 0), r_dot - radial,
+                               r_dot)
         return U, r_dot
 
-    def project(self, c):
-        """Scale r_hat back onto the ball after a discrete update step (SX)."""
+    def project(self, c: ca.SX) -> ca.SX:
+        """Scale r_hat back onto the ball after a discrete update step.
+
+        Parameters
+        ----------
+        c : casadi.SX
+            The controller state r_hat (3,) (m).
+
+        Returns
+        -------
+        casadi.SX
+            r_hat within ``projection_radius`` (unchanged when projection is off).
+        """
         if self.projection_radius is None:
             return c
         norm = ca.norm_2(c)
         return ca.if_else(norm > self.projection_radius, c * (self.projection_radius / norm), c)
 
-    def project_numpy(self, c):
+    def project_numpy(self, c: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """``project`` for numpy arrays, in place.
+
+        Parameters
+        ----------
+        c : (3,) numpy.ndarray
+            r_hat (m).
+
+        Returns
+        -------
+        (3,) numpy.ndarray
+            ``c``, scaled in place onto the ball when outside it.
+        """
         if self.projection_radius is None:
             return c
         norm = np.sqrt(c @ c)

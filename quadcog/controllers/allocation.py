@@ -10,11 +10,16 @@ Vehicle's mixer: with f = mixer^-1 U split into the parts of U1, of (U2, U3) and
     f = f_T + s_rp f_rp + s_y f_y,   s_rp, s_y in [0, 1] as large as the limits allow,
 
 so the delivered input is U itself when it is feasible, else [U1, s_rp U2, s_rp U3, s_y U4]: the
-roll-pitch moment keeps its direction, and yaw is the first to yield. The law then knows exactly what the rotors deliver
-(no clipping happens downstream while the thrust itself is feasible).
+roll-pitch moment keeps its direction, and yaw is the first to yield. The law then knows
+exactly what the rotors deliver (no clipping happens downstream while the thrust itself is
+feasible).
 """
 import casadi as ca
 import numpy as np
+
+from quadcog.vehicles.vehicle import Vehicle
+
+__all__ = ["prioritized_input"]
 
 
 def _largest_step(base, direction, lower, upper):
@@ -29,8 +34,21 @@ def _largest_step(base, direction, lower, upper):
     return ca.fmax(s, 0.0)
 
 
-def prioritized_input(U, vehicle):
-    """U (4x1 SX) reduced to what ``vehicle``'s rotors can deliver, yaw first (see module)."""
+def prioritized_input(U: ca.SX, vehicle: Vehicle) -> ca.SX:
+    """U reduced to what ``vehicle``'s rotors can deliver, yaw first (see the module docstring).
+
+    Parameters
+    ----------
+    U : casadi.SX
+        The commanded input (4x1) [U1 (N), U2, U3, U4 (N m, about O)].
+    vehicle : Vehicle
+        Whose mixer and rotor thrust limits (N) apply.
+
+    Returns
+    -------
+    casadi.SX
+        U itself when feasible, else [U1, s_rp U2, s_rp U3, s_y U4] (4x1).
+    """
     inv = ca.DM(np.linalg.inv(vehicle.mixer()))
     lower, upper = vehicle.min_rotor_thrust, vehicle.max_rotor_thrust
     f_T = inv[:, 0] * U[0]

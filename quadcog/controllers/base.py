@@ -1,45 +1,94 @@
 """What every controller is: a CasADi control law, compiled on demand, callable from Python.
 
 A controller maps (t, x, ref, c) to (U, c_dot): time (s), state x (12,), reference ref (14,)
-(see ``quadcog.trajectories.analytic``), its own state c (``n_state``,; the adaptive controller's r_hat)
-to the input U (4,) and the rate of its state. ``function()`` is that law as a CasADi Function
-(SX, to compose into bigger expressions), ``compiled()`` an allocation-free compiled call.
+(see ``quadcog.trajectories.analytic``), its own state c (``n_state``,; the adaptive
+controller's r_hat) to the input U (4,) and the rate of its state. ``function()`` is that law
+as a CasADi Function (SX, to compose into bigger expressions), ``compiled()`` an
+allocation-free compiled call.
 
 A controller is designed for a model of the vehicle, ``controller.vehicle`` (a Vehicle: what
 the controller believes; by default the Hummingbird with r_G = 0). ``for_vehicle(v)`` gives the
 same controller (same settings) designed for another model; ``quadcog.simulate`` uses it for
 its ``controller_model`` argument. Subclasses take ``vehicle`` and ``model`` as their first two
-parameters and their settings as keywords.
+parameters and their settings as keywords. ``quadcog.controllers.template`` states the
+interface a Python controller of your own implements; every Controller satisfies it.
 """
+from collections.abc import Sequence
+from typing import Any
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.codegen.compiled import compile_function
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import InputError
-from quadcog.model.functions import load
+from quadcog.model.functions import Model, load
 from quadcog.model.parameters import with_cog
 from quadcog.trajectories.analytic import REF_SIZE
 from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
+__all__ = ["Controller"]
+
 
 class Controller:
-    """Base class; subclasses set ``name``, ``n_state`` and implement ``expression``."""
+    """Base class; subclasses set ``name``, ``n_state`` and implement ``expression``.
 
-    name = "controller"
-    n_state = 0
-    estimates_cog = False        # True when the first 3 states are an estimate of r_G
+    Parameters
+    ----------
+    *args, **kwargs : Any
+        The constructor's arguments, kept to redesign the same controller for another model
+        (``for_vehicle``): ``vehicle`` and ``model`` as in ``__init__``, and a subclass's
+        settings as keywords.
 
-    def __new__(cls, *args, **kwargs):
+    Attributes
+    ----------
+    name : str
+        Short name of the law (results and files name the controller by it).
+    n_state : int
+        Length of the controller's own state c (0: none).
+    estimates_cog : bool
+        True when the first 3 states are an estimate r_hat of r_G (m).
+    vehicle : Vehicle
+        The controller's model of the vehicle (what it believes).
+    model : quadcog.model.functions.Model
+        The generated functions it is built from.
+    nominal : (14,) numpy.ndarray
+        ``vehicle.parameters()``.
+    """
+
+    name: str = "controller"
+    n_state: int = 0
+    estimates_cog: bool = False        # True when the first 3 states are an estimate of r_G
+    # set by __new__ and __init__ (annotations only, for the type checker)
+    _init_args: tuple[tuple[Any, ...], dict[str, Any]]
+    _function: ca.Function | None
+    _compiled: Any
+    _cache_key: tuple[str, str] | None
+    _jacobian: ca.Function | None
+    _designs: dict[Vehicle, "Controller"]
+
+    def __new__(cls, *args: Any, **kwargs: Any) -> "Controller":
         self = super().__new__(cls)
         self._init_args = (args, kwargs)        # to redesign the same controller: for_vehicle
         return self
 
-    def __init__(self, vehicle=None, model=None):
-        """vehicle: the controller's model of the vehicle, a Vehicle (default: the Hummingbird
-        with r_G = 0: the controller does not know the CoG). model: a quadcog Model (the
-        generated functions; default ``quadcog.load()``)."""
+    def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None) -> None:
+        """Design the controller for a model of the vehicle.
+
+        Parameters
+        ----------
+        vehicle : Vehicle, optional
+            The controller's model of the vehicle (default: the Hummingbird with r_G = 0: the
+            controller does not know the CoG).
+        model : quadcog.model.functions.Model, optional
+            The generated functions (default ``quadcog.load()``).
+
+        Raises
+        ------
+        InputError
+            When ``vehicle`` is not a quadcog Vehicle.
+        """
         self.model = model or load()
         vehicle = HUMMINGBIRD if vehicle is None else vehicle
         if not isinstance(vehicle, Vehicle):
@@ -54,25 +103,79 @@ class Controller:
         self._designs = {}
 
     # -- to implement -------------------------------------------------------------------
-    def expression(self, t, x, ref, c):
-        """(U (4x1 SX), c_dot (n_state x 1 SX)) for SX symbols t, x, ref, c."""
+    def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The control law as CasADi expressions: what a subclass implements.
+
+        Parameters
+        ----------
+        t : casadi.SX
+            Time (s), a scalar symbol.
+        x : casadi.SX
+            State (12,) [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)].
+        ref : casadi.SX
+            Reference row (14,) (``quadcog.trajectories.analytic``).
+        c : casadi.SX
+            The controller's own state (``n_state``,).
+
+        Returns
+        -------
+        U : casadi.SX
+            Input (4x1) [U1 (N), U2, U3, U4 (N m, about O)].
+        c_dot : casadi.SX
+            Rate of the controller's state (``n_state`` x 1).
+        """
         raise NotImplementedError
 
-    def project(self, c):
-        """The controller state after an update step is mapped through this (SX); identity."""
+    def project(self, c: ca.SX) -> ca.SX:
+        """The controller state after an update step is mapped through this; identity.
+
+        Parameters
+        ----------
+        c : casadi.SX
+            The controller state (``n_state``,) after an update step.
+
+        Returns
+        -------
+        casadi.SX
+            The projected state.
+        """
         return c
 
-    def project_numpy(self, c):
-        """``project`` for numpy arrays, in place where possible."""
+    def project_numpy(self, c: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """``project`` for numpy arrays, in place where possible.
+
+        Parameters
+        ----------
+        c : (n_state,) numpy.ndarray
+            The controller state after an update step.
+
+        Returns
+        -------
+        (n_state,) numpy.ndarray
+            The projected state (``c`` itself when changed in place).
+        """
         return c
 
     # -- provided ---------------------------------------------------------------------
-    def initial_state(self):
-        """The controller state at t = 0 (zeros: e.g. r_hat = 0)."""
+    def initial_state(self) -> npt.NDArray[np.float64]:
+        """The controller state at t = 0.
+
+        Returns
+        -------
+        (n_state,) numpy.ndarray
+            Zeros here (e.g. r_hat = 0 m); a subclass may start elsewhere.
+        """
         return np.zeros(self.n_state)
 
-    def function(self):
-        """The control law as a CasADi Function (t, x, ref, c) -> (U, c_dot)."""
+    def function(self) -> ca.Function:
+        """The control law as a CasADi Function (built once).
+
+        Returns
+        -------
+        casadi.Function
+            ``(t, x (12), ref (14), c (n_state)) -> (U (4), c_dot (n_state))``, SX, to
+            compose into bigger expressions.
+        """
         if self._function is None:
             t, x = ca.SX.sym("t"), ca.SX.sym("x", 12)
             ref, c = ca.SX.sym("ref", REF_SIZE), ca.SX.sym("c", self.n_state)
@@ -83,15 +186,47 @@ class Controller:
                                          ["t", "x", "ref", "c"], ["U", "c_dot"])
         return self._function
 
-    def compiled(self):
-        """A FastCall of the compiled law: write .inputs [t, x, ref, c], call, read .outputs
-        [U, c_dot]. About a microsecond per call; one per thread."""
+    def compiled(self) -> FastCall:
+        """The compiled law, allocation-free.
+
+        Returns
+        -------
+        FastCall
+            Write ``.inputs`` [t, x, ref, c], call, read ``.outputs`` [U, c_dot]. About a
+            microsecond per call; one per thread.
+        """
         if self._compiled is None:
             self._compiled = compile_function(self.function())
         return FastCall(self._compiled)
 
-    def __call__(self, t, x, ref, c=None):
-        """(U (4,), c_dot (n_state,)) as numpy arrays; arguments are checked."""
+    def __call__(self, t: float, x: npt.ArrayLike, ref: npt.ArrayLike,
+                 c: npt.ArrayLike | None = None
+                 ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """The law at one instant, in numpy; arguments are checked.
+
+        Parameters
+        ----------
+        t : float
+            Time (s).
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)].
+        ref : (14,) array_like
+            Reference row (``quadcog.trajectories.analytic``).
+        c : (n_state,) array_like, optional
+            The controller's own state (default ``initial_state()``).
+
+        Returns
+        -------
+        U : (4,) numpy.ndarray
+            Input [U1 (N), U2, U3, U4 (N m, about O)].
+        c_dot : (n_state,) numpy.ndarray
+            Rate of the controller's state.
+
+        Raises
+        ------
+        InputError
+            When an argument has the wrong shape or non-finite entries.
+        """
         x = np.asarray(x, dtype=float)
         ref = np.asarray(ref, dtype=float)
         c = self.initial_state() if c is None else np.asarray(c, dtype=float)
@@ -103,9 +238,25 @@ class Controller:
         U, c_dot = self.function()(float(t), x, ref, c)
         return np.array(U).ravel(), np.array(c_dot).ravel()
 
-    def for_vehicle(self, vehicle):
-        """This controller, with the same settings, designed for the model ``vehicle`` (a
-        Vehicle); ``self`` when that is already its model. Designs are kept per vehicle."""
+    def for_vehicle(self, vehicle: Vehicle) -> "Controller":
+        """This controller, with the same settings, designed for another model.
+
+        Parameters
+        ----------
+        vehicle : Vehicle
+            The model to design for.
+
+        Returns
+        -------
+        Controller
+            ``self`` when ``vehicle`` is already its model, else a new design (kept per
+            vehicle).
+
+        Raises
+        ------
+        InputError
+            When the controller was built with positional settings.
+        """
         if vehicle == self.vehicle:
             return self
         if vehicle not in self._designs:
@@ -118,17 +269,27 @@ class Controller:
             self._designs[vehicle] = type(self)(**kwargs)
         return self._designs[vehicle]
 
-    def cache_key(self):
-        """What identifies this controller's compiled code: its class and its law, serialized
-        (computed once)."""
+    def cache_key(self) -> tuple[str, str]:
+        """What identifies this controller's compiled code (computed once).
+
+        Returns
+        -------
+        tuple of (str, str)
+            Its class name and its law, serialized.
+        """
         if self._cache_key is None:
             self._cache_key = (type(self).__name__, self.function().serialize())
         return self._cache_key
 
-    def closed_loop_jacobian(self):
-        """CasADi Function (x (12), ref (14), p (14)) -> d/dx f(x, U(0, x, ref, c0), p): the
-        Jacobian of the closed loop at the controller's initial state ``c0``, f the truth
-        dynamics without extra effects (built once)."""
+    def closed_loop_jacobian(self) -> ca.Function:
+        """The Jacobian of the closed loop at the controller's initial state (built once).
+
+        Returns
+        -------
+        casadi.Function
+            ``(x (12), ref (14), p (14)) -> A = d/dx f(x, U(0, x, ref, c0), p)`` (12x12), f the
+            truth dynamics without extra effects, c0 = ``initial_state()``.
+        """
         if self._jacobian is None:
             x, ref, p = ca.SX.sym("x", 12), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("p", 14)
             U, _ = self.function()(0.0, x, ref, self.initial_state())
@@ -139,8 +300,20 @@ class Controller:
                 ["x", "ref", "p"], ["A"])
         return self._jacobian
 
-    def nominal_with_cog(self, r):
-        """The nominal parameters with r_G = r (SX or numbers)."""
+    def nominal_with_cog(self, r: ca.SX | npt.NDArray[np.float64] | Sequence[float]
+                         ) -> ca.SX | npt.NDArray[np.float64]:
+        """The nominal parameters with another CoG.
+
+        Parameters
+        ----------
+        r : casadi.SX or (3,) numpy.ndarray or sequence of float
+            The CoG offset r_G (m).
+
+        Returns
+        -------
+        casadi.SX or (14,) numpy.ndarray
+            The parameter vector p with r_G = r (SX when ``r`` is symbolic).
+        """
         if isinstance(r, (ca.SX, ca.MX)):
             p = ca.SX(ca.DM(self.nominal))
             return ca.vertcat(p[:11], r)

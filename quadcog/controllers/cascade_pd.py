@@ -21,6 +21,8 @@ from quadcog.model.parameters import with_cog
 from quadcog.trajectories.analytic import ACC, POS, VEL, YAW, YAW_RATE
 from quadcog.vehicles.vehicle import Vehicle
 
+__all__ = ["CascadePD", "LOOPS"]
+
 # (states, input) of each decoupled loop of the hover linearization (yaw 0, r_G = 0).
 LOOPS = {"z": ([2, 8], 0), "psi": ([5, 11], 3),
          "x": ([0, 6, 4, 10], 2), "y": ([1, 7, 3, 9], 1)}
@@ -29,8 +31,26 @@ LOOPS = {"z": ([2, 8], 0), "psi": ([5, 11], 3),
 class CascadePD(Controller):
     """Linear cascade PD; poles in rad/s (negative real parts).
 
-    poles_z, poles_psi: 2 poles each; poles_x, poles_y: 4 poles each (two slow for position,
-    two fast for attitude). max_tilt: clip on the commanded roll and pitch (rad).
+    Parameters
+    ----------
+    vehicle : Vehicle, optional
+        The controller's model of the vehicle (default: the Hummingbird with r_G = 0); the
+        loops are designed at its hover with r_G = 0, a CoG it believes in is fed forward as
+        the hover moment.
+    model : quadcog.model.functions.Model, optional
+        The generated functions (default ``quadcog.load()``).
+    poles_z, poles_psi : sequence of float
+        2 real poles each (rad/s) of the height and yaw loops.
+    poles_x, poles_y : sequence of float
+        4 real poles each (rad/s) of the x-theta and y-phi chains: two slow for position, two
+        fast for attitude.
+    max_tilt : float
+        Clip on the commanded roll and pitch (rad), in (0, pi/2].
+
+    Raises
+    ------
+    InputError
+        When a pole setting cannot be placed on its loop, or a setting is out of range.
     """
 
     name = "cascade_pd"
@@ -78,7 +98,27 @@ class CascadePD(Controller):
                              f"{validate.plain(chosen.tolist())}; expected poles the hover "
                              f"linearization can be placed at (too fast or too close together)")
 
-    def expression(self, t, x, ref, c):
+    def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The cascade PD law (see the module docstring) as CasADi expressions.
+
+        Parameters
+        ----------
+        t : casadi.SX
+            Time (s), unused.
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        ref : casadi.SX
+            Reference row (14,).
+        c : casadi.SX
+            The controller state, empty (0,).
+
+        Returns
+        -------
+        U : casadi.SX
+            Input (4x1) [U1 (N), U2, U3, U4 (N m)].
+        c_dot : casadi.SX
+            Empty (0x1).
+        """
         p = self.nominal
         m, g = p[IDX["m"]], p[IDX["g"]]
         cx, cy, cz = drag_over_mass(p)

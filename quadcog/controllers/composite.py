@@ -46,6 +46,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization
@@ -55,6 +56,8 @@ from quadcog.model.conventions import B_U, NU
 from quadcog.model.functions import Model
 from quadcog.vehicles.vehicle import Vehicle
 
+__all__ = ["CompositeAdaptive", "unpack_covariance", "pack_covariance"]
+
 _P_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
 
@@ -62,21 +65,43 @@ def _positive(name, value):
     return validate.positive(value, name)
 
 
-def unpack_covariance(v):
-    """The symmetric 3x3 P from its six entries (SX or numpy)."""
+def unpack_covariance(v: ca.SX | npt.NDArray[np.float64]) -> ca.SX | npt.NDArray[np.float64]:
+    """The symmetric 3x3 P from its six entries.
+
+    Parameters
+    ----------
+    v : casadi.SX or (6,) numpy.ndarray
+        The entries (xx, xy, xz, yy, yz, zz).
+
+    Returns
+    -------
+    casadi.SX or (3, 3) numpy.ndarray
+        P, of the kind of ``v``.
+    """
     if isinstance(v, np.ndarray):
         P = np.empty((3, 3))
         for k, (i, j) in enumerate(_P_INDEX):
             P[i, j] = P[j, i] = v[k]
         return P
-    rows = [[None] * 3 for _ in range(3)]
+    rows: list[list[Any]] = [[None] * 3 for _ in range(3)]
     for k, (i, j) in enumerate(_P_INDEX):
         rows[i][j] = rows[j][i] = v[k]
     return ca.vertcat(*[ca.horzcat(*row) for row in rows])
 
 
-def pack_covariance(P):
-    """The six entries of a symmetric 3x3 P (SX)."""
+def pack_covariance(P: ca.SX) -> ca.SX:
+    """The six entries of a symmetric 3x3 P.
+
+    Parameters
+    ----------
+    P : casadi.SX
+        A symmetric 3x3 matrix.
+
+    Returns
+    -------
+    casadi.SX
+        Its entries (xx, xy, xz, yy, yz, zz) (6x1).
+    """
     return ca.vertcat(*[P[i, j] for i, j in _P_INDEX])
 
 
@@ -85,23 +110,42 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
 
     Parameters
     ----------
-    vehicle, model : as every controller (the controller's model of the vehicle; r_G = 0 by
-        default, and r_hat starts at the model's r_G).
-    gamma : tracking-error gain at P = k0 I (the paper's Gamma), default 0.01.
-    filter_rate : lam (1/s) of the filter F(s) = lam / (s + lam), default 20.
-    ls_gain : the least-squares weight (1/s) of the normalized prediction error, default 200.
-    forgetting : beta (1/s), default 8: data older than a few 1/beta no longer count.
-    covariance_bound : k0 (dimensionless, in the normalized units), default 1.
-    force_weight : weight of the three force rows against the moment rows, default 1.
-    allocation : True (default): the commanded input is reduced to what the rotors can give,
-        yaw first (``allocation.prioritized_input``), so the filter knows what is delivered.
-    motor_lag : True: the filter sees the rotor thrusts lagging behind the command with the
-        vehicle's motor_time_constant (4 more states); False (default): the command itself.
-    warm_up : seconds from t = 0 during which the prediction error is not used (default
-        5 / filter_rate): the filters start at rest, and while the vehicle starts moving
-        (a trajectory that begins with a velocity) their start-up term exp(-lam t) would
+    vehicle : Vehicle, optional
+        The controller's model of the vehicle (r_G = 0 by default, and r_hat starts at the
+        model's r_G).
+    model : quadcog.model.functions.Model, optional
+        The generated functions (default ``quadcog.load()``).
+    gamma : float or (3,) sequence of float
+        Tracking-error gain at P = k0 I (the paper's Gamma), default 0.01.
+    filter_rate : float
+        lam (1/s) of the filter F(s) = lam / (s + lam), default 20.
+    ls_gain : float
+        The least-squares weight (1/s) of the normalized prediction error, default 200.
+    forgetting : float
+        beta (1/s), default 8: data older than a few 1/beta no longer count.
+    covariance_bound : float
+        k0 (dimensionless, in the normalized units), default 1.
+    force_weight : float
+        Weight of the three force rows against the moment rows, default 1.
+    allocation : bool
+        True (default): the commanded input is reduced to what the rotors can give, yaw first
+        (``allocation.prioritized_input``), so the filter knows what is delivered.
+    motor_lag : bool
+        True: the filter sees the rotor thrusts lagging behind the command with the vehicle's
+        motor_time_constant (4 more states); False (default): the command itself.
+    warm_up : float, optional
+        Seconds from t = 0 during which the prediction error is not used (default
+        5 / filter_rate): the filters start at rest, and while the vehicle starts moving (a
+        trajectory that begins with a velocity) their start-up term exp(-lam t) would
         otherwise read as a CoG offset.
-    Q, projection_radius and the feedback-linearization poles : as AdaptiveFeedbackLinearization.
+    **kwargs
+        Q, projection_radius and the feedback-linearization poles, as
+        AdaptiveFeedbackLinearization.
+
+    Raises
+    ------
+    InputError
+        When a setting is out of range.
     """
 
     name = "composite_adaptive"
@@ -132,8 +176,15 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
     STATE_SLICES = {"r_hat": slice(0, 3), "zeta": slice(3, 9), "Psi": slice(9, 27),
                     "P": slice(27, 33), "clock": slice(33, 34), "rotor_thrusts": slice(34, 38)}
 
-    def initial_state(self):
-        """r_hat = the model's r_G, filters at rest, P = k0 I, believed rotor thrusts at the model's hover."""
+    def initial_state(self) -> npt.NDArray[np.float64]:
+        """The controller state at t = 0.
+
+        Returns
+        -------
+        (n_state,) numpy.ndarray
+            r_hat = the model's r_G (m), filters at rest, P = k0 I, clock 0 s, believed rotor
+            thrusts at the model's hover (N).
+        """
         c = np.zeros(self.n_state)
         c[0:3] = self.vehicle.r_G
         c[27:33] = self.covariance_bound * np.array([1, 0, 0, 1, 0, 1.0])
@@ -141,10 +192,27 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
             c[34:38] = self.vehicle.rotor_thrusts(self.vehicle.hover_input())
         return c
 
-    def delivered_input(self, U, f_hat):
-        """(U_a, U_cmd, f_hat_dot) (SX): the input the law commands (yaw-last allocation within
-        the rotor limits, when ``allocation``) and what the controller believes its rotors
-        deliver (the command, or with ``motor_lag`` the rotor thrusts lagging behind it)."""
+    def delivered_input(self, U: ca.SX, f_hat: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+        """The input the law commands and what the controller believes its rotors deliver.
+
+        Parameters
+        ----------
+        U : casadi.SX
+            The law's input (4x1) [U1 (N), U2, U3, U4 (N m)].
+        f_hat : casadi.SX
+            The believed rotor thrusts (4,) (N), empty (0,) without ``motor_lag``.
+
+        Returns
+        -------
+        U_a : casadi.SX
+            The input believed delivered (4x1): the command, or with ``motor_lag`` the one of
+            the rotor thrusts lagging behind it.
+        U_cmd : casadi.SX
+            The commanded input (4x1), after yaw-last allocation within the rotor limits when
+            ``allocation``.
+        f_hat_dot : casadi.SX
+            Rate of the believed rotor thrusts (N/s), empty without ``motor_lag``.
+        """
         if self.allocation:
             U = prioritized_input(U, self.vehicle)
         if not self.motor_states:
@@ -153,8 +221,32 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         f_cmd = ca.DM(np.linalg.inv(v.mixer())) @ U
         return ca.DM(v.mixer()) @ f_hat, U, (f_cmd - f_hat) / v.motor_time_constant
 
-    def filtered_regression(self, x, U_a, zeta, Psi):
-        """(z (6), Y (6x3), zeta_dot, Psi_dot) of the filtered identity z = Y r (SX)."""
+    def filtered_regression(self, x: ca.SX, U_a: ca.SX, zeta: ca.SX,
+                            Psi: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+        """The filtered identity z = Y r of the module docstring.
+
+        Parameters
+        ----------
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        U_a : casadi.SX
+            The input believed delivered (4x1) [N, N m, N m, N m].
+        zeta : casadi.SX
+            The filter state of z (6,).
+        Psi : casadi.SX
+            The filter state of Y (6x3).
+
+        Returns
+        -------
+        z : casadi.SX
+            Filtered left-hand side (6,) [N, N m].
+        Y : casadi.SX
+            Filtered regressor (6x3) [N/m, N].
+        zeta_dot : casadi.SX
+            Rate of zeta (6,).
+        Psi_dot : casadi.SX
+            Rate of Psi (6x3).
+        """
         f = self.model.casadi_function
         lam = self.filter_rate
         p0 = self.nominal_with_cog(ca.SX.zeros(3))
@@ -167,7 +259,27 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         Psi_dot = lam * (Phi0 - lam * W - Psi)
         return zeta - lam * M0 @ nu, lam * W + Psi, zeta_dot, Psi_dot
 
-    def expression(self, t, x, ref, c):
+    def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The composite adaptive law (see the module docstring).
+
+        Parameters
+        ----------
+        t : casadi.SX
+            Time (s), unused.
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        ref : casadi.SX
+            Reference row (14,).
+        c : casadi.SX
+            The controller state (``n_state``,), laid out as ``STATE_SLICES``.
+
+        Returns
+        -------
+        U : casadi.SX
+            Input (4x1) [U1 (N), U2, U3, U4 (N m)].
+        c_dot : casadi.SX
+            Its rate (``n_state`` x 1).
+        """
         r_hat, zeta = c[0:3], c[3:9]
         Psi = ca.reshape(c[9:27], 6, 3)
         P = unpack_covariance(c[27:33])
@@ -200,17 +312,51 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
                            ca.fmin(1.0, ca.fmax(0.0, self.warm_up + 1.0 - clock)), f_hat_dot)
         return U, c_dot
 
-    def project(self, c):
-        """Scale r_hat back onto the ball after a discrete step; the rest unchanged (SX)."""
+    def project(self, c: ca.SX) -> ca.SX:
+        """Scale r_hat back onto the ball after a discrete step; the rest unchanged.
+
+        Parameters
+        ----------
+        c : casadi.SX
+            The controller state (``n_state``,).
+
+        Returns
+        -------
+        casadi.SX
+            The state with r_hat within ``projection_radius``.
+        """
         if self.projection_radius is None:
             return c
         return ca.vertcat(super().project(c[0:3]), c[3:])
 
-    def project_numpy(self, c):
+    def project_numpy(self, c: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """``project`` for numpy arrays, in place.
+
+        Parameters
+        ----------
+        c : (n_state,) numpy.ndarray
+            The controller state.
+
+        Returns
+        -------
+        (n_state,) numpy.ndarray
+            ``c``, with r_hat scaled in place onto the ball when outside it.
+        """
         if self.projection_radius is not None:
             super().project_numpy(c[0:3])       # c[0:3] is a view: scaled in place
         return c
 
-    def estimate_of(self, c):
-        """r_hat (3,) from a controller state (numpy)."""
+    def estimate_of(self, c: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The CoG estimate in a controller state.
+
+        Parameters
+        ----------
+        c : (..., n_state) array_like
+            Controller states.
+
+        Returns
+        -------
+        (..., 3) numpy.ndarray
+            r_hat (m), a view.
+        """
         return np.asarray(c)[..., 0:3]

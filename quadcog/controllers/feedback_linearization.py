@@ -3,6 +3,7 @@ b from the generated Lie derivatives at the nominal r_G, v from PD on the output
 y = [z, phi, theta, psi], and an outer position loop that commands phi and theta."""
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.controllers.base import Controller
 from quadcog.controllers.shaping import (
@@ -19,13 +20,30 @@ from quadcog.model.functions import Model
 from quadcog.trajectories.analytic import ACC, JERK, POS, VEL, YAW, YAW_RATE
 from quadcog.vehicles.vehicle import Vehicle
 
+__all__ = ["FeedbackLinearization"]
+
 
 class FeedbackLinearization(Controller):
     """Feedback linearization with a cascade position loop; poles in rad/s.
 
-    poles_z, poles_attitude (phi, theta), poles_psi: 2 poles each for the linearized output
-    errors e_ddot + kd e_dot + kp e = 0; poles_position: 2 poles of the outer x, y loop
-    (slower than the attitude). max_tilt: clip on the commanded roll and pitch (rad).
+    Parameters
+    ----------
+    vehicle : Vehicle, optional
+        The controller's model of the vehicle (default: the Hummingbird with r_G = 0).
+    model : quadcog.model.functions.Model, optional
+        The generated functions (default ``quadcog.load()``).
+    poles_z, poles_attitude, poles_psi : sequence of float
+        2 poles each (rad/s, real or a conjugate pair) for the linearized output errors
+        e_ddot + kd e_dot + kp e = 0 of z, of phi and theta, and of psi.
+    poles_position : sequence of float
+        2 poles (rad/s) of the outer x, y loop (slower than the attitude).
+    max_tilt : float
+        Clip on the commanded roll and pitch (rad), in (0, pi/2].
+
+    Raises
+    ------
+    InputError
+        When a setting is out of range.
     """
 
     name = "feedback_linearization"
@@ -43,13 +61,33 @@ class FeedbackLinearization(Controller):
         self.kp_pos, self.kd_pos = second_order_gains(poles_position, "poles_position")
         self.max_tilt = tilt_limit(max_tilt)
 
-    def output_errors(self, x, ref, p):
-        """(e (4,), e_dot (4,), y_ddot_d (4,)) relative to y_d = [z_d, phi_d, theta_d, psi_d].
+    def output_errors(self, x: ca.SX, ref: ca.SX, p: ca.SX | ca.DM | npt.NDArray[np.float64]
+                      ) -> tuple[ca.SX, ca.SX, ca.SX]:
+        """The output errors relative to y_d = [z_d, phi_d, theta_d, psi_d].
 
         The outer loop commands the acceleration a_cmd = a_ref + Kp e_p + Kd e_v (+ drag),
         turned into phi_d, theta_d by exact inversion of the thrust direction. The part of
         their rates that the reference explains (jerk, yaw rate) is fed forward; their second
-        derivatives are taken as zero."""
+        derivatives are taken as zero.
+
+        Parameters
+        ----------
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        ref : casadi.SX
+            Reference row (14,).
+        p : casadi.SX or casadi.DM or (14,) numpy.ndarray
+            Parameter vector the kinematics are evaluated with.
+
+        Returns
+        -------
+        e : casadi.SX
+            Output error y - y_d (4,) [m, rad, rad, rad].
+        e_dot : casadi.SX
+            Its rate (4,) [m/s, rad/s, rad/s, rad/s].
+        y_ddot_d : casadi.SX
+            Desired output acceleration (4,) [m/s^2, rad/s^2 (0), (0), (0)].
+        """
         g = self.nominal[IDX["g"]]
         eta_dot, y_dot = kinematics(self.model, x, p)
         drag = ca.DM(np.append(drag_over_mass(self.nominal)[:2], 0.0))
@@ -77,11 +115,42 @@ class FeedbackLinearization(Controller):
         tilt, rate = self._tilt_fn(a_cmd, psi, a_cmd_dot, psi_dot)
         return tilt[0], tilt[1], rate
 
-    def commanded_acceleration(self, e, e_dot, y_ddot_d):
-        """v = y_ddot_d - Kp e - Kd e_dot."""
+    def commanded_acceleration(self, e: ca.SX, e_dot: ca.SX, y_ddot_d: ca.SX) -> ca.SX:
+        """The linearized output's command v = y_ddot_d - Kp e - Kd e_dot.
+
+        Parameters
+        ----------
+        e, e_dot, y_ddot_d : casadi.SX
+            As returned by ``output_errors`` (4,) each.
+
+        Returns
+        -------
+        casadi.SX
+            v (4,) [m/s^2, rad/s^2, rad/s^2, rad/s^2].
+        """
         return y_ddot_d - ca.DM(self.kp) * e - ca.DM(self.kd) * e_dot
 
-    def expression(self, t, x, ref, c):
+    def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The feedback-linearizing law U = alpha^{-1} (v - b) at the nominal r_G.
+
+        Parameters
+        ----------
+        t : casadi.SX
+            Time (s), unused.
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        ref : casadi.SX
+            Reference row (14,).
+        c : casadi.SX
+            The controller state, empty (0,).
+
+        Returns
+        -------
+        U : casadi.SX
+            Input (4x1) [U1 (N), U2, U3, U4 (N m)].
+        c_dot : casadi.SX
+            Empty (0x1).
+        """
         p = ca.DM(self.nominal)
         e, e_dot, y_ddot_d = self.output_errors(x, ref, p)
         v = self.commanded_acceleration(e, e_dot, y_ddot_d)

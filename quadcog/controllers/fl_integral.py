@@ -16,12 +16,15 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.kinds import Number
 from quadcog.model.functions import Model
 from quadcog.vehicles.vehicle import Vehicle
+
+__all__ = ["FeedbackLinearizationIntegral", "ATTITUDE_ROWS"]
 
 ATTITUDE_ROWS = slice(1, 4)          # phi, theta, psi in y = [z, phi, theta, psi]
 
@@ -31,11 +34,22 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
 
     Parameters
     ----------
-    vehicle, model : as every controller.
-    integral_pole : the third pole (1/s, negative) of each attitude row, default -4.
-    integral_limit : clip of each integrator state (rad s), default 1.
-    The other keywords are FeedbackLinearization's (its attitude and yaw poles stay poles of
-    the new rows).
+    vehicle : Vehicle, optional
+        The controller's model of the vehicle (default: the Hummingbird with r_G = 0).
+    model : quadcog.model.functions.Model, optional
+        The generated functions (default ``quadcog.load()``).
+    integral_pole : float
+        The third pole (1/s, negative) of each attitude row, default -4.
+    integral_limit : float
+        Clip of each integrator state (rad s), > 0, default 1.
+    **kwargs
+        FeedbackLinearization's keywords (its attitude and yaw poles stay poles of the new
+        rows).
+
+    Raises
+    ------
+    InputError
+        When a setting is out of range.
     """
 
     name = "feedback_linearization_integral"
@@ -53,7 +67,27 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
         self.kd[ATTITUDE_ROWS] = kd - a
         self.ki = -a * kp
 
-    def expression(self, t, x, ref, c):
+    def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """Feedback linearization with the integrators on the attitude rows.
+
+        Parameters
+        ----------
+        t : casadi.SX
+            Time (s), unused.
+        x : casadi.SX
+            State (12,) [m, rad, m/s, rad/s].
+        ref : casadi.SX
+            Reference row (14,).
+        c : casadi.SX
+            The integrals of the phi, theta, psi errors (3,) (rad s).
+
+        Returns
+        -------
+        U : casadi.SX
+            Input (4x1) [U1 (N), U2, U3, U4 (N m)].
+        c_dot : casadi.SX
+            The phi, theta, psi errors (3x1) (rad).
+        """
         p = ca.DM(self.nominal)
         e, e_dot, y_ddot_d = self.output_errors(x, ref, p)
         v = self.commanded_acceleration(e, e_dot, y_ddot_d)
@@ -62,10 +96,33 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
         b = self.model.casadi_function("drift")(x, p)
         return ca.solve(alpha, v - b), e[ATTITUDE_ROWS]
 
-    def project(self, c):
-        """Clip the integrators to +-integral_limit (SX)."""
+    def project(self, c: ca.SX) -> ca.SX:
+        """Clip the integrators to +-integral_limit.
+
+        Parameters
+        ----------
+        c : casadi.SX
+            The integrator states (3,) (rad s).
+
+        Returns
+        -------
+        casadi.SX
+            The states clipped to +-``integral_limit``.
+        """
         return ca.fmin(ca.fmax(c, -self.integral_limit), self.integral_limit)
 
-    def project_numpy(self, c):
+    def project_numpy(self, c: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """``project`` for numpy arrays, in place.
+
+        Parameters
+        ----------
+        c : (3,) numpy.ndarray
+            The integrator states (rad s).
+
+        Returns
+        -------
+        (3,) numpy.ndarray
+            ``c``, clipped in place to +-``integral_limit``.
+        """
         np.clip(c, -self.integral_limit, self.integral_limit, out=c)
         return c

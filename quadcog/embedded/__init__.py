@@ -1,7 +1,7 @@
 """The controllers as self-contained C99 modules (float32 or double) for a flight controller,
 and the tools that check them on a Cortex-M4 in QEMU (``make embedded``)."""
+from quadcog.embedded.controller_export import export_controller, render, short_name, step_function
 from quadcog.embedded.emit import PRECISIONS
-from quadcog.embedded.export import export_controller, render, short_name, step_function
 from quadcog.errors import ExportError
 
 __all__ = ["PRECISIONS", "ExportError", "export_controller", "render", "short_name",

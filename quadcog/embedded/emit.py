@@ -3,10 +3,11 @@
 CasADi's own code generator writes double literals and calls sin/cos even with
 casadi_real=float, so a float32 build promotes to double (software double on a Cortex-M4).
 Here every instruction of the SX algorithm becomes one C statement on a local scalar (the
-operations and the walk are quadcog.codegen.sx_to_c's, shared with the vector kernel): float literals with
-an f suffix and sinf/cosf/fminf/... for float32, 15-digit literals for double. The output
-depends only on the algorithm, so it is byte-reproducible.
+operations and the walk are quadcog.codegen.sx_to_c's, shared with the vector kernel): float
+literals with an f suffix and sinf/cosf/fminf/... for float32, 15-digit literals for double.
+The output depends only on the algorithm, so it is byte-reproducible.
 """
+from collections.abc import Sequence
 import functools
 
 import casadi as ca
@@ -14,6 +15,8 @@ import numpy as np
 
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.errors import ExportError
+
+__all__ = ["PRECISIONS", "C_TYPE", "DOUBLE_DIGITS", "literal", "target", "body"]
 
 PRECISIONS = ("double", "float32")
 C_TYPE = {"double": "double", "float32": "float"}
@@ -23,17 +26,32 @@ C_TYPE = {"double": "double", "float32": "float"}
 DOUBLE_DIGITS = 15
 
 
-def literal(value, precision):
-    """A C literal of ``value`` in the given precision (reproducible text)."""
+def literal(value: float, precision: str) -> str:
+    """A C literal of ``value`` in the given precision (reproducible text).
+
+    Parameters
+    ----------
+    value : float
+        The constant.
+    precision : str
+        'float32' (shortest round-trip float with an f suffix) or 'double'
+        (``DOUBLE_DIGITS`` significant digits).
+
+    Returns
+    -------
+    str
+        The C literal.
+
+    Raises
+    ------
+    quadcog.errors.ExportError
+        When ``value`` is not finite.
+    """
     value = float(value)
     if not np.isfinite(value):
         raise ExportError(f"constant {value} in the expression is not finite")
     if precision == "float32":
-        text = np.format_float_scientific(np.float32(value), unique=True, trim="0")
-        mantissa, exponent = text.split("e")
-        exp = int(exponent)
-        mantissa = mantissa if "." in mantissa else mantissa + ".0"
-        return f"{mantissa}e{exp}f" if exp else f"{mantissa}f"
+        return sxc.float32_literal(value)
     text = f"{value:.{DOUBLE_DIGITS - 1}e}"
     mantissa, exponent = text.split("e")
     mantissa = mantissa.rstrip("0")
@@ -43,9 +61,25 @@ def literal(value, precision):
 
 
 @functools.cache
-def target(precision):
-    """The ``quadcog.codegen.sx_to_c.Target`` of a precision: its literals, sinf/fminf... in float32, fmin
-    and fmax as calls (the C library's, exact on any target)."""
+def target(precision: str) -> sxc.Target:
+    """The ``quadcog.codegen.sx_to_c.Target`` of a precision.
+
+    Parameters
+    ----------
+    precision : str
+        One of ``PRECISIONS``.
+
+    Returns
+    -------
+    quadcog.codegen.sx_to_c.Target
+        Its literals, sinf/fminf... in float32, fmin and fmax as calls (the C library's,
+        exact on any target).
+
+    Raises
+    ------
+    quadcog.errors.ExportError
+        For an unknown precision.
+    """
     if precision not in PRECISIONS:
         raise ExportError(f"precision must be one of {PRECISIONS}, got {precision!r}")
     return sxc.Target(literal=functools.partial(literal, precision=precision),
@@ -53,13 +87,37 @@ def target(precision):
                       error=ExportError)
 
 
-def body(fn, precision, arg_names, res_names, indent="    "):
-    """(declarations, statements, inputs read): C lines evaluating the SX Function ``fn``.
+def body(fn: ca.Function, precision: str, arg_names: Sequence[str], res_names: Sequence[str],
+         indent: str = "    ") -> tuple[list[str], list[str], set[int]]:
+    """C lines evaluating the SX Function ``fn``.
 
-    Input i, nonzero j is read as ``arg_names[i][j]`` (as ``arg_names[i]`` when the input is a
-    scalar); output i, nonzero j is written to ``res_names[i][j]``. Each work-vector slot of
-    CasADi's algorithm is one local scalar ``w<k>`` (CasADi already reuses slots), so the work
-    space is fixed and small. An operation without a C form raises ExportError naming it."""
+    Each work-vector slot of CasADi's algorithm is one local scalar ``w<k>`` (CasADi already
+    reuses slots), so the work space is fixed and small.
+
+    Parameters
+    ----------
+    fn : casadi.Function
+        An SX Function.
+    precision : str
+        One of ``PRECISIONS``.
+    arg_names : sequence of str
+        Input i, nonzero j is read as ``arg_names[i][j]`` (as ``arg_names[i]`` when the input
+        is a scalar).
+    res_names : sequence of str
+        Output i, nonzero j is written to ``res_names[i][j]``.
+    indent : str
+        Put before every line.
+
+    Returns
+    -------
+    tuple of (list of str, list of str, set of int)
+        (declarations, statements, indices of the inputs read).
+
+    Raises
+    ------
+    quadcog.errors.ExportError
+        When ``fn`` is not an SX Function, or for an operation without a C form (named).
+    """
     if not isinstance(fn, ca.Function) or not fn.is_a("SXFunction"):
         raise ExportError(f"expected an SX Function, got {fn!r}")
     scalar = lambda i: fn.numel_in(i) == 1

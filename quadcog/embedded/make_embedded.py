@@ -1,32 +1,73 @@
 """``make embedded``: export every controller in both precisions into generated/embedded/,
 compile each with the strict flags on the host (and for the Cortex-M4), run each on the
 Cortex-M4 in QEMU over a recorded flight, and print the cost table."""
+from collections.abc import Sequence
 import difflib
+import os
 from pathlib import Path
 import tempfile
+from typing import Any
 
-from quadcog.controllers.registry import CONTROLLERS, make_controller
+import numpy as np
+from numpy.typing import NDArray
+
+from quadcog.controllers.registry import controller_names, make_controller
 from quadcog.embedded import target
+from quadcog.embedded.controller_export import render
 from quadcog.embedded.emit import PRECISIONS
-from quadcog.embedded.export import render
 from quadcog.embedded.host import build_host_library
 from quadcog.paths import generated_dir
 
+__all__ = ["CONTROLLERS", "RECORDING", "embedded_dir", "command", "render_all", "check",
+           "write", "recording", "target_costs", "cost_table", "main"]
+
 # The paper's three laws; controllers added to CONTROLLERS later export the same way.
-CONTROLLERS = tuple(CONTROLLERS)
+CONTROLLERS = controller_names()
 RECORDING = ("fig6", 900, 2900)      # scenario, first and end step: 2 s around the CoG step
 
 
-def embedded_dir():
+def embedded_dir() -> Path:
+    """The committed exported modules' folder.
+
+    Returns
+    -------
+    pathlib.Path
+        ``generated/embedded/`` (``quadcog/_generated/embedded/`` when installed).
+    """
     return Path(generated_dir()) / "embedded"
 
 
-def command(name, precision):
+def command(name: str, precision: str) -> str:
+    """The command a header names as the one that exported it.
+
+    Parameters
+    ----------
+    name : str
+        The controller's short name.
+    precision : str
+        'float32' or 'double'.
+
+    Returns
+    -------
+    str
+        The ``quadcog export`` command line.
+    """
     return f"quadcog export --controller {name} --precision {precision} --out DIR"
 
 
-def render_all(names=CONTROLLERS):
-    """{relative path: text} of every exported module, as committed in generated/embedded/."""
+def render_all(names: Sequence[str] = CONTROLLERS) -> dict[str, str]:
+    """Every exported module, as committed in generated/embedded/.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The controllers' short names.
+
+    Returns
+    -------
+    dict of str to str
+        {relative path (``<precision>/quadcog_<name>.h``): text}.
+    """
     files = {}
     for name in names:
         ctl = make_controller(name)
@@ -36,8 +77,22 @@ def render_all(names=CONTROLLERS):
     return files
 
 
-def check(folder=None, files=None):
-    """'' when generated/embedded/ holds exactly what the exporter writes, else a diff."""
+def check(folder: str | os.PathLike[str] | None = None,
+          files: dict[str, str] | None = None) -> str:
+    """Whether a folder holds exactly what the exporter writes.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        Default ``embedded_dir()``.
+    files : dict of str to str, optional
+        What the exporter writes (default ``render_all()``).
+
+    Returns
+    -------
+    str
+        '' when they agree, else a diff (at most 300 lines).
+    """
     folder = Path(folder or embedded_dir())
     files = render_all() if files is None else files
     on_disk = {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*"))
@@ -56,7 +111,22 @@ def check(folder=None, files=None):
     return "".join(out[:300])
 
 
-def write(folder=None, files=None):
+def write(folder: str | os.PathLike[str] | None = None,
+          files: dict[str, str] | None = None) -> Path:
+    """Write the exported modules, and delete those no longer exported.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        Default ``embedded_dir()``.
+    files : dict of str to str, optional
+        {relative path: text} (default ``render_all()``).
+
+    Returns
+    -------
+    pathlib.Path
+        The folder.
+    """
     folder = Path(folder or embedded_dir())
     files = render_all() if files is None else files
     for rel, text in files.items():
@@ -69,9 +139,15 @@ def write(folder=None, files=None):
     return folder
 
 
-def recording():
-    """(x (N, 12), ref (N, 14), dt): states and references of a host flight (the Python
-    compiled path of the RECORDING scenario), for the target runs."""
+def recording() -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+    """States and references of a host flight, for the target runs.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, numpy.ndarray, float)
+        x (N, 12) [m, rad, m/s, rad/s], ref (N, 14) and dt [s] of the steps of ``RECORDING``
+        (the compiled path of its scenario).
+    """
     from quadcog.scenarios.scenario import load_scenario
     scenario, first, end = RECORDING
     sc = load_scenario(scenario)
@@ -79,10 +155,32 @@ def recording():
     return res.x[first:end], res.ref[first:end], sc.dt
 
 
-def target_costs(folder=None, names=CONTROLLERS, work=None):
-    """Run every module of ``folder`` on the Cortex-M4 in QEMU and on the host; returns rows
-    {controller, precision, flash, ram, stack_static, stack_measured, instructions_mean,
-    instructions_max, max_U_diff, max_c_diff, calibration}."""
+def target_costs(folder: str | os.PathLike[str] | None = None,
+                 names: Sequence[str] = CONTROLLERS,
+                 work: str | os.PathLike[str] | None = None) -> list[dict[str, Any]]:
+    """Run every module of ``folder`` on the Cortex-M4 in QEMU and on the host.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        The exported modules (default ``embedded_dir()``).
+    names : sequence of str
+        The controllers' short names.
+    work : str or os.PathLike, optional
+        Build folder (default: a temporary one).
+
+    Returns
+    -------
+    list of dict
+        One row per controller and precision: {controller, precision, flash, ram (B),
+        stack_static, stack_measured (B), instructions_mean, instructions_max, max_U_diff
+        (N, N m), max_c_diff, rel_diff, calibration}.
+
+    Raises
+    ------
+    quadcog.errors.TargetError
+        When the cross tools are missing or a run fails.
+    """
     folder = Path(folder or embedded_dir())
     x, ref, dt = recording()
     rows = []
@@ -114,8 +212,19 @@ def target_costs(folder=None, names=CONTROLLERS, work=None):
     return rows
 
 
-def cost_table(rows):
-    """The cost table as Markdown."""
+def cost_table(rows: Sequence[dict[str, Any]]) -> str:
+    """The cost table as Markdown.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        The rows of ``target_costs``.
+
+    Returns
+    -------
+    str
+        The table, with the time per step at 168 MHz [us].
+    """
     head = ("| controller | precision | flash (B) | RAM (B) | stack, -fstack-usage (B) | "
             "stack, measured (B) | instructions per step, mean | max | at 168 MHz (us) |\n"
             "|---|---|---|---|---|---|---|---|---|\n")
@@ -126,7 +235,20 @@ def cost_table(rows):
     return head + "\n".join(lines) + "\n"
 
 
-def main(argv=None):
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m quadcog.embedded`` (``make embedded``).
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments (default: the command line's).
+
+    Returns
+    -------
+    int
+        The exit status: 0, or 1 when generated/embedded/ is stale (``--check``) or a target
+        run is off its tolerance.
+    """
     import argparse
     import sys
     import time

@@ -7,16 +7,24 @@ advances exactly 1 ns per instruction, and the SysTick, clocked at the board's 2
 every 40 instructions, deterministically. A calibration loop of known length (2 x 100,000
 instructions) is timed first, which checks that mapping on every run.
 """
+import os
 from pathlib import Path
 import re
 import shutil
 import subprocess
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from quadcog.codegen.compiler import find_compiler
 from quadcog.embedded.host import STRICT_FLAGS, compile_checked
 from quadcog.errors import CompileError, TargetError
+
+__all__ = ["TARGET_DIR", "ARM_GCC", "ARM_SIZE", "QEMU", "BOARD", "CORTEX_M4", "TARGET_OPT",
+           "DEBIAN_PACKAGES", "TARGET_RTOL", "TARGET_RTOL_FLOAT32", "STRICT_FLAGS",
+           "target_rtol", "relative_difference", "missing_tools", "write_data", "build_target",
+           "build_host_harness", "run_qemu", "run_host", "parse_output", "object_cost"]
 
 TARGET_DIR = Path(__file__).parent / "target"
 ARM_GCC = "arm-none-eabi-gcc"
@@ -36,16 +44,43 @@ TARGET_RTOL = {"float32": 1e-4, "double": 1e-11}
 TARGET_RTOL_FLOAT32 = {"composite": 1e-2}
 
 
-def target_rtol(name, precision):
-    """The tolerance of target vs host build for controller ``name`` in ``precision``."""
+def target_rtol(name: str, precision: str) -> float:
+    """The tolerance of target vs host build.
+
+    Parameters
+    ----------
+    name : str
+        The controller's short name.
+    precision : str
+        'float32' or 'double'.
+
+    Returns
+    -------
+    float
+        The largest relative difference allowed (``relative_difference``).
+    """
     if precision == "float32":
         return TARGET_RTOL_FLOAT32.get(name, TARGET_RTOL[precision])
     return TARGET_RTOL[precision]
 
 
-def relative_difference(a, b, per_column=True):
-    """max |a - b| / max |b|, per column (the largest ratio) or over the whole array; 0 for
-    an empty array."""
+def relative_difference(a: NDArray[Any], b: NDArray[Any], per_column: bool = True) -> float:
+    """max |a - b| / max |b|, per column (the largest ratio) or over the whole array.
+
+    Parameters
+    ----------
+    a : (N, k) numpy.ndarray
+        One run's outputs.
+    b : (N, k) numpy.ndarray
+        The other's (the scale).
+    per_column : bool
+        Scale each column by its own largest value, else by the whole array's.
+
+    Returns
+    -------
+    float
+        The ratio; 0 for an empty array.
+    """
     if not a.size:
         return 0.0
     axis = 0 if per_column else None
@@ -53,8 +88,14 @@ def relative_difference(a, b, per_column=True):
     return float(np.max(np.max(np.abs(a - b), axis=axis) / scale))
 
 
-def missing_tools():
-    """Names of the tools (cross compiler, size, QEMU) not on PATH."""
+def missing_tools() -> list[str]:
+    """Names of the tools (cross compiler, size, QEMU) not on PATH.
+
+    Returns
+    -------
+    list of str
+        Empty when all are there.
+    """
     return [t for t in (ARM_GCC, ARM_SIZE, QEMU) if shutil.which(t) is None]
 
 
@@ -64,9 +105,28 @@ def _hex_literal(value, precision):
     return float(value).hex()
 
 
-def write_data(path, x, ref, dt, precision):
-    """harness_data.h: the recorded states x (N, 12) and references ref (N, 14) and dt as
-    exact hexadecimal literals of the precision (float32: rounded once, as the host does)."""
+def write_data(path: str | os.PathLike[str], x: ArrayLike, ref: ArrayLike, dt: float,
+               precision: str) -> Path:
+    """Write harness_data.h: a recorded sequence as exact hexadecimal literals.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The header to write.
+    x : (N, 12) array_like
+        Recorded states [m, rad, m/s, rad/s].
+    ref : (N, 14) array_like
+        Recorded references.
+    dt : float
+        Control period [s].
+    precision : str
+        'float32' (rounded once, as the host does) or 'double'.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     x, ref = np.asarray(x, float), np.asarray(ref, float)
     rows = lambda a: ",\n".join("    {" + ", ".join(_hex_literal(v, precision) for v in r) + "}"
                                 for r in a)
@@ -84,9 +144,37 @@ def _defines(name, nc):
             f"-DQC_INIT=quadcog_{name}_init", f"-DQC_NC={nc}"]
 
 
-def build_target(module_dir, name, nc, data_dir, out_dir):
-    """Cross-compile the controller with the harness for the Cortex-M4; returns the ELF path.
-    The controller also gets a .su file (-fstack-usage) and an object for arm-none-eabi-size."""
+def build_target(module_dir: str | os.PathLike[str], name: str, nc: int,
+                 data_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str]) -> Path:
+    """Cross-compile the controller with the harness for the Cortex-M4.
+
+    The controller also gets a .su file (-fstack-usage) and an object for arm-none-eabi-size.
+
+    Parameters
+    ----------
+    module_dir : str or os.PathLike
+        The folder of ``quadcog_<name>.c``.
+    name : str
+        The controller's short name.
+    nc : int
+        Size of its state c.
+    data_dir : str or os.PathLike
+        The folder of harness_data.h.
+    out_dir : str or os.PathLike
+        Where the object and the ELF go (created if needed).
+
+    Returns
+    -------
+    pathlib.Path
+        The ELF.
+
+    Raises
+    ------
+    quadcog.errors.TargetError
+        When the cross tools are missing.
+    quadcog.errors.CompileError
+        When a compile fails.
+    """
     if missing_tools():
         raise TargetError(f"missing {', '.join(missing_tools())}; install the Debian packages "
                           f"{DEBIAN_PACKAGES} (as root, apt-get install)")
@@ -105,8 +193,33 @@ def build_target(module_dir, name, nc, data_dir, out_dir):
     return elf
 
 
-def build_host_harness(module_dir, name, nc, data_dir, out_dir):
-    """The same harness and controller source built for the host; returns the executable."""
+def build_host_harness(module_dir: str | os.PathLike[str], name: str, nc: int,
+                       data_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str]) -> Path:
+    """The same harness and controller source built for the host.
+
+    Parameters
+    ----------
+    module_dir : str or os.PathLike
+        The folder of ``quadcog_<name>.c``.
+    name : str
+        The controller's short name.
+    nc : int
+        Size of its state c.
+    data_dir : str or os.PathLike
+        The folder of harness_data.h.
+    out_dir : str or os.PathLike
+        Where the executable goes.
+
+    Returns
+    -------
+    pathlib.Path
+        The executable.
+
+    Raises
+    ------
+    quadcog.errors.CompileError
+        Without a C compiler, or when the compile fails.
+    """
     cc = find_compiler()
     if cc is None:
         raise CompileError("no C compiler found (looked for $CC or `cc` on PATH)")
@@ -117,11 +230,29 @@ def build_host_harness(module_dir, name, nc, data_dir, out_dir):
     return exe
 
 
-def run_qemu(elf, timeout=120):
-    """Run an ELF on mps2-an386 with semihosting and icount; returns its output (text).
+def run_qemu(elf: str | os.PathLike[str], timeout: float = 120) -> str:
+    """Run an ELF on mps2-an386 with semihosting and icount.
 
     The semihosting console goes to a file next to the ELF (a chardev), apart from QEMU's
-    own messages."""
+    own messages.
+
+    Parameters
+    ----------
+    elf : str or os.PathLike
+        The program (``build_target``).
+    timeout : float
+        Wall-clock limit [s].
+
+    Returns
+    -------
+    str
+        The harness's output.
+
+    Raises
+    ------
+    quadcog.errors.TargetError
+        When QEMU times out or exits with an error.
+    """
     log = Path(elf).with_suffix(".out")
     cmd = [QEMU, "-M", BOARD, "-display", "none", "-monitor", "none", "-serial", "none",
            "-chardev", f"file,id=semihosting,path={log}",
@@ -139,17 +270,59 @@ def run_qemu(elf, timeout=120):
     return text
 
 
-def run_host(exe, timeout=60):
+def run_host(exe: str | os.PathLike[str], timeout: float = 60) -> str:
+    """Run the host build of the harness.
+
+    Parameters
+    ----------
+    exe : str or os.PathLike
+        The executable (``build_host_harness``).
+    timeout : float
+        Wall-clock limit [s].
+
+    Returns
+    -------
+    str
+        The harness's output.
+
+    Raises
+    ------
+    quadcog.errors.TargetError
+        When it exits with an error.
+    """
     res = subprocess.run([str(exe)], capture_output=True, text=True, timeout=timeout)
     if res.returncode != 0:
         raise TargetError(f"{exe} exited with {res.returncode}: {res.stderr[-2000:]}")
     return res.stdout
 
 
-def parse_output(text, precision, nc):
-    """(U (N, 4), c (N, nc), info dict) from a harness output."""
+def parse_output(text: str, precision: str,
+                 nc: int) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, Any]]:
+    """The values and costs of a harness output.
+
+    Parameters
+    ----------
+    text : str
+        The output (``run_qemu``, ``run_host``).
+    precision : str
+        'float32' or 'double': how the hex of the bits is read.
+    nc : int
+        Size of the controller state c.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, numpy.ndarray, dict)
+        U (N, 4) [N, N m], c (N, nc), and the costs: calibration counts, timer overhead,
+        instructions per step (mean, max), steps and stack bytes.
+
+    Raises
+    ------
+    quadcog.errors.TargetError
+        When the output ends early.
+    """
     dtype = np.dtype(">f4") if precision == "float32" else np.dtype(">f8")
-    values, info = [], {}
+    values: list[bytes] = []
+    info: dict[str, Any] = {}
     for line in text.splitlines():
         head = line.split(" ", 1)[0]
         if head in ("calibration", "cost"):
@@ -169,9 +342,20 @@ def parse_output(text, precision, nc):
     return a[:, :4], a[:, 4:], info
 
 
-def object_cost(obj):
-    """{'text', 'data', 'bss', 'stack'} of a controller object (arm-none-eabi-size, and the
-    largest frame in its .su file)."""
+def object_cost(obj: str | os.PathLike[str]) -> dict[str, int]:
+    """The sizes of a controller object.
+
+    Parameters
+    ----------
+    obj : str or os.PathLike
+        The object file (its .su file next to it).
+
+    Returns
+    -------
+    dict of str to int
+        {'text', 'data', 'bss', 'stack'} in bytes (arm-none-eabi-size, and the largest frame
+        in the .su file).
+    """
     res = subprocess.run([ARM_SIZE, str(obj)], capture_output=True, text=True, check=True)
     text, data, bss = (int(v) for v in res.stdout.splitlines()[1].split()[:3])
     su = Path(obj).with_suffix(".su")

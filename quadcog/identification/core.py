@@ -236,7 +236,7 @@ def pooled_estimate(estimates: Sequence[FlightEstimate]
         r_G and its half-widths (m, NaN where not estimated), mass and half-width (kg),
         samples.
     """
-    from quadcog.identification.flight import block_mean_ci95, speed_corrected
+    from quadcog.identification.segments import block_mean_ci95, speed_corrected
     samples = sum(e.samples for e in estimates)
     m, m_half = block_mean_ci95(np.concatenate([e.blocks_m for e in estimates]))
     if estimates[0].method == "static":

@@ -30,7 +30,7 @@ import numpy.typing as npt
 
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.errors import IdentificationError
-from quadcog.identification.flight import (
+from quadcog.identification.segments import (
     BLOCK_SECONDS,
     MIN_BLOCKS,
     SPEED_SPREAD,

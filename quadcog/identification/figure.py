@@ -43,7 +43,7 @@ def plot_identification(result: "Identification", path: str | Path | None = None
         matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from quadcog.identification.flight import BLOCK_SECONDS
+    from quadcog.identification.segments import BLOCK_SECONDS
     with plt.rc_context({"font.size": 11, "legend.fontsize": 9}):
         fig, (ax_r, ax_m) = plt.subplots(1, 2, figsize=(12, 4.8))
         offset = 0.0

@@ -150,7 +150,7 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
         layouts[event_id] = (name, dtype)
     # Records: find where each starts (only the event id is read here), then gather each
     # event's records at once.
-    starts = {e: [] for e in layouts}
+    starts: dict[int, list[int]] = {e: [] for e in layouts}
     while i < end:
         if i + 2 > end:
             raise LogFormatError(f"{path}: truncated record at byte {i} (before the CRC)")
@@ -173,7 +173,8 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
             np.zeros((0, dtype.itemsize), np.uint8)
         rec = np.ascontiguousarray(block).view(dtype).reshape(-1)
         ticks = rec["_tick"].astype(np.float64) * _STAMP[version][1]
-        events[name] = (ticks, {f: rec[f] for f in dtype.names[2:]})
+        # a structured dtype always has names
+        events[name] = (ticks, {f: rec[f] for f in dtype.names[2:]})  # type: ignore[index]
     return version, events
 
 

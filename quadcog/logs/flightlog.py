@@ -1,8 +1,8 @@
 """``FlightLog``: one flight's signals on one time base, as every reader of quadcog.logs
 returns them, checked once here (shapes, finite values, strictly increasing time)."""
+from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Mapping
 
 import numpy as np
 
@@ -119,7 +119,7 @@ class FlightLog:
         return a
 
     @property
-    def n_samples(self):
+    def n_samples(self) -> int:
         """Number of samples N (int)."""
         return int(self.t.size)
 
@@ -134,6 +134,7 @@ class FlightLog:
         Returns
         -------
         bool
+            True when ``signals`` holds it.
         """
         return name in self.signals
 

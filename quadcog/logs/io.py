@@ -84,6 +84,7 @@ def read_log(path: str | os.PathLike, format: str | None = None) -> "FlightLog":
     Returns
     -------
     FlightLog
+        Its signals in SI units and quadcog's frames, time ``t`` (s) from 0.
 
     Raises
     ------

@@ -137,6 +137,7 @@ def table_columns(names: Iterable[str] | None = None) -> tuple:
     Returns
     -------
     tuple of str
+        ``t_s`` and each signal's ``<name>_<unit>`` columns.
     """
     chosen = set(SIGNALS) if names is None else set(names)
     return (TIME_COLUMN,) + tuple(c for n in SIGNALS if n in chosen for c in signal_columns(n))

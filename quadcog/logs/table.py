@@ -156,6 +156,7 @@ def read_table(path: str | os.PathLike, fmt: str) -> FlightLog:
     Returns
     -------
     FlightLog
+        The table's signals, time ``t`` (s) from the ``t_s`` column.
 
     Raises
     ------

@@ -34,10 +34,11 @@ topic read covers (so nothing is extrapolated; what is cut at either end is in
 quaternion component-wise with its sign kept continuous, then normalized), by the previous
 sample for integer fields. ``raw`` holds every numeric field of the topics read as
 ``"topic.field"`` on that base (fields not finite somewhere, NaN or infinite, are left out and
-counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``, ``ver_sw``,
-...), its rotor geometry in quadcog's order (``rotor_positions_m``, ``rotor_directions``:
-``-sign(CA_ROTOR{i}_KM)``, KM being positive for a counter-clockwise rotor) and parameters
-of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...) when logged. A signal with a NaN or
+counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``,
+``ver_sw``, ...), its rotor geometry in quadcog's order (``rotor_positions_m``,
+``rotor_directions``: ``-sign(CA_ROTOR{i}_KM)``, KM being positive for a counter-clockwise
+rotor) and parameters of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...)
+when logged. A signal with a NaN or
 infinite sample (an estimate not valid yet) is left out and named in
 ``meta["signals_dropped"]``, which ``FlightLog.signal`` quotes when it is asked for.
 """
@@ -46,6 +47,7 @@ import io
 import os
 from pathlib import Path
 import struct
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -347,14 +349,14 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     if v is not None:
         signals["thrust_command"] = -v[:, 0]
     # an estimate that is not valid yet is NaN in PX4's topics: leave such a signal out, say so
-    dropped = []
+    not_finite: list[str] = []
     for name in list(signals):
         bad = ~np.isfinite(signals[name]).reshape(t_us.size, -1).all(axis=1)
         if bad.any():
             del signals[name]
-            dropped.append(f"{name} ({int(bad.sum())} of {t_us.size} samples not finite)")
-    if dropped:
-        meta["signals_dropped"] = "; ".join(dropped)
+            not_finite.append(f"{name} ({int(bad.sum())} of {t_us.size} samples not finite)")
+    if not_finite:
+        meta["signals_dropped"] = "; ".join(not_finite)
     return FlightLog(path, "ulog", (tb - tb[0]) * 1e-6, signals, raw, meta)
 
 
@@ -477,15 +479,16 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
             params[f"PWM_MAIN_FUNC{ch}"] = ("int32_t", struct.pack("<i", 100 + ch))
             params[f"PWM_MAIN_MIN{ch}"] = ("int32_t", struct.pack("<i", 1000))
             params[f"PWM_MAIN_MAX{ch}"] = ("int32_t", struct.pack("<i", 2000))
-    for key, (ctype, value) in params.items():
-        out += _message("P", _key_value(ctype, key, value))
+    for key, (ctype, packed) in params.items():
+        out += _message("P", _key_value(ctype, key, packed))
     dtypes = {}
     for msg_id, (name, flds) in enumerate(topics.items()):
         spec = ";".join(["uint64_t timestamp"] + [f"{c} {f}" for f, c, _ in flds]) + ";"
         out += _message("F", f"{name}:{spec}".encode())
-        dt = [("size", "<u2"), ("type", "u1"), ("id", "<u2"), ("timestamp", "<u8")]
-        dt += [(f, "<f4", v.shape[1:]) if v.ndim > 1 else (f, "<f4") for f, _, v in flds]
-        dtypes[name] = (msg_id, np.dtype(dt))
+        layout: list[tuple[Any, ...]] = [("size", "<u2"), ("type", "u1"), ("id", "<u2"),
+                                         ("timestamp", "<u8")]
+        layout += [(f, "<f4", v.shape[1:]) if v.ndim > 1 else (f, "<f4") for f, _, v in flds]
+        dtypes[name] = (msg_id, np.dtype(layout))
     for name, (msg_id, _) in dtypes.items():
         out += _message("A", bytes([0]) + struct.pack("<H", msg_id) + name.encode())
     rows = []

@@ -7,6 +7,9 @@ radians here (the plots show degrees and say so). Defined once; the writers, the
 """
 from quadcog.model.conventions import INPUT_NAMES, STATE_NAMES
 
+__all__ = ["STATE_UNITS", "INPUT_UNITS", "REFERENCE", "trajectory_columns", "T", "X", "U", "REF",
+           "R_HAT", "R_G"]
+
 # unit of each state entry, in the order of STATE_NAMES
 STATE_UNITS = ("m", "m", "m", "rad", "rad", "rad", "m_s", "m_s", "m_s", "rad_s", "rad_s", "rad_s")
 INPUT_UNITS = ("N", "N_m", "N_m", "N_m")
@@ -16,9 +19,15 @@ REFERENCE = (("x", "m"), ("y", "m"), ("z", "m"), ("vx", "m_s"), ("vy", "m_s"), (
              ("jz", "m_s3"), ("yaw", "rad"), ("yaw_rate", "rad_s"))
 
 
-def trajectory_columns():
-    """The column names of a run's table, in order: time, state (12), input (4), reference
-    (14), r_hat (3), r_G (3): 37 names."""
+def trajectory_columns() -> tuple[str, ...]:
+    """The column names of a run's table.
+
+    Returns
+    -------
+    tuple of str
+        In order: time, state (12), input (4), reference (14), r_hat (3), r_G (3): 37 names,
+        each ``<quantity>_<unit>`` (``t_s``, ``x_m``, ..., ``r_G_z_m``).
+    """
     return (("t_s",)
             + tuple(f"{n}_{u}" for n, u in zip(STATE_NAMES, STATE_UNITS))
             + tuple(f"{n}_{u}" for n, u in zip(INPUT_NAMES, INPUT_UNITS))

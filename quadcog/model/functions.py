@@ -1,7 +1,9 @@
 """The generated functions as fast numpy callables: ``quadcog.load()``."""
 from collections import namedtuple
+import os
 from pathlib import Path
 import threading
+from typing import Any
 import warnings
 
 import numpy as np
@@ -12,22 +14,33 @@ from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import InputError, ParameterError, QuadcogWarning
 from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
-from quadcog.model.inertial import check_physically_consistent
+from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import check_parameters
 from quadcog.paths import generated_dir
 from quadcog.validate import nonnegative, positive, vector
 
+__all__ = ["Linearization", "Model", "load"]
+
 Linearization = namedtuple("Linearization", "A B")
+Linearization.__doc__ = """The dynamics linearized about a point: x_dot ~ A dx + B dU.
+
+Parameters
+----------
+A : (12, 12) numpy.ndarray
+    d x_dot / d x (1/s and the units of the state entries).
+B : (12, 4) numpy.ndarray
+    d x_dot / d U.
+"""
 _warned_no_compiler = False
-_cache = {}
+_cache: dict[Path, "_Library"] = {}
 _cache_lock = threading.Lock()
 
 
-def _as_vector(name, value, n):
+def _as_vector(name: str, value: ArrayLike, n: int) -> np.ndarray:
     return vector(value, name, n)
 
 
-def _key(value):
+def _key(value: object) -> bytes | None:
     """The bytes of ``value`` as floats, or None when it is not numbers (a string, a ragged
     list): the check that follows then says what is wrong, as a typed error."""
     try:
@@ -45,31 +58,62 @@ class Model:
     unchecked allocation-free path. ``backend`` is "c" (the generated C, compiled on the first
     call of a method or of ``fast``) or "casadi-vm" (CasADi's virtual machine, when there is
     no C compiler). ``casadi_function`` never compiles: simulations build their own code.
+
+    Use ``quadcog.load()`` rather than the constructor.
+
+    Parameters
+    ----------
+    library : _Library
+        The shared, lazily compiled functions of ``folder`` (``load`` keeps one per folder).
+    folder : pathlib.Path
+        The generated/ folder this model was loaded from.
     """
 
-    def __init__(self, library, folder):
+    def __init__(self, library: "_Library", folder: Path) -> None:
         self.folder = folder                # the generated/ folder this model was loaded from
         self._library = library             # the shared, lazily compiled functions
-        self._symbolic = {}                 # name -> casadi.Function (SX), for expressions
+        self._symbolic: dict[str, Any] = {}  # name -> casadi.Function (SX), for expressions
         self.backend = library.backend
-        self._calls = {}
-        self._last_p = None
-        self._last_pi = None
+        self._calls: dict[str, FastCall] = {}
+        self._last_p: bytes | None = None
+        self._last_pi: bytes | None = None
 
     @property
-    def functions(self):
+    def functions(self) -> dict[str, Any]:
         """{name: (inputs ((argument, length), ...), outputs ((name, shape), ...))}: the
         generated functions of this folder, as its manifest declares them."""
         return self._library.contract
 
-    def _known(self, name):
+    def _known(self, name: str) -> None:
         if name not in self._library.contract:
             raise InputError(f"unknown function {name!r}; expected one of "
                              f"{tuple(self._library.contract)}")
 
-    def call(self, name, *args, out=None):
-        """Evaluate the generated function ``name`` on numpy arguments, in the order and with
-        the lengths of ``functions[name]``; one array per output (a tuple when several)."""
+    def call(self, name: str, *args: ArrayLike, out: Any = None) -> Any:
+        """Evaluate the generated function ``name`` on numpy arguments.
+
+        Parameters
+        ----------
+        name : str
+            A generated function (a key of ``functions``).
+        *args : array_like
+            Its arguments, in the order and with the lengths of ``functions[name]``.
+        out : numpy.ndarray or tuple of numpy.ndarray, optional
+            Arrays of the output shapes to write into.
+
+        Returns
+        -------
+        numpy.ndarray or tuple of numpy.ndarray
+            One array per output (a tuple when several; a Linearization for
+            ``"linearization"``).
+
+        Raises
+        ------
+        InputError
+            An unknown name, a wrong number of arguments, a bad argument or ``out``.
+        ParameterError
+            ``p`` is not admissible (or ``pi`` not physically consistent).
+        """
         self._known(name)
         if len(args) != len(self._library.contract[name][0]):
             raise InputError(f"{name} takes {len(self._library.contract[name][0])} arguments "
@@ -77,19 +121,51 @@ class Model:
                              f"{len(args)}")
         return self._call(name, args, out)
 
-    def casadi_function(self, name):
-        """The generated CasADi Function ``name`` (SX), callable on SX/MX symbols."""
+    def casadi_function(self, name: str) -> Any:
+        """The generated CasADi Function ``name`` (SX), callable on SX/MX symbols.
+
+        Parameters
+        ----------
+        name : str
+            A generated function (a key of ``functions``).
+
+        Returns
+        -------
+        casadi.Function
+            The SX Function, loaded once per Model.
+
+        Raises
+        ------
+        InputError
+            An unknown name.
+        """
         self._known(name)
         if name not in self._symbolic:
             self._symbolic[name] = load_casadi_function(name, self.folder)
         return self._symbolic[name]
 
-    def fast(self, name):
-        """A new FastCall (preallocated buffers) of the compiled function ``name``."""
+    def fast(self, name: str) -> FastCall:
+        """A new FastCall (preallocated buffers) of the compiled function ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A generated function (a key of ``functions``).
+
+        Returns
+        -------
+        quadcog.codegen.fastcall.FastCall
+            Unchecked, allocation-free calls (the C is compiled on the first use).
+
+        Raises
+        ------
+        InputError
+            An unknown name.
+        """
         self._known(name)
         return FastCall(self._library.functions()[name])
 
-    def _call(self, name, args, out):
+    def _call(self, name: str, args: tuple[Any, ...], out: Any) -> Any:
         spec_in, spec_out = self._library.contract[name]
         call = self._calls.get(name)
         if call is None:
@@ -120,59 +196,302 @@ class Model:
             return results[0]
         return Linearization(*results) if name == "linearization" else tuple(results)
 
-    def _check_p(self, p):
+    def _check_p(self, p: ArrayLike) -> None:
         key = _key(p)
         if key is None or key != self._last_p:   # admissibility once per distinct p
             check_parameters(p)
             self._last_p = key
 
-    def _check_pi(self, pi):
+    def _check_pi(self, pi: ArrayLike) -> None:
         key = _key(pi)
         if key is None or key != self._last_pi:    # consistency once per distinct pi
             check_physically_consistent(pi, "pi")
             self._last_pi = key
 
-    def dynamics(self, x, U, p, out=None):
-        """x_dot (12,) of the state x (12,) under inputs U (4,: N, N m, N m, N m) and p (14,)."""
+    def dynamics(self, x: ArrayLike, U: ArrayLike, p: ArrayLike,
+                 out: np.ndarray | None = None) -> np.ndarray:
+        """The state derivative of the model.
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        U : (4,) array_like
+            Inputs: thrust along body z (N) and the three body moments about O (N m).
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (12,) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (12,) numpy.ndarray
+            x_dot.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("dynamics", (x, U, p), out)
 
-    def mass_matrix(self, p, out=None):
-        """M (6, 6), the mass and inertia matrix about O, for parameters p (14,)."""
+    def mass_matrix(self, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """M, the mass and inertia matrix about O.
+
+        Parameters
+        ----------
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (6, 6) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (6, 6) numpy.ndarray
+            M (kg, kg m, kg m^2).
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("mass_matrix", (p,), out)
 
-    def inverse_mass_matrix(self, p, out=None):
-        """M^{-1} (6, 6) for parameters p (14,), by block elimination (no 6x6 solve)."""
+    def inverse_mass_matrix(self, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """M^{-1}, by block elimination (no 6x6 solve).
+
+        Parameters
+        ----------
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (6, 6) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (6, 6) numpy.ndarray
+            M^{-1}.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("inverse_mass_matrix", (p,), out)
 
-    def coriolis(self, x, p, out=None):
-        """C(nu) (6, 6), skew-symmetric, at state x (12,), parameters p (14,)."""
+    def coriolis(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The Coriolis and centripetal matrix C(nu).
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (6, 6) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (6, 6) numpy.ndarray
+            C(nu), skew-symmetric.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("coriolis", (x, p), out)
 
-    def damping(self, p, out=None):
-        """D (6, 6) = diag(c_x, c_y, c_z, c_phi, c_theta, c_psi) for p (14,)."""
+    def damping(self, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The damping matrix D.
+
+        Parameters
+        ----------
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (6, 6) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (6, 6) numpy.ndarray
+            D = diag(c_x, c_y, c_z, c_phi, c_theta, c_psi).
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("damping", (p,), out)
 
-    def gravity(self, x, p, out=None):
-        """g_G (6,) = -[f_G; r_G x f_G] in N and N m at state x (12,), parameters p (14,)."""
+    def gravity(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The gravity wrench g_G = -[f_G; r_G x f_G].
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (6,) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (6,) numpy.ndarray
+            g_G in N and N m.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("gravity", (x, p), out)
 
-    def regressor(self, x, vartheta, p, out=None):
-        """Phi (6, 3) = d/dr_G [M vartheta + C nu + g_G]; vartheta (6,) a generalized
-        acceleration (m/s^2, rad/s^2), x (12,), p (14,). Phi does not depend on r_G."""
+    def regressor(self, x: ArrayLike, vartheta: ArrayLike, p: ArrayLike,
+                  out: np.ndarray | None = None) -> np.ndarray:
+        """The CoG regressor Phi = d/dr_G [M vartheta + C nu + g_G].
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        vartheta : (6,) array_like
+            A generalized acceleration (m/s^2, rad/s^2).
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (6, 3) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (6, 3) numpy.ndarray
+            Phi; it does not depend on r_G.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("regressor", (x, vartheta, p), out)
 
-    def decoupling(self, x, p, out=None):
-        """alpha (4, 4) = L_g L_f h for y = [z, phi, theta, psi], at x (12,), p (14,)."""
+    def decoupling(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The decoupling matrix alpha = L_g L_f h for y = [z, phi, theta, psi].
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (4, 4) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (4, 4) numpy.ndarray
+            alpha, so that y_ddot = alpha U + b.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("decoupling", (x, p), out)
 
-    def drift(self, x, p, out=None):
-        """b (4,) = L_f^2 h, so that y_ddot = alpha U + b; x (12,), p (14,)."""
+    def drift(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The drift b = L_f^2 h of y = [z, phi, theta, psi].
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : (4,) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (4,) numpy.ndarray
+            b, so that y_ddot = alpha U + b.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("drift", (x, p), out)
 
-    def truth_dynamics(self, x, U, p, I_products, wrench, out=None):
-        """x_dot (12,) of the truth model: full inertia about O (diagonal from p, off-diagonal
-        entries I_products = [Ixy, Ixz, Iyz], kg m^2) and an external wrench (6,) =
-        [force at O in ground axes (N), moment in body axes (N m)]."""
+
+    def truth_dynamics(self, x: ArrayLike, U: ArrayLike, p: ArrayLike, I_products: ArrayLike,
+                       wrench: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The state derivative of the truth model: full inertia about O and an external wrench.
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        U : (4,) array_like
+            Inputs: thrust along body z (N) and the three body moments about O (N m).
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        I_products : (3,) array_like
+            Off-diagonal entries [Ixy, Ixz, Iyz] of the inertia about O (kg m^2); the
+            diagonal is p's.
+        wrench : (6,) array_like
+            [force at O in ground axes (N), moment in body axes (N m)].
+        out : (12,) numpy.ndarray, optional
+            Where to write the result (returned).
+
+        Returns
+        -------
+        (12,) numpy.ndarray
+            x_dot.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("truth_dynamics", (x, U, p, I_products, wrench), out)
 
     def inertial_regressor(self, x: ArrayLike, nu_dot: ArrayLike, g: float | ArrayLike,
@@ -195,9 +514,10 @@ class Model:
         -------
         numpy.ndarray, shape (6, 10)
             Y with ``Y pi = M nu_dot + C(nu) nu + g_G`` (N, N m) for any inertial parameters
-            pi (``quadcog.model.inertial``); drag is not in Y.
+            pi (``quadcog.model.inertial_parameters``); drag is not in Y.
         """
-        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
+        # a scalar g as the (1,) argument (numpy's ArrayLike does not see the list as one)
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g  # type: ignore[assignment]
         return self._call("inertial_regressor", (x, nu_dot, g), out)
 
     def inertial_mass_matrix(self, pi: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
@@ -243,13 +563,41 @@ class Model:
         -------
         numpy.ndarray, shape (12,)
             x_dot; equals ``dynamics(x, U, p)`` for ``(pi, g, c) =
-            quadcog.model.inertial.inertial_arguments(p)``.
+            quadcog.model.inertial_parameters.inertial_arguments(p)``.
         """
-        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g
+        # a scalar g as the (1,) argument (numpy's ArrayLike does not see the list as one)
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g  # type: ignore[assignment]
         return self._call("inertial_dynamics", (x, U, pi, g, c), out)
 
-    def linearization(self, x, U, p, out=None):
-        """Linearization(A (12, 12), B (12, 4)) of the dynamics at x (12,), U (4,), p (14,)."""
+    def linearization(self, x: ArrayLike, U: ArrayLike, p: ArrayLike,
+                      out: tuple[np.ndarray, np.ndarray] | None = None) -> Linearization:
+        """The dynamics linearized about (x, U).
+
+        Parameters
+        ----------
+        x : (12,) array_like
+            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
+            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        U : (4,) array_like
+            Inputs: thrust along body z (N) and the three body moments about O (N m).
+        p : (14,) array_like
+            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
+            admissible (else ParameterError).
+        out : tuple of numpy.ndarray, optional
+            Arrays of shapes (12, 12) and (12, 4) to write A and B into.
+
+        Returns
+        -------
+        Linearization
+            Linearization(A (12, 12), B (12, 4)) with x_dot ~ A dx + B dU.
+
+        Raises
+        ------
+        InputError
+            An argument of the wrong shape or not finite.
+        ParameterError
+            ``p`` is not admissible (docs/model.md sec. 1.4).
+        """
         return self._call("linearization", (x, U, p), out)
 
 
@@ -257,7 +605,7 @@ class _Library:
     """The numeric functions of one generated folder, made on first use: the generated C
     compiled into the cache, or CasADi's virtual machine without a compiler."""
 
-    def __init__(self, folder):
+    def __init__(self, folder: Path) -> None:
         global _warned_no_compiler
         self.folder = folder
         self.contract = read_contract(folder).functions
@@ -268,10 +616,10 @@ class _Library:
                           "virtual machine, which is about 100x slower per call",
                           QuadcogWarning, stacklevel=4)
             _warned_no_compiler = True
-        self._functions = None
+        self._functions: dict[str, Any] | None = None
         self._lock = threading.Lock()
 
-    def functions(self):
+    def functions(self) -> dict[str, Any]:
         """name -> casadi.Function (external C or VM), built once."""
         with self._lock:
             if self._functions is None:
@@ -286,12 +634,27 @@ class _Library:
         return self._functions
 
 
-def load(folder=None):
-    """The Model of generated/ (or ``folder``): every file checked against the manifest now;
-    the generated C is compiled (once, into the cache) when a method first needs it.
+def load(folder: str | os.PathLike[str] | None = None) -> Model:
+    """The Model of generated/ (or ``folder``).
 
-    Raises GeneratedFilesError naming the file when generated/ is missing, corrupted or
-    incomplete, and what to do about it.
+    Every file is checked against the manifest now; the generated C is compiled (once, into
+    the cache) when a method first needs it.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        A generated folder (default ``quadcog.paths.generated_dir()``).
+
+    Returns
+    -------
+    Model
+        The generated functions of that folder.
+
+    Raises
+    ------
+    GeneratedFilesError
+        Naming the file when generated/ is missing, corrupted or incomplete, and what to do
+        about it.
     """
     folder = generated_dir() if folder is None else folder
     folder = Path(folder).resolve()

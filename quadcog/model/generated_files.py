@@ -1,33 +1,55 @@
 """Read generated/: the manifest, the contract of the generated functions written into it by
 derive/contract.py, the integrity of every file, the CasADi functions."""
 from collections import namedtuple
+from collections.abc import Collection
 import hashlib
 import json
+import os
 from pathlib import Path, PurePosixPath
 import re
+from typing import Any
 
 from quadcog.errors import GeneratedFilesError
 from quadcog.paths import generated_dir, shipped_generated_dir
+
+__all__ = ["MANIFEST", "C_SOURCE", "COVERED", "Contract", "read_manifest", "read_contract",
+           "imported_contract", "required_files", "verify", "load_casadi_function"]
 
 MANIFEST = "manifest.json"
 C_SOURCE = "c/quadcog_gen.c"
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 
 
-def _fix(folder):
+def _fix(folder: str | os.PathLike[str]) -> str:
     """What to do about a bad generated folder: reinstall a package, re-derive a checkout."""
     if Path(folder).resolve() == shipped_generated_dir().resolve():
         return "reinstall quadcog (pip install --force-reinstall quadcog)"
     return "run `make derive` to regenerate it"
 
 
-def _sha256(path):
+def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def read_manifest(folder=None):
-    """The manifest as a dict, its shape checked ("files": {relative path: SHA-256 hex},
-    "functions": {name: ...}); GeneratedFilesError when missing, unreadable or malformed."""
+def read_manifest(folder: str | os.PathLike[str] | None = None) -> dict[str, Any]:
+    """The manifest of a generated folder, its shape checked.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        The generated folder (default ``quadcog.paths.generated_dir()``).
+
+    Returns
+    -------
+    dict
+        The manifest: "files" {relative path: SHA-256 hex}, "functions" {name: ...},
+        "vectors" {name: entries}, "outputs" [names].
+
+    Raises
+    ------
+    GeneratedFilesError
+        The manifest is missing, unreadable or malformed.
+    """
     folder = Path(folder or generated_dir())
     path = folder / MANIFEST
     if not path.is_file():
@@ -61,13 +83,37 @@ def read_manifest(folder=None):
 
 
 Contract = namedtuple("Contract", "vectors outputs functions")
-Contract.__doc__ = """The public contract of the generated functions, as derive/ wrote it:
-vectors {argument name: entry names}, outputs (the names of y), functions {name: (inputs
-((argument, length), ...), outputs ((name, shape), ...))}."""
+Contract.__doc__ = """The public contract of the generated functions, as derive/ wrote it.
+
+Parameters
+----------
+vectors : dict of str to tuple of str
+    {argument name: entry names}, e.g. ``vectors["x"]`` the 12 state names.
+outputs : tuple of str
+    The names of y, the feedback-linearization outputs.
+functions : dict
+    {name: (inputs ((argument, length), ...), outputs ((name, shape), ...))}.
+"""
 
 
-def read_contract(folder=None):
-    """The Contract recorded in the manifest of ``folder`` (default: generated_dir())."""
+def read_contract(folder: str | os.PathLike[str] | None = None) -> Contract:
+    """The Contract recorded in the manifest of ``folder``.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        The generated folder (default ``quadcog.paths.generated_dir()``).
+
+    Returns
+    -------
+    Contract
+        Its vectors, outputs and function signatures.
+
+    Raises
+    ------
+    GeneratedFilesError
+        The manifest is missing, malformed or has no readable contract.
+    """
     folder = Path(folder or generated_dir())
     manifest = read_manifest(folder)
     try:
@@ -82,12 +128,23 @@ def read_contract(folder=None):
                                   f"{_fix(folder)}") from None
 
 
-_IMPORTED: list = []
+_IMPORTED: list[Contract] = []
 
 
-def imported_contract():
-    """The Contract of ``generated_dir()`` read once, when quadcog is imported: the vectors
-    and signatures this runtime works with (``quadcog.model.conventions`` holds it)."""
+def imported_contract() -> Contract:
+    """The Contract of ``generated_dir()`` read once, when quadcog is imported.
+
+    Returns
+    -------
+    Contract
+        The vectors and signatures this runtime works with (``quadcog.model.conventions``
+        holds it).
+
+    Raises
+    ------
+    GeneratedFilesError
+        The manifest is missing, malformed or has no readable contract.
+    """
     if not _IMPORTED:
         _IMPORTED.append(read_contract())
     return _IMPORTED[0]
@@ -98,7 +155,7 @@ def imported_contract():
 COVERED = ("c", "casadi")
 
 
-def _files_in(folder):
+def _files_in(folder: Path) -> set[str]:
     """Relative paths of the files of a generated folder that the manifest must list."""
     out = set()
     for p in [*folder.iterdir(), *(q for sub in COVERED if (folder / sub).is_dir()
@@ -109,17 +166,54 @@ def _files_in(folder):
     return out
 
 
-def required_files(folder=None):
-    """The files the runtime reads: the C source and one CasADi file per function of the
-    contract of ``folder``."""
+def required_files(folder: str | os.PathLike[str] | None = None) -> set[str]:
+    """The files the runtime reads.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        The generated folder (default ``quadcog.paths.generated_dir()``).
+
+    Returns
+    -------
+    set of str
+        Relative paths: the C source and one CasADi file per function of its contract.
+
+    Raises
+    ------
+    GeneratedFilesError
+        The manifest is missing, malformed or has no readable contract.
+    """
     return {C_SOURCE} | {f"casadi/{name}.casadi" for name in read_contract(folder).functions}
 
 
-def verify(folder=None, only=None):
+def verify(folder: str | os.PathLike[str] | None = None,
+           only: Collection[str] | None = None) -> dict[str, Any]:
     """Check the SHA-256 of every generated file (or of the names in ``only``) against the
-    manifest. The manifest must list every file of the folder and every file the runtime
-    reads, so removing an entry (or emptying "files") does not switch a check off; and the
-    folder's vectors must be the ones this runtime was imported with."""
+    manifest.
+
+    The manifest must list every file of the folder and every file the runtime reads, so
+    removing an entry (or emptying "files") does not switch a check off; and the folder's
+    vectors must be the ones this runtime was imported with.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        The generated folder (default ``quadcog.paths.generated_dir()``).
+    only : collection of str, optional
+        Relative paths whose SHA-256 to check (default: all listed).
+
+    Returns
+    -------
+    dict
+        The manifest (as ``read_manifest``).
+
+    Raises
+    ------
+    GeneratedFilesError
+        Naming the file that is missing, unlisted, unreadable or does not match, or the
+        vectors that differ, and what to do about it.
+    """
     folder = Path(folder or generated_dir())
     manifest = read_manifest(folder)
     listed = manifest["files"]
@@ -164,8 +258,26 @@ def verify(folder=None, only=None):
     return manifest
 
 
-def load_casadi_function(name, folder=None):
-    """One generated function through CasADi's serializer (checked against the manifest)."""
+def load_casadi_function(name: str, folder: str | os.PathLike[str] | None = None) -> Any:
+    """One generated function through CasADi's serializer (checked against the manifest).
+
+    Parameters
+    ----------
+    name : str
+        A function of the contract, e.g. ``"dynamics"``.
+    folder : str or os.PathLike, optional
+        The generated folder (default ``quadcog.paths.generated_dir()``).
+
+    Returns
+    -------
+    casadi.Function
+        The SX Function.
+
+    Raises
+    ------
+    GeneratedFilesError
+        ``casadi/<name>.casadi`` fails the manifest check or cannot be loaded.
+    """
     import casadi as ca
     folder = Path(folder or generated_dir())
     rel = f"casadi/{name}.casadi"

@@ -16,10 +16,14 @@ LARGEST below), so that the model's products and inverses stay finite. Every run
 parameters uses this module.
 """
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import ParameterError
 from quadcog.model.conventions import IDX, N_PARAM, PARAM_NAMES, R_G
 from quadcog.validate import vector
+
+__all__ = ["SMALLEST", "LARGEST", "MARGIN", "inertia_about_cog", "inertia_ratio",
+           "admissible_radius", "is_admissible", "with_cog", "check_parameters"]
 
 # The scale of every parameter in SI units: m, g, Ixx, Iyy, Izz in [SMALLEST, LARGEST], drag
 # coefficients in [0, LARGEST]. Far wider than any vehicle (a Crazyflie's Ixx is 1.4e-5 kg m^2),
@@ -31,8 +35,19 @@ SMALLEST, LARGEST = 1e-9, 1e6
 MARGIN = 0.01
 
 
-def inertia_about_cog(p):
-    """I_G = I_O - m (|r_G|^2 I - r_G r_G^T), 3x3 in kg m^2, of the parameter vector p (14,)."""
+def inertia_about_cog(p: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """I_G = I_O - m (|r_G|^2 I - r_G r_G^T), the inertia about the CoG.
+
+    Parameters
+    ----------
+    p : (14,) array_like
+        Parameter vector (SI units, order ``PARAM_NAMES``).
+
+    Returns
+    -------
+    (3, 3) numpy.ndarray
+        I_G in kg m^2, body axes.
+    """
     p = np.asarray(p, dtype=float)
     r = p[R_G]
     with np.errstate(over="ignore", invalid="ignore"):
@@ -40,10 +55,20 @@ def inertia_about_cog(p):
                 - p[IDX["m"]] * (r @ r * np.eye(3) - np.outer(r, r)))
 
 
-def inertia_ratio(p):
-    """Smallest eigenvalue of I_O^-1/2 I_G I_O^-1/2 (dimensionless): the least fraction of the
-    inertia about O that the inertia about the CoG keeps over all directions. NaN when the
-    numbers overflow; requires Ixx, Iyy, Izz > 0."""
+def inertia_ratio(p: npt.ArrayLike) -> float:
+    """Smallest eigenvalue of I_O^-1/2 I_G I_O^-1/2.
+
+    Parameters
+    ----------
+    p : (14,) array_like
+        Parameter vector (SI units); requires Ixx, Iyy, Izz > 0.
+
+    Returns
+    -------
+    float
+        The least fraction of the inertia about O that the inertia about the CoG keeps over
+        all directions (dimensionless; 1 for a CoG at O); NaN when the numbers overflow.
+    """
     p = np.asarray(p, dtype=float)
     scale = 1.0 / np.sqrt(p[IDX["Ixx"]:IDX["Izz"] + 1])
     with np.errstate(over="ignore", invalid="ignore"):
@@ -53,31 +78,83 @@ def inertia_ratio(p):
     return float(np.linalg.eigvalsh(0.5 * (S + S.T))[0])
 
 
-def admissible_radius(p):
-    """sqrt((1 - MARGIN) min(Ixx, Iyy, Izz) / m) (m): every CoG offset shorter than this is
-    admissible for the inertia and mass of p (14,), whatever its direction (since
-    m (|r|^2 I - r r^T) <= m |r|^2 I)."""
+def admissible_radius(p: npt.ArrayLike) -> float:
+    """The CoG offset below which every direction is admissible.
+
+    Parameters
+    ----------
+    p : (14,) array_like
+        Parameter vector (SI units); its mass and inertia about O are used.
+
+    Returns
+    -------
+    float
+        sqrt((1 - MARGIN) min(Ixx, Iyy, Izz) / m) (m): every CoG offset shorter than this is
+        admissible, whatever its direction (since m (|r|^2 I - r r^T) <= m |r|^2 I).
+    """
     p = np.asarray(p, dtype=float)
     return float(np.sqrt((1 - MARGIN) * np.min(p[IDX["Ixx"]:IDX["Izz"] + 1]) / p[IDX["m"]]))
 
 
-def is_admissible(p):
-    """True when the inertia ratio of p (14,) is at least MARGIN (mass and inertia assumed
-    positive and finite: quadcog.model.parameters.check_parameters checks those first)."""
+def is_admissible(p: npt.ArrayLike) -> bool:
+    """Whether the model accepts the CoG offset of ``p``.
+
+    Parameters
+    ----------
+    p : (14,) array_like
+        Parameter vector (SI units), mass and inertia assumed positive and finite
+        (quadcog.model.parameters.check_parameters checks those first).
+
+    Returns
+    -------
+    bool
+        True when the inertia ratio of ``p`` is at least MARGIN.
+    """
     ratio = inertia_ratio(p)
     return bool(np.isfinite(ratio) and ratio >= MARGIN)
 
 
-def with_cog(p, r_G):
-    """A copy of ``p`` (14,) with the CoG offset replaced by ``r_G`` (3,), in m."""
+def with_cog(p: npt.ArrayLike, r_G: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """A copy of ``p`` with the CoG offset replaced by ``r_G``.
+
+    Parameters
+    ----------
+    p : (14,) array_like
+        Parameter vector (SI units).
+    r_G : (3,) array_like
+        The new CoG offset from O (m, body axes).
+
+    Returns
+    -------
+    (14,) numpy.ndarray
+        A new parameter vector.
+    """
     p = np.array(p, dtype=float)
     p[R_G] = r_G
     return p
 
 
-def check_parameters(p, name="p"):
-    """Raise ParameterError unless ``p`` is an admissible (14,) parameter vector (docs/model.md
-    sec. 1.4; the margin is ``quadcog.model.parameters.MARGIN``); returns it as a float array."""
+def check_parameters(p: npt.ArrayLike, name: str = "p") -> npt.NDArray[np.float64]:
+    """Check that ``p`` is an admissible parameter vector (docs/model.md sec. 1.4).
+
+    Parameters
+    ----------
+    p : (14,) array_like
+        Parameter vector (SI units, order ``PARAM_NAMES``).
+    name : str, optional
+        What to call it in messages.
+
+    Returns
+    -------
+    (14,) numpy.ndarray
+        ``p`` as a new float array.
+
+    Raises
+    ------
+    ParameterError
+        A non-finite entry, m, g or inertia not > 0, a negative drag coefficient, an entry
+        out of scale, or a CoG too far from O (margin ``quadcog.model.parameters.MARGIN``).
+    """
     p = vector(p, name, N_PARAM, finite=False, error=ParameterError)
     bad = np.flatnonzero(~np.isfinite(p))
     if bad.size:

@@ -10,6 +10,7 @@ releases is refused with a message that shows the bracket form.
 (``controller=adaptive``). The result is validated exactly like a file, so a wrong type or an
 unknown key is reported with the key's name.
 """
+from collections.abc import Sequence
 import copy
 import re
 import tomllib
@@ -191,8 +192,8 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     return key, parsed
 
 
-def apply_overrides(data: dict, assignments: list[str] | tuple[str, ...]
-                    ) -> tuple[dict, list[str]]:
+def apply_overrides(data: dict[str, Any], assignments: Sequence[str]
+                    ) -> tuple[dict[str, Any], list[str]]:
     """A copy of a parsed scenario with each ``--set`` text applied in order.
 
     Parameters

@@ -5,19 +5,23 @@ A scenario names a controller, a trajectory, CoG changes, disturbances, the trut
 parameters and truth-model switches; `quadcog run FILE --out DIR` writes
 metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are documented in README.md.
 """
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 import math
+import os
 from pathlib import Path
+from typing import Any
 import warnings
 
 import numpy as np
 
 from quadcog import config, validate
+from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import controller_names, make_controller
 from quadcog.errors import InputError, ScenarioError
 from quadcog.files import RunFiles, strict_json, write_csv
 from quadcog.model.columns import trajectory_columns
-from quadcog.scenarios.files import read_toml, scenario_path
+from quadcog.scenarios.lookup import read_toml, scenario_path
 from quadcog.scenarios.schema import (
     COG,
     DISTURBANCE,
@@ -33,36 +37,91 @@ from quadcog.scenarios.schema import (
 from quadcog.sim.divergence import Limits
 from quadcog.sim.flight import simulate, start_at_reference
 from quadcog.sim.plant import TruthOptions
+from quadcog.sim.result import SimulationResult
 from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
-from quadcog.trajectories.analytic import Hover
-from quadcog.vehicles.vehicle import HUMMINGBIRD, PRESETS
+from quadcog.trajectories.analytic import Hover, Trajectory
+from quadcog.vehicles.vehicle import HUMMINGBIRD, PRESETS, Vehicle
 from quadcog.viz.progress import ProgressBar
+
+__all__ = ["Scenario", "parse", "load_scenario", "write_table", "output_files", "write_outputs",
+           "run_with_progress", "run_file", "default_out"]
 
 
 @dataclass
 class Scenario:
-    """A validated scenario, ready to run."""
+    """A validated scenario, ready to run.
+
+    Parameters
+    ----------
+    name : str
+        The scenario's name (its ``name`` key).
+    controller : str
+        Short name of the controller (``quadcog.controllers.registry.CONTROLLERS``).
+    duration : float
+        Simulated time [s].
+    dt : float
+        Control period and integration step [s] (default ``config.defaults["simulate.dt"]``).
+    description : str
+        One line for ``quadcog scenarios``.
+    path : str
+        'compiled' or 'python': the simulation path of ``quadcog.simulate``.
+    trajectory : quadcog.trajectories.analytic.Trajectory
+        The reference (default: hover).
+    cog : quadcog.sim.timeline.CogProfile
+        The CoG changes of the truth vehicle over time.
+    disturbances : list of quadcog.sim.timeline.Disturbance
+        External force and moment pulses.
+    vehicle : quadcog.Vehicle
+        The truth vehicle (default: the Hummingbird).
+    controller_model : quadcog.Vehicle or None
+        What the controller believes; None: the truth vehicle with r_G = 0.
+    controller_params : dict
+        The ``[controller_params]`` table: the controller's settings, ``Q_scale`` for a
+        multiple of the identity as the Lyapunov weight Q.
+    truth : quadcog.sim.plant.TruthOptions
+        Truth-model switches (parallel axis, rotor saturation, motor lag).
+    sensing : quadcog.sim.sensing.Sensing or None
+        Noise and delay of the state estimate; None: the controller sees the true state.
+    limits : quadcog.sim.divergence.Limits
+        When a run counts as diverged.
+    initial_offset : tuple of float
+        (3,) start position relative to the reference at t = 0 [m].
+    source : str
+        What error messages name (the file, with its ``--set`` texts).
+    """
     name: str
     controller: str
     duration: float
     dt: float = field(default_factory=lambda: config.defaults["simulate.dt"])
     description: str = ""
     path: str = "compiled"
-    trajectory: object = field(default_factory=Hover)
+    trajectory: Trajectory = field(default_factory=Hover)
     cog: CogProfile = field(default_factory=CogProfile)
-    disturbances: list = field(default_factory=list)
-    vehicle: object = HUMMINGBIRD                 # the truth Vehicle
-    controller_model: object = None               # what the controller believes (a Vehicle)
-    controller_params: dict = field(default_factory=dict)
+    disturbances: list[Disturbance] = field(default_factory=list)
+    vehicle: Vehicle = HUMMINGBIRD                # the truth Vehicle
+    controller_model: Vehicle | None = None       # what the controller believes (a Vehicle)
+    controller_params: dict[str, Any] = field(default_factory=dict)
     truth: TruthOptions = field(default_factory=TruthOptions)
     sensing: Sensing | None = None
     limits: Limits = field(default_factory=Limits)
-    initial_offset: tuple = (0.0, 0.0, 0.0)
+    initial_offset: tuple[float, ...] = (0.0, 0.0, 0.0)
     source: str = "<scenario>"
 
-    def make_controller(self):
-        """The scenario's controller, designed for its controller model."""
+    def make_controller(self) -> Controller | Sensed:
+        """The scenario's controller, designed for its controller model.
+
+        Returns
+        -------
+        quadcog.Controller or quadcog.sim.sensing.Sensed
+            The controller of ``controller`` with ``controller_params``, wrapped in the
+            sensing model when the scenario has ``[sensing]``.
+
+        Raises
+        ------
+        quadcog.errors.ScenarioError
+            When the controller's design refuses a setting (named with ``source``).
+        """
         params = dict(self.controller_params)
         if "Q_scale" in params:
             params["Q"] = np.eye(8) * params.pop("Q_scale")
@@ -76,14 +135,31 @@ class Scenario:
             raise ScenarioError(f"{self.source}: key 'controller_params': {e}") from None
         return ctl if self.sensing is None else Sensed(ctl, self.sensing, self.dt)
 
-    def model_vehicle(self):
-        """The controller's model: ``controller_model``, or the truth vehicle with r_G = 0."""
+    def model_vehicle(self) -> Vehicle:
+        """The controller's model: ``controller_model``, or the truth vehicle with r_G = 0.
+
+        Returns
+        -------
+        quadcog.Vehicle
+            The vehicle the controller is designed for.
+        """
         if self.controller_model is not None:
             return self.controller_model
         return self.vehicle.with_cog(np.zeros(3))
 
-    def run(self, progress=None):
-        """Simulate; returns a quadcog SimulationResult."""
+    def run(self, progress: Callable[[float], object] | None = None) -> SimulationResult:
+        """Simulate the scenario.
+
+        Parameters
+        ----------
+        progress : callable or None
+            Called with the fraction done (0..1) as the run goes (a ProgressBar); None: quiet.
+
+        Returns
+        -------
+        quadcog.sim.result.SimulationResult
+            The flight: times [s], states, inputs, references, estimates and metrics.
+        """
         x0 = None
         if any(self.initial_offset):
             x0 = start_at_reference(self.trajectory(0.0))
@@ -183,9 +259,27 @@ def _disturbances(data, source):
     return pulses
 
 
-def parse(data, source="<scenario>"):
-    """A Scenario from a parsed TOML dict; ScenarioError names ``source``, the key and the
-    expectation."""
+def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
+    """A Scenario from a parsed TOML dict.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed scenario file (keys as in README.md "Scenario files").
+    source : str
+        What error messages name (the file).
+
+    Returns
+    -------
+    Scenario
+        The validated scenario.
+
+    Raises
+    ------
+    quadcog.errors.ScenarioError
+        Naming ``source``, the key and the expectation, for any key or value the schema
+        refuses.
+    """
     _validate(data, TOP, source)
     for key in ("name", "controller", "duration"):
         if key not in data:
@@ -275,10 +369,32 @@ def _vehicle(data, key, base, source):
         raise ScenarioError(f"{source}: key {key!r}: {e}") from None
 
 
-def load_scenario(path, overrides=()):
-    """Read and validate a scenario: a file path or the name of a shipped scenario ("fig6";
-    see ``quadcog.scenarios.files.scenario_path``). ``overrides``: ``--set`` texts ("vehicle.m=0.8",
-    see ``quadcog.scenarios.keys``), applied before the validation, which then names them."""
+def load_scenario(path: str | os.PathLike[str],
+                  overrides: Sequence[str] = ()) -> Scenario:
+    """Read and validate a scenario.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file path or the name of a shipped scenario ("fig6"; see
+        ``quadcog.scenarios.lookup.scenario_path``).
+    overrides : sequence of str
+        ``--set`` texts ("vehicle.m=0.8", see ``quadcog.scenarios.keys``), applied before the
+        validation, which then names them.
+
+    Returns
+    -------
+    Scenario
+        The validated scenario.
+
+    Raises
+    ------
+    quadcog.errors.ScenarioError
+        When the file is missing or not valid, naming the file, the key and the ``--set``
+        texts.
+    quadcog.errors.OverrideError
+        For a malformed ``--set`` text.
+    """
     path = scenario_path(path)
     data = read_toml(path, ScenarioError)
     source = str(path)
@@ -291,11 +407,35 @@ def load_scenario(path, overrides=()):
     return parse(data, source)
 
 
-def write_table(result, path, every=1, fmt="csv"):
-    """The run's samples (every ``every``-th, and the last) into ``path`` as CSV or Parquet
-    (``fmt``), with the column names of ``quadcog.model.columns.trajectory_columns()`` (units in the
-    names). The CSV is written block by block (``quadcog.files.write_csv``): no memory
-    beyond the result arrays. Returns the path written."""
+def write_table(result: SimulationResult, path: str | os.PathLike[str], every: int = 1,
+                fmt: str = "csv") -> Path:
+    """The run's samples into a CSV or Parquet file.
+
+    The column names are those of ``quadcog.model.columns.trajectory_columns()`` (units in
+    the names). The CSV is written block by block (``quadcog.files.write_csv``): no memory
+    beyond the result arrays.
+
+    Parameters
+    ----------
+    result : quadcog.sim.result.SimulationResult
+        The run.
+    path : str or os.PathLike
+        The file to write.
+    every : int
+        Write every ``every``-th sample, and the last.
+    fmt : str
+        'csv' or 'parquet' (needs pyarrow).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    quadcog.errors.InputError
+        For a bad ``every`` or ``fmt``, or 'parquet' without pyarrow.
+    """
     if not (isinstance(every, int) and not isinstance(every, bool) and every >= 1):
         raise InputError(f"every: expected a whole number >= 1 (write every N-th sample), "
                          f"got {every!r}")
@@ -323,17 +463,53 @@ def write_table(result, path, every=1, fmt="csv"):
     return path
 
 
-def output_files(fmt="csv", plot=True):
-    """The files ``write_outputs`` writes, in its order."""
+def output_files(fmt: str = "csv", plot: bool = True) -> tuple[str, ...]:
+    """The files ``write_outputs`` writes, in its order.
+
+    Parameters
+    ----------
+    fmt : str
+        'csv' or 'parquet': the table's format.
+    plot : bool
+        Whether flight.png is drawn.
+
+    Returns
+    -------
+    tuple of str
+        File names inside the run folder.
+    """
     return ("metrics.json", "vehicle.json", f"trajectory.{fmt}") + (("flight.png",) if plot
                                                                       else ())
 
 
-def write_outputs(result, scenario, out, plot=True, every=1, fmt="csv"):
-    """metrics.json, vehicle.json, trajectory.csv (or .parquet: ``fmt``; every ``every``-th
-    sample) and, with ``plot``, flight.png of one run into folder ``out``: all of them or
-    none (``quadcog.files.RunFiles``), so an error or Ctrl-C while writing leaves the
-    folder's previous files as they were. metrics.json and vehicle.json are strict JSON."""
+def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.PathLike[str],
+                  plot: bool = True, every: int = 1, fmt: str = "csv") -> dict[str, Any]:
+    """The files of one run, into a folder: all of them or none.
+
+    metrics.json, vehicle.json, trajectory.csv (or .parquet) and, with ``plot``, flight.png,
+    written through ``quadcog.files.RunFiles``, so an error or Ctrl-C while writing leaves
+    the folder's previous files as they were. metrics.json and vehicle.json are strict JSON.
+
+    Parameters
+    ----------
+    result : quadcog.sim.result.SimulationResult
+        The run.
+    scenario : Scenario
+        The scenario flown (its name, controller, duration, dt go into metrics.json).
+    out : str or os.PathLike
+        The folder.
+    plot : bool
+        Draw flight.png (needs matplotlib).
+    every : int
+        Write every ``every``-th sample (and the last) into the table.
+    fmt : str
+        'csv' or 'parquet'.
+
+    Returns
+    -------
+    dict
+        The metrics as written to metrics.json (errors in m, times in s).
+    """
     metrics = result.metrics.as_dict()
     metrics.update(name=scenario.name, controller=scenario.controller,
                    duration=scenario.duration, dt=scenario.dt,
@@ -349,8 +525,24 @@ def write_outputs(result, scenario, out, plot=True, every=1, fmt="csv"):
     return metrics
 
 
-def run_with_progress(scenario, label=None, progress=True):
-    """Run a scenario with a progress bar on stderr (or none); returns the result."""
+def run_with_progress(scenario: Scenario, label: str | None = None,
+                      progress: bool = True) -> SimulationResult:
+    """Run a scenario with a progress bar on stderr (or none).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        What to fly.
+    label : str, optional
+        The bar's label (default: the scenario's name).
+    progress : bool
+        Show the bar.
+
+    Returns
+    -------
+    quadcog.sim.result.SimulationResult
+        The flight.
+    """
     bar = ProgressBar(label or scenario.name) if progress else None
     try:
         return scenario.run(progress=bar)
@@ -359,10 +551,41 @@ def run_with_progress(scenario, label=None, progress=True):
             bar.close()
 
 
-def run_file(path, out=None, progress=True, overrides=(), plot=True, every=1, fmt="csv",
-             animate=False):
-    """`quadcog run`: load (with ``overrides``), simulate with a progress bar, write the
-    outputs into ``out`` (default ``out/<scenario>`` in the current folder); returns metrics."""
+def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = None,
+             progress: bool = True, overrides: Sequence[str] = (), plot: bool = True,
+             every: int = 1, fmt: str = "csv", animate: bool = False) -> dict[str, Any]:
+    """`quadcog run`: load, simulate with a progress bar, write the outputs, print a line.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A scenario file or the name of a shipped scenario.
+    out : str or os.PathLike, optional
+        The results folder (default ``out/<scenario>`` in the current folder).
+    progress : bool
+        Show a progress bar on stderr.
+    overrides : sequence of str
+        ``--set`` texts (``KEY=VALUE``).
+    plot : bool
+        Draw flight.png.
+    every : int
+        Write every ``every``-th sample (and the last) into the table.
+    fmt : str
+        'csv' or 'parquet'.
+    animate : bool
+        Also write flight.gif.
+
+    Returns
+    -------
+    dict
+        The metrics of metrics.json.
+
+    Raises
+    ------
+    quadcog.errors.ScenarioError
+        When the scenario is not valid or its run refuses a setting (e.g. dt too large for
+        the closed loop), naming the file.
+    """
     scenario = load_scenario(path, overrides)
     out = Path(out) if out is not None else default_out(path)
     try:
@@ -384,6 +607,17 @@ def run_file(path, out=None, progress=True, overrides=(), plot=True, every=1, fm
     return metrics
 
 
-def default_out(scenario):
-    """``out/<stem>`` for a scenario name or file path: where `quadcog run` writes by default."""
+def default_out(scenario: str | os.PathLike[str]) -> Path:
+    """Where `quadcog run` writes by default.
+
+    Parameters
+    ----------
+    scenario : str or os.PathLike
+        A scenario name or file path.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out/<stem>``, relative to the current folder.
+    """
     return Path("out") / Path(str(scenario)).stem

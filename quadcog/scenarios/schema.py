@@ -43,7 +43,7 @@ DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3
 
 def _takes(cls: type, name: str) -> bool:
     """Whether ``cls``'s constructor (or a base's) has a parameter ``name``."""
-    return any(name in inspect.signature(k.__init__).parameters
+    return any(name in inspect.signature(k.__dict__["__init__"]).parameters
                for k in cls.__mro__ if "__init__" in k.__dict__)
 
 

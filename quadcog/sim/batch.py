@@ -20,7 +20,7 @@ from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, monitored_chunk_functio
 from quadcog.sim.divergence import DivergenceCause, Limits, divergence_rule, magnitude
 from quadcog.sim.plant import Actuation, TruthOptions
 from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference
-from quadcog.sim.result import metrics_from_sums, position_errors
+from quadcog.sim.result import metric_arrays, position_errors
 from quadcog.sim.schedule import Schedule, cog_at
 from quadcog.sim.timeline import CogProfile
 from quadcog.trajectories.registry import as_trajectory
@@ -90,8 +90,17 @@ def batch_kernel(controller: Controller, actuation: Actuation, limits: Limits
                       lambda: packed(monitored_step(controller, actuation, limits)))
 
 
-def _vehicles(vehicles: Any, options: TruthOptions) -> tuple[list[Vehicle], Actuation]:
-    """The checked list of truth vehicles and their shared Actuation."""
+# the Vehicle fields that are not among the 14 parameters: what the rotors are, and labels
+_ROTOR_FIELDS = ("rotor_positions", "rotor_directions", "thrust_constant", "moment_constant",
+                 "max_rotor_thrust", "min_rotor_thrust", "motor_time_constant")
+
+
+def _vehicles(vehicles: Any, options: TruthOptions
+              ) -> tuple[list[Vehicle], npt.NDArray[np.float64], Actuation]:
+    """The checked list of truth vehicles, their parameters (B, 14) and shared Actuation.
+
+    Each Vehicle was checked when it was built; here only what the batch adds is checked, in
+    vectorized form: that all share the rotors (the compiled step holds them)."""
     if isinstance(vehicles, Vehicle):
         vehicles = [vehicles]
     elif isinstance(vehicles, (str, bytes)) or not hasattr(vehicles, "__iter__"):
@@ -101,11 +110,22 @@ def _vehicles(vehicles: Any, options: TruthOptions) -> tuple[list[Vehicle], Actu
         raise InputError("vehicles must be a non-empty sequence of quadcog Vehicles, got "
                          f"{vehicles!r:.200}")
     actuation = Actuation.of(vehicles[0], options)
+    rotors = tuple(getattr(vehicles[0], f) for f in _ROTOR_FIELDS)
     for b, v in enumerate(vehicles):
-        if Actuation.of(v, options) != actuation:
+        if v is not vehicles[0] and tuple(getattr(v, f) for f in _ROTOR_FIELDS) != rotors:
             raise InputError(f"vehicles[{b}] has other rotors than vehicles[0] (layout, "
                              "constants, limits or motor time constant); a batch shares them")
-    return vehicles, actuation
+    params = np.array([v.parameters() for v in vehicles])
+    return vehicles, params, actuation
+
+
+def _same_but_cog(params):
+    """The index of the first flight whose parameters differ from flight 0's in more than
+    r_G, or None."""
+    other = np.ones(params.shape[1], dtype=bool)
+    other[R_G] = False
+    bad = np.flatnonzero(np.any(params[:, other] != params[0, other], axis=1))
+    return int(bad[0]) if bad.size else None
 
 
 def _cog_scale(cog_shape: Any) -> Callable[[float], float] | None:
@@ -178,17 +198,16 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
     threads = validate.integer(threads, "threads", lo=1, hi=1024)
     cog_scale = _cog_scale(cog_shape)
     dt = config.get("simulate.dt", dt)
-    vehicles, actuation = _vehicles(vehicles, options)
+    vehicles, params, actuation = _vehicles(vehicles, options)
     if controller_model is None:
+        b = _same_but_cog(params)
+        if b is not None:
+            raise InputError(f"vehicles[{b}] differs from vehicles[0] in more than r_G: "
+                             "pass controller_model (what the controller believes)")
         controller_model = vehicles[0].with_cog(np.zeros(3))
-        for b, v in enumerate(vehicles):
-            if v.with_cog(np.zeros(3)) != controller_model:
-                raise InputError(f"vehicles[{b}] differs from vehicles[0] in more than r_G: "
-                                 "pass controller_model (what the controller believes)")
     elif not isinstance(controller_model, Vehicle):
         raise InputError(f"controller_model must be a quadcog Vehicle, got {controller_model!r}")
     controller = controller.for_vehicle(controller_model)
-    params = np.array([v.parameters() for v in vehicles])
     duration, dt = check_time(duration, dt)
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
                               disturbances=disturbances, cog_scale=cog_scale)
@@ -339,27 +358,24 @@ def batch_metrics(Z: npt.NDArray[np.float64], nX: int, schedule: Schedule, limit
     final_codes = np.array(divergence_rule(limits).map(B)(
         Z[:, :N_STATE].T, e_final[None, :], magnitude(Z[:, N_STATE:nX])[None, :])).ravel()
     tail_n = schedule.tail[n]
-    metrics = []
-    for b in range(B):
-        code, at = int(a["code"][b]), a["diverged_at"][b]
-        sums = [a[k][b] for k in ("count", "sum_sq", "max", "count_tail", "sum_sq_tail", "last")]
-        if not code and final_codes[b]:
-            code, at = int(final_codes[b]), schedule.t[n]
-        elif not code:          # the final sample counts
-            e = e_final[b]
-            sums = [sums[0] + 1, sums[1] + e * e, max(sums[2], e), sums[3] + tail_n,
-                    sums[4] + tail_n * e * e, e]
-        cause = DivergenceCause(code) if code else None
-        # sums holds exactly the six sums, so *sums fills no keyword argument
-        metrics.append(metrics_from_sums(*sums, diverged_at=at, cause=cause,  # type: ignore[misc]
-                                         limits=limits))
-    field = lambda name: np.array([getattr(m, name) for m in metrics], dtype=float)
+    code, at = a["code"].astype(int), a["diverged_at"].copy()
+    count, sum_sq, mx = a["count"].copy(), a["sum_sq"].copy(), a["max"].copy()
+    count_tail, sum_sq_tail = a["count_tail"].copy(), a["sum_sq_tail"].copy()
+    last = a["last"].copy()
+    final_hit = (code == 0) & (final_codes != 0)
+    code[final_hit], at[final_hit] = final_codes[final_hit].astype(int), schedule.t[n]
+    ok = code == 0                  # the final sample counts
+    e = e_final
+    count[ok] += 1
+    sum_sq[ok] += e[ok] ** 2
+    mx[ok] = np.maximum(mx[ok], e[ok])
+    count_tail[ok] += tail_n
+    sum_sq_tail[ok] += tail_n * e[ok] ** 2
+    last[ok] = e[ok]
+    diverged = code != 0
+    m = metric_arrays(count, sum_sq, mx, count_tail, sum_sq_tail, last, diverged)
+    causes = {c: DivergenceCause(c) for c in np.unique(code[diverged]).tolist()}
     return BatchResult(
-        rms_position_error=field("rms_position_error"),
-        max_position_error=field("max_position_error"),
-        rms_position_error_tail=field("rms_position_error_tail"),
-        final_position_error=field("final_position_error"),
-        diverged=np.array([m.diverged for m in metrics], dtype=bool),
-        diverged_at=np.array([m.diverged_at if m.diverged else np.nan for m in metrics]),
-        diverged_cause=[m.diverged_cause for m in metrics],
+        **m, diverged=diverged, diverged_at=np.where(diverged, at, np.nan),
+        diverged_cause=[causes[c] if c else None for c in code.tolist()],
         final_state=Z[:, :nX].copy(), seconds=seconds)

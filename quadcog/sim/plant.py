@@ -146,20 +146,22 @@ class Actuation:
         # a non-finite command stays non-finite (fmax(NaN, 0) = 0 would hide a failed law)
         return ca.if_else(ca.fabs(f) < np.inf, clipped, f)
 
-    def rotor_command_numpy(self, U: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-        """``rotor_command`` for a numpy U.
+    def rotor_command_numpy(self, U: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """``rotor_command`` for numpy inputs, of one flight or many.
 
         Parameters
         ----------
-        U : (4,) numpy.ndarray
-            The input [N, N m, N m, N m].
+        U : (4,) or (B, 4) array_like
+            The input [N, N m, N m, N m], or one per flight.
 
         Returns
         -------
-        (4,) numpy.ndarray
+        (4,) or (B, 4) numpy.ndarray
             Rotor thrusts (N), within the limits.
         """
-        return np.clip(np.linalg.solve(self.mixer_matrix(), U), self.lower, self.upper)
+        U = np.asarray(U, dtype=float)
+        f = np.linalg.solve(self.mixer_matrix(), U.T).T
+        return np.clip(f, self.lower, self.upper)
 
 
 def truth_arguments(p: ca.SX, options: TruthOptions) -> tuple[ca.SX, ca.SX]:
@@ -280,16 +282,16 @@ def initial_rotor_thrusts(P0: npt.NDArray[np.float64], actuation: Actuation
 
     Parameters
     ----------
-    P0 : (14,) numpy.ndarray
-        The truth parameters (r_G at t = 0).
+    P0 : (14,) or (B, 14) numpy.ndarray
+        The truth parameters (r_G at t = 0), of one flight or of B flights.
     actuation : Actuation
         The rotors.
 
     Returns
     -------
-    (n_rotor_states,) numpy.ndarray
+    (n_rotor_states,) or (B, n_rotor_states) numpy.ndarray
         Rotor thrusts (N); empty without motor lag.
     """
     if not actuation.n_rotor_states:
-        return np.zeros(0)
+        return np.zeros(np.shape(P0)[:-1] + (0,))
     return actuation.rotor_command_numpy(hover_trim(P0))

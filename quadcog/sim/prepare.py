@@ -192,8 +192,7 @@ def batch_start(controller: Controller, actuation: Actuation, P0: npt.NDArray[np
     nX = N_STATE + nf + nc
     Z = np.zeros((P0.shape[0], nX + len(ACCUMULATORS)))
     Z[:, :N_STATE] = x0
-    for b in range(P0.shape[0]):
-        Z[b, N_STATE:N_STATE + nf] = initial_rotor_thrusts(P0[b], actuation)
+    Z[:, N_STATE:N_STATE + nf] = initial_rotor_thrusts(P0, actuation)
     Z[:, N_STATE + nf:nX] = controller.initial_state()
     Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
     return Z
@@ -269,8 +268,9 @@ def run_options(truth: TruthOptions | None, limits: Limits | None,
 
 
 
-def check_step_size(controller: Controller | None, x0: npt.ArrayLike, ref0: npt.ArrayLike,
-                    P: npt.ArrayLike, dt: float, actuation: Actuation) -> None:
+def check_step_size(controller: Controller | None, x0: npt.NDArray[np.float64],
+                    ref0: npt.NDArray[np.float64], P: npt.NDArray[np.float64], dt: float,
+                    actuation: Actuation) -> None:
     """Raise InputError if RK4 with step dt is unstable for the closed loop at the start.
 
     Also for the motor lag. The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from
@@ -280,11 +280,11 @@ def check_step_size(controller: Controller | None, x0: npt.ArrayLike, ref0: npt.
     ----------
     controller : Controller or None
         None for a Python controller: no closed-loop check.
-    x0 : (12,) array_like
+    x0 : (12,) numpy.ndarray
         The start state [m, rad, m/s, rad/s].
-    ref0 : (14,) array_like
+    ref0 : (14,) numpy.ndarray
         The reference row at t = 0.
-    P : (14,) array_like
+    P : (14,) numpy.ndarray
         The truth parameters at t = 0.
     dt : float
         The step (s).

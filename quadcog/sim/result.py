@@ -13,7 +13,7 @@ if TYPE_CHECKING:
 
     from quadcog.sim.divergence import DivergenceCause, Limits
 
-__all__ = ["Metrics", "metrics_from_sums", "position_errors", "flight_metrics",
+__all__ = ["Metrics", "metric_arrays", "metrics_from_sums", "position_errors", "flight_metrics",
            "position_metrics", "SimulationResult"]
 
 
@@ -73,14 +73,58 @@ class Metrics:
         return d
 
 
+def metric_arrays(count: npt.ArrayLike, sum_sq: npt.ArrayLike, max_error: npt.ArrayLike,
+                  count_tail: npt.ArrayLike, sum_sq_tail: npt.ArrayLike,
+                  last_error: npt.ArrayLike, diverged: npt.ArrayLike
+                  ) -> dict[str, npt.NDArray[np.float64]]:
+    """The metrics of many flights from their sums (arrays of one entry per flight).
+
+    The one definition behind single flights (``metrics_from_sums``) and batches.
+
+    Parameters
+    ----------
+    count : (B,) array_like
+        Samples counted.
+    sum_sq : (B,) array_like
+        Their sums of e^2 (m^2).
+    max_error : (B,) array_like
+        Their largest e (m).
+    count_tail : (B,) array_like
+        Samples counted in the tail.
+    sum_sq_tail : (B,) array_like
+        Their sums of e^2 (m^2).
+    last_error : (B,) array_like
+        e at the last counted sample (m).
+    diverged : (B,) array_like of bool
+        True for a diverged flight.
+
+    Returns
+    -------
+    dict of str to (B,) numpy.ndarray
+        rms_position_error (NaN without samples), max_position_error,
+        rms_position_error_tail (inf for a diverged flight) and final_position_error (m).
+    """
+    count, count_tail = np.asarray(count, float), np.asarray(count_tail, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rms = np.where(count > 0,
+                       np.sqrt(np.asarray(sum_sq, float) / np.where(count > 0, count, 1)),
+                       np.nan)
+        tail = np.where(count_tail > 0, np.sqrt(np.asarray(sum_sq_tail, float)
+                                                / np.where(count_tail > 0, count_tail, 1)), np.nan)
+    tail = np.where(np.asarray(diverged, bool), np.inf, tail)
+    return {"rms_position_error": rms, "max_position_error": np.asarray(max_error, float),
+            "rms_position_error_tail": tail,
+            "final_position_error": np.asarray(last_error, float)}
+
+
 def metrics_from_sums(count: float, sum_sq: float, max_error: float, count_tail: float,
                       sum_sq_tail: float, last_error: float, diverged_at: float | None = None,
                       cause: "DivergenceCause | None" = None, limits: "Limits | None" = None
                       ) -> Metrics:
-    """Metrics from the sums of the squared position errors over the counted samples.
+    """Metrics of one flight from the sums of the squared position errors over the counted
+    samples.
 
-    The one definition behind single flights (``flight_metrics``) and batches (compiled
-    sums).
+    ``metric_arrays``, for one flight.
 
     Parameters
     ----------
@@ -108,12 +152,11 @@ def metrics_from_sums(count: float, sum_sq: float, max_error: float, count_tail:
     Metrics
         RMS values are NaN when nothing was counted.
     """
-    nan = float("nan")
+    m = metric_arrays([count], [sum_sq], [max_error], [count_tail], [sum_sq_tail],
+                      [last_error], [cause is not None])
     return Metrics(
-        rms_position_error=float(np.sqrt(sum_sq / count)) if count else nan,
-        max_position_error=float(max_error), final_position_error=float(last_error),
-        rms_position_error_tail=(float("inf") if cause is not None else
-                                 float(np.sqrt(sum_sq_tail / count_tail)) if count_tail else nan),
+        # the four float metrics by name (mypy matches a dict to every field)
+        **{k: float(v[0]) for k, v in m.items()},  # type: ignore[arg-type]
         diverged=cause is not None,
         # diverged_at and limits come with a cause
         diverged_at=None if cause is None else float(diverged_at),  # type: ignore[arg-type]

@@ -1,6 +1,7 @@
 """A user's Python controller, guarded: its calls checked and its failures named.
 
-The protocol (``quadcog.controllers.template``): ``ctrl(t, x, ref, c)`` returns ``U`` (4,), or
+The protocol, stated with shapes and units in ``quadcog.controllers.template.ControllerProtocol``
+(and ``FullControllerProtocol``): ``ctrl(t, x, ref, c)`` returns ``U`` (4,), or
 ``(U, c_dot)`` when it has a state; optional ``n_state``, ``initial_state()``,
 ``project_numpy(c)``, ``estimates_cog``, ``name``.
 """

@@ -18,6 +18,7 @@ import numpy.typing as npt
 
 from quadcog import config
 from quadcog.controllers.base import Controller
+from quadcog.errors import InputError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
 from quadcog.sim.batch import BatchResult, batch_metrics, run_kernel, run_map
 from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
@@ -98,8 +99,8 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
               trajectory: Any = "hover", duration: float = 10.0, dt: float | None = None,
               cog_times: Sequence[tuple[float, float]] = (), disturbances: Any = (),
               truth: TruthOptions | None = None, limits: Limits | None = None,
-              x0: npt.ArrayLike | None = None, threads: int = 1, kernel: str = "auto"
-              ) -> BatchResult:
+              x0: npt.ArrayLike | None = None, threads: int = 1, kernel: str = "auto",
+              precision: str = "float64") -> BatchResult:
     """Fly ``controller`` (designed for its model already) with each truth vehicle and CoG
     increments D (B, 3 J).
 
@@ -131,12 +132,23 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
         Threads that share the flights.
     kernel : {"auto", "vector", "casadi"}
         The vectorized C kernel ("auto" when a C compiler is there) or CasADi's map.
+    precision : {"float64", "float32"}
+        The vector kernel's precision. float32 is for measuring only (bench/precision.py):
+        its metrics are not within 1e-4 of float64's (docs/performance.md).
 
     Returns
     -------
     quadcog.BatchResult
         One entry per flight.
+
+    Raises
+    ------
+    quadcog.InputError
+        A precision other than float64 with kernel='casadi'.
     """
+    if precision != "float64" and kernel == "casadi":
+        raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
+                         "map runs in float64), got kernel='casadi'")
     options, limits = run_options(truth, limits, None)
     dt = config.get("simulate.dt", dt)
     duration, dt = check_time(duration, dt)
@@ -162,7 +174,8 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
         from quadcog.codegen.vector_kernel import kernel_for
         run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
                          lambda: packed(sweep_step(controller, actuation, limits, J)),
-                         required=kernel == "vector")
+                         required=kernel == "vector" or precision == "float32",
+                         precision=precision)
     if run is not None:
         Z = run_kernel(run, Z, Q, schedule, shapes, threads=threads)
     else:

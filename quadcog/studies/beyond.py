@@ -9,13 +9,22 @@ go to the composite law only.
 """
 import dataclasses
 import json
+import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from quadcog.controllers.registry import controller_settings
-from quadcog.scenarios.scenario import load_scenario, run_with_progress
+from quadcog.scenarios.scenario import Scenario, load_scenario, run_with_progress
+from quadcog.sim.result import SimulationResult
 from quadcog.trajectories.registry import make_trajectory
+
+__all__ = ["SCENARIOS", "CONTROLLERS", "SHARED_KEYS", "CONVERGED", "TARGETS", "DIAGNOSTICS",
+           "Z_G_STEP", "Z_G_TRAJECTORIES", "STABILITY_TEX", "Z_G_WHY", "diagnostic", "variant",
+           "convergence_time", "last_change_end", "measure", "z_g_study", "table_lines",
+           "run_beyond"]
 
 SCENARIOS = ("fig6", "fig7", "fig8", "fig6-real", "fig7-real", "fig8-real")
 CONTROLLERS = (("adaptive", "paper's law"), ("fl_integral", "FL + integral"),
@@ -42,9 +51,24 @@ DIAGNOSTICS = (
 )
 
 
-def diagnostic(scenario, kind, change):
-    """``scenario`` flown by ``kind`` with one change: 'poles' (the controller's default
-    poles) or 'motor_lag' (the truth without motor lag)."""
+def diagnostic(scenario: Scenario, kind: str, change: str) -> Scenario:
+    """``scenario`` flown by controller ``kind`` with one thing changed.
+
+    Parameters
+    ----------
+    scenario : quadcog.scenarios.scenario.Scenario
+        The flight.
+    kind : str
+        The controller's short name.
+    change : str
+        'poles' (the controller's default poles) or 'motor_lag' (the truth without motor
+        lag).
+
+    Returns
+    -------
+    quadcog.scenarios.scenario.Scenario
+        The changed copy.
+    """
     sc = variant(scenario, kind)
     if change == "poles":
         return dataclasses.replace(sc, controller_params={})
@@ -53,24 +77,57 @@ def diagnostic(scenario, kind, change):
 
 # Where z_G is learnt: the composite law, ideal truth, a [3, 3, 3] cm CoG step at t = 1 s.
 Z_G_STEP = (0.03, 0.03, 0.03)
-Z_G_TRAJECTORIES = (("hover", {"kind": "hover"}),
+Z_G_TRAJECTORIES: tuple[tuple[str, dict[str, Any]], ...] = (("hover", {"kind": "hover"}),
                     ("circle of Fig. 7 (1 m, 10 s)", {"kind": "circle", "period": 10.0}),
                     ("figure-8, 1 m, 12 s", {"kind": "figure8", "size": 1.0, "period": 12.0}),
                     ("circle, 1 m, 3 s", {"kind": "circle", "period": 3.0}),
                     ("figure-8, 1.5 m, 4 s", {"kind": "figure8", "size": 1.5, "period": 4.0}))
 
 
-def variant(scenario, kind):
-    """``scenario`` flown by controller ``kind`` (see the module docstring)."""
+def variant(scenario: Scenario, kind: str) -> Scenario:
+    """``scenario`` flown by controller ``kind`` (see the module docstring).
+
+    Parameters
+    ----------
+    scenario : quadcog.scenarios.scenario.Scenario
+        The flight.
+    kind : str
+        The controller's short name.
+
+    Returns
+    -------
+    quadcog.scenarios.scenario.Scenario
+        A copy with the controller and only the shared settings (``SHARED_KEYS``), or all of
+        the scenario's settings when ``kind`` is its own controller.
+    """
     params = {k: v for k, v in scenario.controller_params.items() if k in SHARED_KEYS}
     if kind == scenario.controller:
         params = dict(scenario.controller_params)
     return dataclasses.replace(scenario, controller=kind, controller_params=params)
 
 
-def convergence_time(t, r_hat, r_G, since):
-    """Seconds after ``since`` from which the x_G, y_G estimates stay within CONVERGED of
-    |r_G (x, y)| (per component, against the final r_G) to the end; None if never."""
+def convergence_time(t: NDArray[np.float64], r_hat: NDArray[np.float64],
+                     r_G: NDArray[np.float64], since: float) -> float | None:
+    """When the x_G, y_G estimates have converged.
+
+    Parameters
+    ----------
+    t : (N,) numpy.ndarray
+        Times [s].
+    r_hat : (N, 3) numpy.ndarray
+        The CoG estimate [m].
+    r_G : (N, 3) numpy.ndarray
+        The true CoG [m].
+    since : float
+        The time to count from [s].
+
+    Returns
+    -------
+    float or None
+        Seconds after ``since`` from which both estimates stay within ``CONVERGED`` of
+        |r_G (x, y)| (per component, against the final r_G) to the end; None if never (or
+        when r_G (x, y) = 0).
+    """
     r = r_G[-1, :2]
     tol = CONVERGED * np.linalg.norm(r)
     if tol == 0:
@@ -83,13 +140,38 @@ def convergence_time(t, r_hat, r_G, since):
     return float(t[bad[-1] + 1] - since)
 
 
-def last_change_end(scenario):
-    """When the last CoG change of ``scenario`` is complete (s)."""
+def last_change_end(scenario: Scenario) -> float:
+    """When the last CoG change of ``scenario`` is complete.
+
+    Parameters
+    ----------
+    scenario : quadcog.scenarios.scenario.Scenario
+        The flight.
+
+    Returns
+    -------
+    float
+        The end of its last ramp [s]; 0 without CoG changes.
+    """
     return max((c.t + c.ramp for c in scenario.cog.changes), default=0.0)
 
 
-def measure(scenario, result):
-    """The row of one flight: max excursion, tail RMS, estimate convergence time."""
+def measure(scenario: Scenario, result: SimulationResult) -> dict[str, Any]:
+    """The row of one flight: max excursion, tail RMS, estimate convergence time.
+
+    Parameters
+    ----------
+    scenario : quadcog.scenarios.scenario.Scenario
+        The flight.
+    result : quadcog.sim.result.SimulationResult
+        Its run.
+
+    Returns
+    -------
+    dict
+        max, tail [m] (tail None when diverged), diverged, diverged_at [s], estimating,
+        converged_after [s] or None, r_hat_final and r_G_final [m].
+    """
     m = result.metrics
     since = last_change_end(scenario)
     estimating = m.r_hat_final is not None
@@ -102,9 +184,21 @@ def measure(scenario, result):
                 r_hat_final=m.r_hat_final, r_G_final=m.r_G_final)
 
 
-def z_g_study(progress=False):
-    """Rows (trajectory, final r_hat (cm), seconds after the step from which z_G stays within
-    5 % of the truth, or None)."""
+def z_g_study(progress: bool = False) -> list[dict[str, Any]]:
+    """Where z_G is learnt: the composite law on the trajectories of ``Z_G_TRAJECTORIES``.
+
+    Parameters
+    ----------
+    progress : bool
+        Print each row's estimate.
+
+    Returns
+    -------
+    list of dict
+        One row per trajectory: trajectory, r_hat_final_cm (3 numbers, cm),
+        z_G_converged_after (seconds after the step from which z_G stays within 5 % of the
+        truth, or None) and diverged.
+    """
     from quadcog.controllers import CompositeAdaptive
     from quadcog.sim.flight import simulate
     rows = []
@@ -135,8 +229,19 @@ def _fmt_tail(m):
     return f"diverged at {m['diverged_at']:.2f} s" if m["diverged"] else f"{m['tail']:.4f}"
 
 
-def table_lines(rows):
-    """The side-by-side table as markdown lines."""
+def table_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """The side-by-side table as markdown lines.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows of ``run_beyond`` (scenario, label and the keys of ``measure``).
+
+    Returns
+    -------
+    list of str
+        The table's lines.
+    """
     lines = ["| scenario | controller | max excursion (m) | tail RMS (m) | x_G, y_G within 5 % |",
              "|---|---|---|---|---|"]
     for r in rows:
@@ -231,10 +336,24 @@ forgetting keep bounded.
 """
 
 
-def run_beyond(out, progress=True):
-    """Fly every CoG scenario with the three controllers and the z_G study; write beyond.md,
-    beyond.json, beyond.png and beyond_fragment.tex into ``out``. Returns (rows, targets,
-    z rows)."""
+def run_beyond(out: str | os.PathLike[str], progress: bool = True
+               ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], list[dict[str, Any]]]:
+    """Fly every CoG scenario with the three controllers and the z_G study.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The folder for beyond.md, beyond.json, beyond.png and beyond_fragment.tex (created
+        if needed).
+    progress : bool
+        Progress bars on stderr.
+
+    Returns
+    -------
+    tuple of (list of dict, list of dict, list of dict)
+        (rows of ``measure`` per scenario and controller, the targets with ``met``, the rows
+        of ``z_g_study``).
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows, flights = [], {}
@@ -250,7 +369,8 @@ def run_beyond(out, progress=True):
         m = next(r for r in rows if r["scenario"] == name and r["controller"] == "composite")
         for text, check in checks:
             targets.append(dict(scenario=name, target=text, met=bool(check(m)),
-                                max=m["max"], tail=m["tail"], converged_after=m["converged_after"]))
+                                max=m["max"], tail=m["tail"],
+                                converged_after=m["converged_after"]))
     why = []
     for name, kind, text, change in DIAGNOSTICS:
         sc = diagnostic(load_scenario(name), kind, change)
@@ -258,8 +378,8 @@ def run_beyond(out, progress=True):
         why.append(dict(scenario=name, controller=kind, change=text, **measure(sc, res)))
     z_rows = z_g_study(progress)
     _plot(flights, z_rows, out / "beyond.png")
-    (out / "beyond.json").write_text(json.dumps(dict(rows=rows, targets=targets, why=why, z_G=z_rows),
-                                                indent=2) + "\n")
+    (out / "beyond.json").write_text(json.dumps(dict(rows=rows, targets=targets, why=why,
+                                                     z_G=z_rows), indent=2) + "\n")
     md = ["# Beyond the paper", "",
           "Max excursion: largest position error of the run; tail: RMS over the last 25 %; "
           "x_G, y_G within 5 %: seconds after the last CoG change is complete from which both "
@@ -273,7 +393,8 @@ def run_beyond(out, progress=True):
            "|---|---|---|---|---|"]
     md += [f"| {w['scenario']} | {w['controller']} | {w['change']} | {w['max']:.3f} | "
            f"{_fmt_tail(w)} |" for w in why]
-    md += ["", f"z_G (composite law, ideal truth, CoG step to {[round(100 * v, 1) for v in Z_G_STEP]} "
+    md += ["", "z_G (composite law, ideal truth, CoG step to "
+           f"{[round(100 * v, 1) for v in Z_G_STEP]} "
            "cm at 1 s, 20 s):", "", "| trajectory | r_hat at 20 s (cm) | z_G within 5 % |",
            "|---|---|---|"]
     after = lambda z: ("not in the run" if z["z_G_converged_after"] is None
@@ -322,7 +443,8 @@ def _fragment(rows, targets, why, z_rows):
 Z_G_WHY = (r"Why: the thrust acts along body $z$, so a CoG offset along body $z$ has no moment "
            r"arm to the thrust; gravity's moment on $z_G$ is cancelled by the same offset's "
            r"inertial coupling $m\,r_G\times\dot\nu_1$ whenever the vehicle is in (quasi-)steady "
-           r"flight. $z_G$ shows only through the angular accelerations ($m\,\dot\nu_2\times r_G$) "
+           r"flight. $z_G$ shows only through the angular accelerations "
+           r"($m\,\dot\nu_2\times r_G$) "
            r"and the horizontal drag at $O$, which hover and the paper's slow trajectories hardly "
            r"excite; the covariance in that direction stays at its bound $k_0$ and the estimate "
            r"keeps what a transient taught it. Aggressive trajectories with large angular "

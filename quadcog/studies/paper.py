@@ -1,13 +1,18 @@
 """`quadcog paper`: the paper's figures as scenarios, each claim as numbers and a verdict."""
 from dataclasses import dataclass
 import json
+import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from quadcog import config
-from quadcog.scenarios.files import scenario_path
+from quadcog.scenarios.lookup import scenario_path
 from quadcog.scenarios.scenario import load_scenario, run_with_progress, write_outputs
+
+__all__ = ["TRACKS", "FAILS", "RECOVERS", "ESTIMATE", "ESTIMATE_FLOOR", "CSV_EVERY", "Claim",
+           "CLAIMS", "verdict", "readme_table", "run_paper"]
 
 TRACKS = 0.05        # m: tail RMS under which a balanced run "tracks" (Fig. 3)
 FAILS = 0.50         # m: tail RMS over which (or diverged) a controller "fails" (Figs. 4, 5)
@@ -19,6 +24,19 @@ CSV_EVERY = 10           # the paper run's trajectory.csv keeps every 10th step
 
 @dataclass(frozen=True)
 class Claim:
+    """One claim of the paper, checked on one shipped scenario.
+
+    Parameters
+    ----------
+    figure : str
+        The paper's figure ("Fig. 6").
+    scenario : str
+        The shipped scenario that reproduces it.
+    text : str
+        The claim in words.
+    kind : str
+        "tracks", "fails" or "recovers": how ``verdict`` judges it.
+    """
     figure: str
     scenario: str
     text: str
@@ -48,8 +66,21 @@ def _estimate_ok(m):
     return bool(np.all(np.abs(r_hat - r) <= np.maximum(ESTIMATE * np.abs(r), ESTIMATE_FLOOR)))
 
 
-def verdict(claim, m):
-    """(holds: 'yes' | 'partly' | 'no', note) for one claim and its run's metrics."""
+def verdict(claim: Claim, m: dict[str, Any]) -> tuple[str, str]:
+    """Whether one claim holds in its run.
+
+    Parameters
+    ----------
+    claim : Claim
+        The claim.
+    m : dict
+        Its run's metrics (metrics.json: errors in m, times in s).
+
+    Returns
+    -------
+    tuple of (str, str)
+        (holds: 'yes' | 'partly' | 'no', a note with the numbers).
+    """
     tail, peak = m["rms_position_error_tail"], m["max_position_error"]
     if claim.kind == "tracks":
         if not m["diverged"] and tail < TRACKS:
@@ -129,9 +160,21 @@ def _fragment(rows):
     return "\n".join(lines) + "\n"
 
 
-def readme_table(rows):
-    """The README's table of the claims (Markdown): tail RMS to 0.1 mm, max to 1 mm;
-    ``python bench/publish.py paper`` copies it into README.md."""
+def readme_table(rows: list[dict[str, Any]]) -> str:
+    """The README's table of the claims (Markdown).
+
+    ``python bench/publish.py paper`` copies it into README.md.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows of ``run_paper``.
+
+    Returns
+    -------
+    str
+        The table: tail RMS to 0.1 mm, max to 1 mm.
+    """
     lines = ["| figure | claim | tail RMS (m) | max (m) | holds |", "|---|---|---|---|---|"]
     for r in rows:
         tail = (f"diverged at {r['diverged_at']:.2f} s" if r["diverged"]
@@ -141,11 +184,27 @@ def readme_table(rows):
     return "\n".join(lines)
 
 
-def run_paper(out, progress=True, beyond=True):
-    """Run the built-in scenarios, draw the figures, write summary.md, summary.json and
-    report_fragment.tex into ``out``; with ``beyond``, also the side-by-side comparison of
-    ``quadcog.studies.beyond`` into ``out/beyond`` (its section joins the report fragment). Returns the
-    summary rows."""
+def run_paper(out: str | os.PathLike[str], progress: bool = True,
+              beyond: bool = True) -> list[dict[str, Any]]:
+    """Run the built-in scenarios, draw the figures, write the summaries.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The folder for summary.md, summary.json, report_fragment.tex, readme_table.md and
+        the figures (created if needed).
+    progress : bool
+        Progress bars on stderr.
+    beyond : bool
+        Also the side-by-side comparison of ``quadcog.studies.beyond`` into ``out/beyond``
+        (its section joins the report fragment).
+
+    Returns
+    -------
+    list of dict
+        The summary rows, one per claim: figure, scenario, claim, controller, holds, note
+        and the run's metrics (m, s).
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows, results = [], {}

@@ -1,12 +1,24 @@
 """`quadcog tour`: the generated functions evaluated at hover, as a first look."""
+from collections.abc import Callable
+
 import numpy as np
 
 from quadcog.model.conventions import N_STATE, R_G, hover_trim
 from quadcog.model.functions import load
 from quadcog.vehicles.vehicle import default_parameters
 
+__all__ = ["tour"]
 
-def tour(print_=print):
+
+def tour(print_: Callable[[str], object] = print) -> None:
+    """Print every generated function evaluated at hover of the default vehicle with a CoG
+    offset r_G = [3, -2, 0] cm.
+
+    Parameters
+    ----------
+    print_ : callable
+        Called with each text to show (default: ``print``).
+    """
     model = load()
     p = default_parameters(x_G=0.03, y_G=-0.02)
     x = np.zeros(N_STATE)
@@ -14,7 +26,8 @@ def tour(print_=print):
     fmt = {"float_kind": lambda v: f"{v: .4g}"}
 
     def show(title, value):
-        print_(f"\n{title}\n{np.array2string(np.asarray(value), formatter=fmt, max_line_width=100)}")
+        text = np.array2string(np.asarray(value), formatter=fmt, max_line_width=100)
+        print_(f"\n{title}\n{text}")
 
     print_(f"quadcog tour: backend {model.backend!r}; default vehicle (AscTec Hummingbird) with "
            f"r_G = {p[R_G].tolist()} m, level hover")

@@ -5,22 +5,44 @@ A chunk is a plain dict (the base scenario data, the flights' values) and its re
 columns, so it travels to a Dask worker and back without any compiled object: the worker builds
 or loads the compiled code itself (from the disk cache, keyed by its source).
 """
+from collections.abc import Sequence
 import copy
 import json
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from quadcog.scenarios.keys import set_key
-from quadcog.scenarios.scenario import parse
+from quadcog.scenarios.scenario import Scenario, parse
 from quadcog.sim.flight import start_at_reference
+from quadcog.sweeps.spec import Flight, Sweep
+
+__all__ = ["METRICS", "make_job", "run_chunk", "cog_steps", "fly_group"]
 
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
            "final_position_error", "diverged", "diverged_at")
-_controllers = {}           # group key -> controller, per process
+_controllers: dict[str, Any] = {}       # group key -> controller, per process
 
 
-def make_job(sweep, chunk_index, flights):
-    """The picklable description of one chunk."""
+def make_job(sweep: Sweep, chunk_index: int, flights: Sequence[Flight]) -> dict[str, Any]:
+    """The picklable description of one chunk.
+
+    Parameters
+    ----------
+    sweep : quadcog.sweeps.spec.Sweep
+        The sweep.
+    chunk_index : int
+        The chunk's index.
+    flights : sequence of quadcog.sweeps.spec.Flight
+        Its flights.
+
+    Returns
+    -------
+    dict
+        {"chunk", "base", "source", "threshold", "dimensions": [(key, width)], "flights":
+        [(index, values, admissible)]}: plain data only.
+    """
     return {"chunk": chunk_index, "base": sweep.base, "source": sweep.source,
             "threshold": sweep.threshold,
             "dimensions": [(d.key, d.width) for d in sweep.dimensions],
@@ -38,14 +60,29 @@ def _group_key(data):
     return json.dumps(d, sort_keys=True)
 
 
-def run_chunk(job, threads=1):
-    """Fly the flights of ``job`` (see ``make_job``); returns {column: numpy array}, one row
-    per flight in flight order. Deterministic: the same job gives the same bits anywhere."""
+def run_chunk(job: dict[str, Any], threads: int = 1) -> dict[str, NDArray[Any]]:
+    """Fly the flights of one chunk.
+
+    Deterministic: the same job gives the same bits anywhere.
+
+    Parameters
+    ----------
+    job : dict
+        The chunk (see ``make_job``).
+    threads : int
+        Threads of the batch kernel.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        {column: (n,) array}, one row per flight in flight order: ``flight``, the varied
+        keys, ``controller``, ``admissible``, the ``METRICS`` (m, s) and ``failed``.
+    """
     flights = job["flights"]
     n = len(flights)
     metrics = {k: np.full(n, np.nan) for k in METRICS}
     metrics["diverged"] = np.zeros(n, dtype=bool)
-    groups = {}
+    groups: dict[str, list[int]] = {}
     scenarios = {}
     for row, (index, values, admissible) in enumerate(flights):
         data = copy.deepcopy(job["base"])
@@ -78,17 +115,47 @@ def run_chunk(job, threads=1):
     return columns
 
 
-def cog_steps(scenario):
-    """(J, 2) start times and ramps of the scenario's CoG changes, and (J, 3) the increments
-    d_j = r_j - r_{j-1}: r_G(t) = r_G(vehicle) + sum_j s_j(t) d_j."""
+def cog_steps(scenario: Scenario) -> NDArray[np.float64]:
+    """The increments of a scenario's CoG changes.
+
+    Parameters
+    ----------
+    scenario : quadcog.scenarios.scenario.Scenario
+        The flight.
+
+    Returns
+    -------
+    (J, 3) numpy.ndarray
+        d_j = r_j - r_{j-1} [m] of its J CoG changes, so that
+        r_G(t) = r_G(vehicle) + sum_j s_j(t) d_j.
+    """
     changes = scenario.cog.changes
     r = np.array([c.r for c in changes], dtype=float).reshape(-1, 3)
     d = np.diff(np.vstack([np.zeros((1, 3)), r]), axis=0)
     return d
 
 
-def fly_group(key, scenarios, threads=1):
-    """Metrics of scenarios that differ only in their truth CoG, flown as one batch."""
+def fly_group(key: str, scenarios: Sequence[Scenario], threads: int = 1,
+              precision: str = "float64") -> dict[str, NDArray[Any]]:
+    """Metrics of scenarios that differ only in their truth CoG, flown as one batch.
+
+    Parameters
+    ----------
+    key : str
+        What the scenarios share (the controller is built once per key and process).
+    scenarios : sequence of quadcog.scenarios.scenario.Scenario
+        The flights.
+    threads : int
+        Threads of the batch kernel.
+    precision : str
+        "float64" or "float32", the vector kernel's (for measuring; see
+        ``quadcog.sim.vector_batch.fly_batch``).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        {metric: (len(scenarios),) array} of the ``METRICS`` (m, s, bool).
+    """
     from quadcog.sim.vector_batch import fly_batch
     s0 = scenarios[0]
     ctl = _controllers.get(key)
@@ -97,8 +164,9 @@ def fly_group(key, scenarios, threads=1):
     D = np.array([cog_steps(s).ravel() for s in scenarios]).reshape(len(scenarios), -1)
     x0 = start_at_reference(s0.trajectory(0.0))
     x0[:3] += np.asarray(s0.initial_offset)
-    r = fly_batch(ctl, [s.vehicle for s in scenarios], D, s0.trajectory, duration=s0.duration, dt=s0.dt,
+    r = fly_batch(ctl, [s.vehicle for s in scenarios], D, s0.trajectory, duration=s0.duration,
+                  dt=s0.dt,
                   cog_times=[(c.t, c.ramp) for c in s0.cog.changes],
                   disturbances=s0.disturbances, truth=s0.truth, limits=s0.limits, x0=x0,
-                  threads=threads)
+                  threads=threads, precision=precision)
     return {name: getattr(r, name) for name in METRICS}

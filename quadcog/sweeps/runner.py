@@ -6,6 +6,7 @@ The result of a chunk depends on the chunk alone (fixed flights, seeded values, 
 lanes), never on where or when it ran: every backend and every resumed run gives the same
 bits.
 """
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 import json
 import multiprocessing
@@ -13,14 +14,19 @@ import os
 from pathlib import Path
 import sys
 import time
+from typing import Any, TextIO
 
 import numpy as np
+from numpy.typing import NDArray
 
 from quadcog.errors import QuadcogError
 from quadcog.files import atomic_write
+from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.flights import make_job, run_chunk
 from quadcog.sweeps.spec import Sweep, SweepError, from_dict, load_sweep
-from quadcog.sweeps.table import require_pyarrow, to_arrow
+
+__all__ = ["CHUNK_FOLDER", "MANIFEST", "Progress", "ChunkStore", "SweepResult", "sweep",
+           "run_cli"]
 
 CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"
@@ -28,16 +34,31 @@ MANIFEST = "sweep.json"
 
 class Progress:
     """``done/total flights (percent), rate, time left`` on stderr: live on a terminal, every
-    few seconds (and at the end) in a log."""
+    few seconds (and at the end) in a log. Call it with the number of flights just done.
 
-    def __init__(self, label, total, done=0, stream=None, every=5.0):
+    Parameters
+    ----------
+    label : str
+        What the line starts with.
+    total : int
+        Flights in the sweep.
+    done : int
+        Flights already done (resumed chunks).
+    stream : file-like, optional
+        Where to write (default: stderr).
+    every : float
+        Seconds between lines when the stream is not a terminal [s].
+    """
+
+    def __init__(self, label: str, total: int, done: int = 0, stream: TextIO | None = None,
+                 every: float = 5.0) -> None:
         self.label, self.total, self.done = label, total, done
         self.stream = stream or sys.stderr
         self._start_done, self._t0 = done, time.perf_counter()
         self._last, self._every = -1e9, every
         self._live = getattr(self.stream, "isatty", lambda: False)()
 
-    def __call__(self, n_new):
+    def __call__(self, n_new: int) -> None:
         self.done += n_new
         now = time.perf_counter()
         if self.done < self.total and now - self._last < (0.2 if self._live else self._every):
@@ -56,9 +77,22 @@ class Progress:
 
 class ChunkStore:
     """``out/sweep.json`` (the sweep's fingerprint) and ``out/chunks/chunk-NNNNN.parquet``,
-    each written to a temporary name and renamed, so a chunk file is complete or absent."""
+    each written to a temporary name and renamed, so a chunk file is complete or absent.
 
-    def __init__(self, out, sweep):
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The results folder (created if needed).
+    sweep : quadcog.sweeps.spec.Sweep
+        The sweep whose chunks it stores.
+
+    Raises
+    ------
+    quadcog.errors.SweepError
+        When ``out`` holds the results of a different sweep.
+    """
+
+    def __init__(self, out: str | os.PathLike[str], sweep: Sweep) -> None:
         self.out = Path(out)
         self.folder = self.out / CHUNK_FOLDER
         self.fingerprint = sweep.fingerprint()
@@ -77,19 +111,64 @@ class ChunkStore:
             {"fingerprint": self.fingerprint, "name": sweep.name, "source": sweep.source,
              "flights": len(sweep.flights), "chunks": len(sweep.chunks())}, indent=2) + "\n")
 
-    def path(self, c):
+    def path(self, c: int) -> Path:
+        """The file of chunk ``c``.
+
+        Parameters
+        ----------
+        c : int
+            The chunk index.
+
+        Returns
+        -------
+        pathlib.Path
+            ``out/chunks/chunk-NNNNN.parquet``.
+        """
         return self.folder / f"chunk-{c:05d}.parquet"
 
-    def done(self, c):
+    def done(self, c: int) -> bool:
+        """Whether chunk ``c`` is stored.
+
+        Parameters
+        ----------
+        c : int
+            The chunk index.
+
+        Returns
+        -------
+        bool
+            True when its file exists (it is complete: files are renamed into place).
+        """
         return self.path(c).is_file()
 
-    def write(self, c, columns):
+    def write(self, c: int, columns: dict[str, NDArray[Any]]) -> None:
+        """Store the result of chunk ``c`` (to a temporary name, then renamed).
+
+        Parameters
+        ----------
+        c : int
+            The chunk index.
+        columns : dict of str to numpy.ndarray
+            {column: (n,) array}, one row per flight of the chunk.
+        """
         pa = require_pyarrow()
         tmp = self.path(c).with_suffix(".tmp")
         pa.parquet.write_table(to_arrow(columns), tmp)
         os.replace(tmp, self.path(c))
 
-    def read(self, c):
+    def read(self, c: int) -> dict[str, NDArray[Any]]:
+        """The stored result of chunk ``c``.
+
+        Parameters
+        ----------
+        c : int
+            The chunk index.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            {column: (n,) array}, one row per flight of the chunk.
+        """
         pa = require_pyarrow()
         table = pa.parquet.read_table(self.path(c))
         return {name: table.column(name).to_numpy(zero_copy_only=False)
@@ -153,22 +232,44 @@ def _dask(jobs, workers, scheduler, fingerprint, on_done):
 
 
 class SweepResult:
-    """The outcome of a sweep: ``columns`` ({name: array}, one row per flight, in flight
-    order), ``summary`` (dict), the ``sweep`` itself, ``out`` (folder or None), ``seconds``
-    and ``flown`` (flights simulated by this call: not those of resumed chunks, nor
-    inadmissible ones)."""
+    """The outcome of a sweep.
 
-    def __init__(self, sweep, columns, summary, out, seconds, flown):
+    Parameters
+    ----------
+    sweep : quadcog.sweeps.spec.Sweep
+        The sweep itself.
+    columns : dict of str to numpy.ndarray
+        {name: (n_flights,) array}, one row per flight, in flight order.
+    summary : dict
+        ``quadcog.sweeps.summary.summarize`` of the columns.
+    out : str or os.PathLike or None
+        The results folder, or None (kept in memory).
+    seconds : float
+        Wall time of the call [s].
+    flown : int
+        Flights simulated by this call: not those of resumed chunks, nor inadmissible ones.
+    """
+
+    def __init__(self, sweep: Sweep, columns: dict[str, NDArray[Any]], summary: dict[str, Any],
+                 out: str | os.PathLike[str] | None, seconds: float, flown: int) -> None:
         self.sweep, self.columns, self.summary = sweep, columns, summary
         self.out, self.seconds, self.flown = out, seconds, flown
 
-    def table(self):
-        """The results as a pyarrow Table."""
+    def table(self) -> Any:
+        """The results as a pyarrow Table.
+
+        Returns
+        -------
+        pyarrow.Table
+            One row per flight (pyarrow ships no type stubs: typed as Any).
+        """
         return to_arrow(self.columns)
 
 
-def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=True,
-          **settings):
+def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
+          out: str | os.PathLike[str] | None = None, *, workers: int | None = None,
+          scheduler: str | None = None, progress: bool | Callable[[int], object] = True,
+          plots: bool = True, **settings: Any) -> SweepResult:
     """Run a sweep file and collect one row per flight.
 
     Parameters
@@ -195,6 +296,15 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
     Returns
     -------
     SweepResult
+        One row per flight, the summary, the timing.
+
+    Raises
+    ------
+    quadcog.errors.SweepError
+        For an invalid sweep file or settings, both ``workers`` and ``scheduler``, or an
+        ``out`` folder holding another sweep's results.
+    quadcog.errors.QuadcogError
+        When Dask or pyarrow is needed and missing, or the scheduler cannot be reached.
     """
     t0 = time.perf_counter()
     if isinstance(spec, Sweep):
@@ -210,7 +320,7 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
         raise SweepError(f"workers must be a whole number >= 1, got {workers!r}")
     chunks = s.chunks()
     store = ChunkStore(out, s) if out is not None else None
-    results = {}
+    results: dict[int, dict[str, NDArray[Any]] | None] = {}
     pending = []
     for c, flights in chunks:
         if store is not None and store.done(c):
@@ -250,8 +360,26 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
     return SweepResult(s, columns, summary, out, time.perf_counter() - t0, flown)
 
 
-def run_cli(spec, out, workers=None, scheduler=None):
-    """`quadcog sweep FILE --out DIR`: run (or resume), then print the summary table."""
+def run_cli(spec: str | os.PathLike[str], out: str | os.PathLike[str],
+            workers: int | None = None, scheduler: str | None = None) -> SweepResult:
+    """`quadcog sweep FILE --out DIR`: run (or resume), then print the summary table.
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+        A sweep file, or the name of a shipped sweep.
+    out : str or os.PathLike
+        The results folder.
+    workers : int, optional
+        Processes of a Dask LocalCluster.
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+
+    Returns
+    -------
+    SweepResult
+        The outcome.
+    """
     from quadcog.sweeps.summary import summary_markdown
     result = sweep(spec, out, workers=workers, scheduler=scheduler)
     print(summary_markdown(result.summary))

@@ -8,22 +8,29 @@ way the scenario file spells it: ``controller``, ``duration``, ``vehicle.m``,
 a sweep accepts exactly what a scenario file accepts. The keys of a sweep file are listed in
 README.md ("Sweeps").
 """
+from collections.abc import Callable
 import copy
 from dataclasses import dataclass, field
 import hashlib
 import itertools
 import json
 import math
+import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from quadcog.errors import ParameterError, SweepError
 from quadcog.model.parameters import admissible_radius
-from quadcog.scenarios.files import find_file, read_toml, scenario_path, shipped_names
 from quadcog.scenarios.keys import KEY_EXAMPLE, parse_key, set_key
-from quadcog.scenarios.scenario import ScenarioError, parse
+from quadcog.scenarios.lookup import find_file, read_toml, scenario_path, shipped_names
+from quadcog.scenarios.scenario import Scenario, ScenarioError, parse
 from quadcog.sim.flight import check_cog_changes
+
+__all__ = ["MODES", "TOP", "SOURCES", "DEFAULT_CHUNK", "DEFAULT_THRESHOLD", "Dimension",
+           "Flight", "Sweep", "cog_admissible", "from_dict", "sweep_names", "sweep_path",
+           "read_sweep_file", "load_sweep"]
 
 MODES = ("grid", "monte-carlo")
 TOP = {"name", "description", "scenario", "mode", "samples", "seed", "chunk", "threshold",
@@ -48,65 +55,148 @@ def _plain(v):
 
 @dataclass
 class Dimension:
-    """One varied key: ``values`` (a list: grid values, or the pool Monte-Carlo draws from)
-    or ``sampler`` (a callable(rng, n) -> n values) with ``n`` draws in a grid."""
+    """One varied key: ``values`` or ``sampler``.
+
+    Parameters
+    ----------
+    key : str
+        The scenario key varied (``vehicle.m``, ``cog[0].r``).
+    kind : str
+        Where its values come from: one of ``SOURCES``.
+    values : list or None
+        Grid values, or the pool Monte-Carlo draws from.
+    sampler : callable or None
+        ``sampler(rng, n)`` -> n values (a list), for the random kinds.
+    n : int or None
+        Draws of ``sampler`` in a grid (None in Monte-Carlo mode).
+    random : bool
+        Whether the values are drawn (uniform, normal, ball).
+    width : int
+        Columns in the table: 3 for a vector value.
+    """
     key: str
     kind: str
-    values: list = None
-    sampler: object = None
-    n: int = None
+    values: list[Any] | None = None
+    sampler: Callable[[np.random.Generator, int], list[Any]] | None = None
+    n: int | None = None
     random: bool = False
     width: int = 1              # columns in the table: 3 for a vector value
 
-    def columns(self):
+    def columns(self) -> list[str]:
+        """The table's column names of this dimension.
+
+        Returns
+        -------
+        list of str
+            ``[key]``, or ``key[0]``, ``key[1]``, ... for a vector value.
+        """
         return [self.key] if self.width == 1 else [f"{self.key}[{i}]" for i in range(self.width)]
 
 
 @dataclass
 class Flight:
-    """One flight: its index, the values of the varied keys, and whether its CoG is admissible
-    (inadmissible grid points are kept as rows without metrics when ``inadmissible = "skip"``)."""
+    """One flight of a sweep.
+
+    Parameters
+    ----------
+    index : int
+        Its place in the sweep (the table's ``flight`` column).
+    values : dict
+        {key: value} of the varied keys (TOML-like values).
+    admissible : bool
+        Whether its CoG is admissible (inadmissible grid points are kept as rows without
+        metrics when ``inadmissible = "skip"``).
+    """
     index: int
-    values: dict
+    values: dict[str, Any]
     admissible: bool = True
 
 
 @dataclass
 class Sweep:
-    """A validated sweep: the base scenario data (dict, with the fixed settings applied), the
-    dimensions and the expanded flights."""
+    """A validated sweep: the base scenario, the dimensions and the expanded flights.
+
+    Parameters
+    ----------
+    name : str
+        The sweep's name (default: the file's stem).
+    description : str
+        One line about it.
+    source : str
+        The sweep file, as error messages name it.
+    base : dict
+        The base scenario data, with the fixed settings (``[set]``) applied.
+    base_source : str
+        The base scenario file.
+    mode : str
+        'grid' or 'monte-carlo'.
+    seed : int
+        The seed of the random dimensions.
+    chunk : int
+        Flights per chunk: the unit of scheduling, retry and resume.
+    threshold : float
+        Tail RMS position error above which a flight counts as failed [m].
+    dimensions : list of Dimension
+        The varied keys, in the file's order.
+    flights : list of Flight
+        The expanded flights, in order.
+    """
     name: str
     description: str
     source: str
-    base: dict
+    base: dict[str, Any]
     base_source: str
     mode: str
     seed: int
     chunk: int
     threshold: float
-    dimensions: list
-    flights: list = field(default_factory=list)
+    dimensions: list[Dimension]
+    flights: list[Flight] = field(default_factory=list)
 
     @property
-    def columns(self):
+    def columns(self) -> list[str]:
+        """The table's columns of the varied keys, in the dimensions' order."""
         return [c for d in self.dimensions for c in d.columns()]
 
-    def flight_data(self, flight):
-        """The scenario dict of one flight."""
+    def flight_data(self, flight: Flight) -> dict[str, Any]:
+        """The scenario dict of one flight.
+
+        Parameters
+        ----------
+        flight : Flight
+            One of ``flights``.
+
+        Returns
+        -------
+        dict
+            A copy of ``base`` with the flight's values set.
+        """
         data = copy.deepcopy(self.base)
         for key, value in flight.values.items():
             set_key(data, key, value)
         return data
 
-    def chunks(self):
-        """[(chunk index, flights)]: consecutive runs of ``chunk`` flights, fixed by the file
-        alone (never by the scheduler), so results do not depend on where they ran."""
+    def chunks(self) -> list[tuple[int, list[Flight]]]:
+        """The flights in chunks.
+
+        Returns
+        -------
+        list of (int, list of Flight)
+            [(chunk index, flights)]: consecutive runs of ``chunk`` flights, fixed by the file
+            alone (never by the scheduler), so results do not depend on where they ran.
+        """
         return [(c, self.flights[k:k + self.chunk])
                 for c, k in enumerate(range(0, len(self.flights), self.chunk))]
 
-    def fingerprint(self):
-        """SHA-256 of what determines the results: the base data, the settings and every
-        flight's values. A results folder remembers it, so that resuming never mixes sweeps."""
+    def fingerprint(self) -> str:
+        """SHA-256 of what determines the results.
+
+        Returns
+        -------
+        str
+            The hex digest of the base data, the settings and every flight's values. A
+            results folder remembers it, so that resuming never mixes sweeps.
+        """
         text = json.dumps({"base": self.base, "threshold": self.threshold, "chunk": self.chunk,
                            "flights": [(f.index, f.values, f.admissible) for f in self.flights]},
                           sort_keys=True, default=_plain)
@@ -164,8 +254,8 @@ def _range_values(spec, where, source):
                          f"{{start, stop, step}}, got {spec!r}")
     has_num, has_step = "num" in spec, "step" in spec
     if has_num == has_step:
-        raise _field_err(source, where, "expected exactly one of 'num' (points, stop included) and "
-                   "'step'")
+        raise _field_err(source, where, "expected exactly one of 'num' (points, stop included) "
+                         "and 'step'")
     _table(spec, where, source, ("start", "stop", "num" if has_num else "step"))
     start, stop = float(spec["start"]), float(spec["stop"])
     if has_num:
@@ -266,9 +356,20 @@ def _expand(dims, mode, samples, seed):
     return [dict(zip((d.key for d in dims), row)) for row in zip(*columns)]
 
 
-def cog_admissible(scenario):
-    """None when the vehicle with every CoG change of ``scenario`` is admissible, else the
-    reason (the ParameterError message)."""
+def cog_admissible(scenario: Scenario) -> str | None:
+    """Whether the vehicle stays admissible through every CoG change of a scenario.
+
+    Parameters
+    ----------
+    scenario : quadcog.scenarios.scenario.Scenario
+        The flight.
+
+    Returns
+    -------
+    str or None
+        None when the vehicle with every CoG change is admissible, else the reason (the
+        ParameterError message).
+    """
     try:
         check_cog_changes(scenario.vehicle.parameters(), scenario.cog)
     except ParameterError as e:
@@ -276,9 +377,30 @@ def cog_admissible(scenario):
     return None
 
 
-def from_dict(data, source="<sweep>", folder=None):
-    """A validated Sweep from a parsed sweep file ``data``; ``source`` names it in errors and
-    ``folder`` resolves a relative base-scenario path (default: the current folder)."""
+def from_dict(data: dict[str, Any], source: str = "<sweep>",
+              folder: str | os.PathLike[str] | None = None) -> Sweep:
+    """A validated Sweep from a parsed sweep file.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed sweep file (keys as in README.md "Sweeps").
+    source : str
+        What error messages name.
+    folder : str or os.PathLike, optional
+        Resolves a relative base-scenario path (default: the current folder).
+
+    Returns
+    -------
+    Sweep
+        With every flight expanded and validated as a scenario.
+
+    Raises
+    ------
+    quadcog.errors.SweepError
+        For any key or value refused, naming ``source`` and the key; for a flight that is
+        not a valid scenario or whose CoG is inadmissible.
+    """
     if not isinstance(data, dict):
         raise SweepError(f"{source}: expected a table at the top level")
     for k in data:
@@ -290,7 +412,7 @@ def from_dict(data, source="<sweep>", folder=None):
     mode = data.get("mode", "grid")
     if mode not in MODES:
         raise _err(source, "mode", f"expected one of {', '.join(MODES)}, got {mode!r}")
-    ints = {"seed": 0, "chunk": DEFAULT_CHUNK, "samples": None}
+    ints: dict[str, Any] = {"seed": 0, "chunk": DEFAULT_CHUNK, "samples": None}
     for k, default in ints.items():
         v = data.get(k, default)
         if v is not None and (not isinstance(v, int) or isinstance(v, bool) or v < 0
@@ -343,7 +465,8 @@ def from_dict(data, source="<sweep>", folder=None):
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
         raise _err(source, dup, "appears in two dimensions")
-    sweep = Sweep(name=data.get("name", Path(source).stem), description=data.get("description", ""),
+    sweep = Sweep(name=data.get("name", Path(source).stem),
+                  description=data.get("description", ""),
                   source=source, base=base, base_source=base_source, mode=mode,
                   seed=ints["seed"], chunk=ints["chunk"], threshold=float(threshold),
                   dimensions=dims)
@@ -400,23 +523,61 @@ def _describe(values):
     return ", ".join(f"{k} = {v}" for k, v in values.items())
 
 
-def sweep_names():
-    """Names of the shipped sweep files, sorted."""
+def sweep_names() -> tuple[str, ...]:
+    """Names of the shipped sweep files.
+
+    Returns
+    -------
+    tuple of str
+        Sorted, without ``.toml``.
+    """
     return shipped_names("sweep")
 
 
-def sweep_path(spec):
-    """A sweep file path, or the name of a shipped one (``"failure-map"``)."""
+def sweep_path(spec: str | os.PathLike[str]) -> Path:
+    """The sweep file that ``spec`` stands for.
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+        A sweep file path, or the name of a shipped one (``"failure-map"``).
+
+    Returns
+    -------
+    pathlib.Path
+        The file to read.
+
+    Raises
+    ------
+    quadcog.errors.SweepError
+        When it is neither a file nor a shipped name.
+    """
     return find_file(spec, "sweep")
 
 
-def read_sweep_file(spec):
-    """(parsed TOML dict, path) of a sweep file or shipped name."""
+def read_sweep_file(spec: str | os.PathLike[str]) -> tuple[dict[str, Any], Path]:
+    """A sweep file, parsed but not validated.
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+        A sweep file path, or the name of a shipped one.
+
+    Returns
+    -------
+    tuple of (dict, pathlib.Path)
+        The parsed TOML and the file's path.
+
+    Raises
+    ------
+    quadcog.errors.SweepError
+        When the file is missing or not valid TOML.
+    """
     path = sweep_path(spec)
     return read_toml(path, SweepError), path
 
 
-def load_sweep(spec, **settings):
+def load_sweep(spec: str | os.PathLike[str], **settings: Any) -> Sweep:
     """Read and validate a sweep file (a path or a shipped name).
 
     Parameters
@@ -430,6 +591,12 @@ def load_sweep(spec, **settings):
     Returns
     -------
     Sweep
+        The validated sweep with its flights.
+
+    Raises
+    ------
+    quadcog.errors.SweepError
+        For a missing or invalid file, naming it and the key.
     """
     data, path = read_sweep_file(spec)
     data.update(settings)

@@ -2,24 +2,44 @@
 quantiles of the tail error) and plots chosen from the dimensions."""
 import json
 import os
+from pathlib import Path
 import re
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from quadcog.files import atomic_write
-from quadcog.sweeps.table import require_pyarrow, to_arrow
+from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
+from quadcog.sweeps.spec import Sweep
+
+__all__ = ["QUANTILES", "summarize", "summary_markdown", "write_outputs", "plot_sweep",
+           "summary_survival"]
 
 QUANTILES = (0.5, 0.9, 0.99)
 _COG_XY = re.compile(r"^(cog\[\d+\]\.r)\[([01])\]$")
 
 
-def summarize(sweep, columns):
-    """{"flights", "admissible", "threshold", "controllers": {name: {...}}}: per controller the
-    flight counts, survivors (admissible, not diverged, tail RMS <= threshold), survival rate
-    among the admissible flights, and quantiles of the tail RMS (m) over the flights that did
-    not diverge."""
+def summarize(sweep: Sweep, columns: dict[str, NDArray[Any]]) -> dict[str, Any]:
+    """The summary of a sweep's table.
+
+    Parameters
+    ----------
+    sweep : quadcog.sweeps.spec.Sweep
+        The sweep (its name, source, mode and threshold).
+    columns : dict of str to numpy.ndarray
+        The table: {column: (n_flights,) array}.
+
+    Returns
+    -------
+    dict
+        {"name", "source", "mode", "flights", "admissible", "threshold", "controllers":
+        {name: {...}}}: per controller the flight counts, survivors (admissible, not
+        diverged, tail RMS <= threshold), survival rate among the admissible flights, and
+        quantiles of the tail RMS [m] over the flights that did not diverge.
+    """
     ctl = columns["controller"]
-    out = {"name": sweep.name, "source": sweep.source, "mode": sweep.mode,
+    out: dict[str, Any] = {"name": sweep.name, "source": sweep.source, "mode": sweep.mode,
            "flights": int(len(ctl)), "admissible": int(columns["admissible"].sum()),
            "threshold": sweep.threshold, "controllers": {}}
     for name in dict.fromkeys(ctl.tolist()):
@@ -38,7 +58,19 @@ def summarize(sweep, columns):
     return out
 
 
-def summary_markdown(summary):
+def summary_markdown(summary: dict[str, Any]) -> str:
+    """The summary as Markdown: a sentence and a table per controller.
+
+    Parameters
+    ----------
+    summary : dict
+        The result of ``summarize``.
+
+    Returns
+    -------
+    str
+        summary.md's text.
+    """
     lines = [f"# Sweep {summary['name']}", "",
              f"{summary['flights']} flights ({summary['mode']}), {summary['admissible']} with an "
              f"admissible CoG; a flight survives when it does not diverge and its tail RMS "
@@ -55,8 +87,28 @@ def summary_markdown(summary):
     return "\n".join(lines) + "\n"
 
 
-def write_outputs(sweep, columns, summary, out, plots=True):
-    """results.parquet, results.csv, summary.json, summary.md and the plots into ``out``."""
+def write_outputs(sweep: Sweep, columns: dict[str, NDArray[Any]], summary: dict[str, Any],
+                  out: Path, plots: bool = True) -> list[str]:
+    """results.parquet, results.csv, summary.json, summary.md and the plots into ``out``.
+
+    Parameters
+    ----------
+    sweep : quadcog.sweeps.spec.Sweep
+        The sweep.
+    columns : dict of str to numpy.ndarray
+        The table: {column: (n_flights,) array}.
+    summary : dict
+        The result of ``summarize``.
+    out : pathlib.Path
+        The results folder (exists).
+    plots : bool
+        Draw the plots (skipped without matplotlib).
+
+    Returns
+    -------
+    list of str
+        The file names of the plots written.
+    """
     pa = require_pyarrow()
     import pyarrow.csv  # noqa: F401
     table = to_arrow(columns)
@@ -87,10 +139,26 @@ def _numeric(sweep, columns):
     return out
 
 
-def plot_sweep(sweep, columns, out):
-    """Plots chosen from the dimensions: a failure map over two CoG components (the x and y of
-    one CoG change), survival against each numeric varied value, and histograms of the tail
-    RMS per controller. Returns the file names written."""
+def plot_sweep(sweep: Sweep, columns: dict[str, NDArray[Any]], out: Path) -> list[str]:
+    """Plots chosen from the dimensions.
+
+    A failure map over two CoG components (the x and y of one CoG change), survival against
+    each numeric varied value, and histograms of the tail RMS per controller.
+
+    Parameters
+    ----------
+    sweep : quadcog.sweeps.spec.Sweep
+        The sweep.
+    columns : dict of str to numpy.ndarray
+        The table: {column: (n_flights,) array}.
+    out : pathlib.Path
+        The folder for the PNGs.
+
+    Returns
+    -------
+    list of str
+        The file names written.
+    """
     import matplotlib
     matplotlib.use("Agg")
     from matplotlib.colors import LogNorm
@@ -102,7 +170,7 @@ def plot_sweep(sweep, columns, out):
     tail = columns["rms_position_error_tail"]
     failed, adm = columns["failed"], columns["admissible"]
 
-    pairs = {}
+    pairs: dict[str, dict[str, str]] = {}
     for c in numeric:
         m = _COG_XY.match(c)
         if m:
@@ -172,11 +240,13 @@ def plot_sweep(sweep, columns, out):
     fig, ax = plt.subplots(figsize=(6, 4))
     finite = tail[adm & np.isfinite(tail) & (tail > 0)]
     if finite.size:
-        bins = np.logspace(np.log10(finite.min()), np.log10(max(finite.max(), finite.min() * 10)),
-                           40)
+        hist_bins = np.logspace(np.log10(finite.min()),
+                                np.log10(max(finite.max(), finite.min() * 10)), 40)
         for name in names:
             sel = (ctl == name) & adm & np.isfinite(tail) & (tail > 0)
-            ax.hist(tail[sel], bins=bins, histtype="step", label=name)
+            # matplotlib's stubs name a Sequence for bins; an array of edges is what it takes
+            ax.hist(tail[sel], bins=hist_bins,  # type: ignore[arg-type]
+                    histtype="step", label=name)
         ax.set_xscale("log")
     ax.axvline(sweep.threshold, color="k", ls="--", lw=1, label="failure threshold")
     ax.set_xlabel("tail RMS position error (m)")
@@ -189,7 +259,21 @@ def plot_sweep(sweep, columns, out):
     return written
 
 
-def summary_survival(columns, name):
+def summary_survival(columns: dict[str, NDArray[Any]], name: str) -> str:
+    """The survival of one controller, as text.
+
+    Parameters
+    ----------
+    columns : dict of str to numpy.ndarray
+        The table: {column: (n_flights,) array}.
+    name : str
+        The controller's short name.
+
+    Returns
+    -------
+    str
+        Percent of its admissible flights that did not fail ("93 %"), or "n/a".
+    """
     sel = (columns["controller"] == name) & columns["admissible"]
     if not sel.any():
         return "n/a"

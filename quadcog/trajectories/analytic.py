@@ -2,23 +2,31 @@
 
 A trajectory maps time t (s) to the 14-vector ``[p (3, m), v (3, m/s), a (3, m/s^2),
 j (3, m/s^3), yaw (rad), yaw_rate (rad/s)]``; ``sample(t)`` does it for an array of times and
-returns (N, 14). The jerk lets the controllers feed forward the rate of the attitude they command.
+returns (N, 14). The jerk lets the controllers feed forward the rate of the attitude they
+command. ``quadcog.trajectories.template`` states that interface as a Protocol.
 """
+from collections.abc import Callable
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.errors import InputError, QuadcogError
 from quadcog.kinds import Number, Vec3
 from quadcog.model.parameters import LARGEST
 
+__all__ = ["Trajectory", "Hover", "Circle", "Figure8", "Helix", "FromCallable", "REF_SIZE",
+           "REF_NAMES", "REFERENCE_LIMIT", "POS", "VEL", "ACC", "JERK", "YAW", "YAW_RATE"]
+
 REF_SIZE = 14
 POS, VEL, ACC, JERK = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 YAW, YAW_RATE = 12, 13
 # A reference row beyond this (SI units) is refused: far above any flyable reference (a
-# finite-differenced waypoint step reaches ~5e8 m/s^3, which quadcog.trajectories.feasibility reports),
+# finite-differenced waypoint step reaches ~5e8 m/s^3, which
+# quadcog.trajectories.feasibility reports),
 # and low enough that the closed loop's products stay finite (a radius of 1e300 m does not).
 REFERENCE_LIMIT = 1e12
 REF_NAMES = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz", "yaw",
@@ -69,13 +77,35 @@ def _checked_reference(ref, t, trajectory):
 
 
 class Trajectory:
-    """Base class: subclasses implement ``_pvaj(t)`` for an array t -> four (N, 3) arrays."""
+    """Base class: subclasses implement ``_pvaj(t)`` for an array t -> four (N, 3) arrays.
 
-    yaw = 0.0
+    A trajectory maps time (s) to the reference row ``[p (3, m), v (3, m/s), a (3, m/s^2),
+    j (3, m/s^3), yaw (rad), yaw_rate (rad/s)]`` (``quadcog.trajectories.template``).
+    """
 
-    def sample(self, t):
-        """(N, 14) reference rows at the times ``t`` (s); InputError when a row is not finite
-        or beyond REFERENCE_LIMIT (a radius of 1e300 m)."""
+    yaw: float = 0.0
+    # what a subclass implements (an annotation only: the base class defines no such method)
+    _pvaj: Callable[[npt.NDArray[np.float64]], tuple[npt.NDArray[np.float64], ...]]
+
+    def sample(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Reference rows at many times.
+
+        Parameters
+        ----------
+        t : float or (N,) array_like
+            Times (s).
+
+        Returns
+        -------
+        (N, 14) numpy.ndarray
+            One row ``[p (m), v (m/s), a (m/s^2), j (m/s^3), yaw (rad), yaw_rate (rad/s)]``
+            per time.
+
+        Raises
+        ------
+        InputError
+            When a row is not finite or beyond REFERENCE_LIMIT (a radius of 1e300 m).
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         with np.errstate(over="ignore", invalid="ignore"):
             p, v, a, j = self._pvaj(t)
@@ -83,18 +113,47 @@ class Trajectory:
             ref = np.hstack([p, v, a, j, yaw, np.zeros((t.size, 1))])
         return _checked_reference(ref, t, self)
 
-    def __call__(self, t):
-        """The 14-vector reference at time t (s)."""
+    def __call__(self, t: float) -> npt.NDArray[np.float64]:
+        """The reference row at one time.
+
+        Parameters
+        ----------
+        t : float
+            Time (s).
+
+        Returns
+        -------
+        (14,) numpy.ndarray
+            ``[p (m), v (m/s), a (m/s^2), j (m/s^3), yaw (rad), yaw_rate (rad/s)]``.
+
+        Raises
+        ------
+        InputError
+            When the row is not finite or beyond REFERENCE_LIMIT.
+        """
         return self.sample([t])[0]
 
 
 @dataclass
 class Hover(Trajectory):
-    """Hold ``position`` (m) at heading ``yaw`` (rad)."""
+    """Hold ``position`` (m) at heading ``yaw`` (rad).
+
+    Parameters
+    ----------
+    position : (3,) array_like
+        The position held (m), ground axes; default [0, 0, 1].
+    yaw : float
+        Heading (rad), default 0.
+
+    Raises
+    ------
+    InputError
+        When a setting is not finite or of the wrong shape.
+    """
     position: Vec3 = (0.0, 0.0, 1.0)
     yaw: Number = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.position = _vec3("hover position", self.position)
         self.yaw = _angle("hover yaw", self.yaw)
 
@@ -106,13 +165,30 @@ class Hover(Trajectory):
 @dataclass
 class Circle(Trajectory):
     """Horizontal circle of ``radius`` (m) about ``center`` (m), one lap per ``period`` (s),
-    counter-clockwise, starting at center + [radius, 0, 0]."""
+    counter-clockwise, starting at center + [radius, 0, 0].
+
+    Parameters
+    ----------
+    center : (3,) array_like
+        Centre of the circle (m), ground axes; default [0, 0, 1].
+    radius : float
+        Radius (m), > 0; default 1.
+    period : float
+        Time of one lap (s), > 0; default 10.
+    yaw : float
+        Heading held (rad), default 0.
+
+    Raises
+    ------
+    InputError
+        When a setting is not finite, out of range or of the wrong shape.
+    """
     center: Vec3 = (0.0, 0.0, 1.0)
     radius: Number = 1.0
     period: Number = 10.0
     yaw: Number = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.center = _vec3("circle center", self.center)
         self.radius = _positive("circle radius", self.radius)
         self.period = _positive("circle period", self.period)
@@ -133,13 +209,30 @@ class Circle(Trajectory):
 @dataclass
 class Figure8(Trajectory):
     """Lemniscate of Gerono in the horizontal plane: x = size sin(w t),
-    y = size sin(2 w t) / 2 about ``center``, one figure per ``period`` (s)."""
+    y = size sin(2 w t) / 2 about ``center``, one figure per ``period`` (s), w = 2 pi / period.
+
+    Parameters
+    ----------
+    center : (3,) array_like
+        Centre of the figure (m), ground axes; default [0, 0, 1].
+    size : float
+        Half-width along x (m), > 0; default 1.
+    period : float
+        Time of one figure (s), > 0; default 12.
+    yaw : float
+        Heading held (rad), default 0.
+
+    Raises
+    ------
+    InputError
+        When a setting is not finite, out of range or of the wrong shape.
+    """
     center: Vec3 = (0.0, 0.0, 1.0)
     size: Number = 1.0
     period: Number = 12.0
     yaw: Number = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.center = _vec3("figure8 center", self.center)
         self.size = _positive("figure8 size", self.size)
         self.period = _positive("figure8 period", self.period)
@@ -157,10 +250,29 @@ class Figure8(Trajectory):
 
 @dataclass
 class Helix(Circle):
-    """A circle that climbs at ``climb_rate`` (m/s)."""
+    """A circle that climbs at ``climb_rate`` (m/s).
+
+    Parameters
+    ----------
+    center : (3,) array_like
+        Centre of the circle at t = 0 (m), ground axes; default [0, 0, 1].
+    radius : float
+        Radius (m), > 0; default 1.
+    period : float
+        Time of one lap (s), > 0; default 10.
+    yaw : float
+        Heading held (rad), default 0.
+    climb_rate : float
+        Vertical speed (m/s), default 0.1 (negative: descends).
+
+    Raises
+    ------
+    InputError
+        When a setting is not finite, out of range or of the wrong shape.
+    """
     climb_rate: Number = 0.1
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         super().__post_init__()
         self.climb_rate = validate.real(self.climb_rate, "helix climb_rate", unit="m/s")
 
@@ -172,11 +284,21 @@ class Helix(Circle):
 
 
 class FromCallable(Trajectory):
-    """Wrap a user function ``f(t)`` returning a position (3,), a tuple
-    (position, velocity, acceleration[, jerk]), or the full 14-vector. Missing derivatives
-    are taken by central differences with step ``h`` (s); yaw is 0."""
+    """Wrap a user function of time as a Trajectory.
 
-    def __init__(self, f, h=1e-3):
+    Missing derivatives are taken by central differences with step ``h`` (s); yaw is 0.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(t)`` for a time t (s, float) returning a position (3,) (m), a tuple
+        (position (m), velocity (m/s), acceleration (m/s^2)[, jerk (m/s^3)]) of 3-vectors, or
+        the full 14-entry reference row.
+    h : float
+        Step of the central differences (s), default 1e-3.
+    """
+
+    def __init__(self, f: Callable[[float], Any], h: float = 1e-3) -> None:
         self.f, self.h = f, h
 
     def _eval(self, t):
@@ -202,7 +324,26 @@ class FromCallable(Trajectory):
             raise InputError(f"{where}: expected {shape}, got shape {out.shape}")
         return [out, None, None, None]
 
-    def sample(self, t):
+    def sample(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Reference rows at many times, from the wrapped function.
+
+        Parameters
+        ----------
+        t : float or (N,) array_like
+            Times (s).
+
+        Returns
+        -------
+        (N, 14) numpy.ndarray
+            One row ``[p (m), v (m/s), a (m/s^2), j (m/s^3), yaw (rad), yaw_rate (rad/s)]``
+            per time.
+
+        Raises
+        ------
+        InputError
+            When the function raises, returns something of another shape, or a row is not
+            finite or beyond REFERENCE_LIMIT.
+        """
         rows = []
         t = np.atleast_1d(np.asarray(t, dtype=float))
         for tk in t:

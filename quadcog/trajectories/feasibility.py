@@ -13,17 +13,31 @@ within them may still be hard to track, but one outside them cannot be followed 
 from dataclasses import asdict, dataclass
 import itertools
 import math
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import config
 from quadcog.trajectories.analytic import ACC, JERK
+from quadcog.vehicles.vehicle import Vehicle
+
+__all__ = ["ReferenceLimits", "ReferenceCheck", "reference_limits", "check_reference"]
 
 
 @dataclass
 class ReferenceLimits:
-    """What a vehicle can follow: thrust per mass (m/s^2), tilt (rad), thrust-direction rate
-    (rad/s)."""
+    """What a vehicle can follow (see the module docstring).
+
+    Parameters
+    ----------
+    max_specific_thrust : float
+        The rotors' largest total thrust per mass (m/s^2).
+    max_tilt : float
+        The largest tilt of the thrust vector (rad).
+    max_rate : float
+        The largest rate of the thrust direction (rad/s).
+    """
     max_specific_thrust: float
     max_tilt: float
     max_rate: float
@@ -31,7 +45,31 @@ class ReferenceLimits:
 
 @dataclass
 class ReferenceCheck:
-    """The worst demands of a reference against a vehicle's ReferenceLimits."""
+    """The worst demands of a reference against a vehicle's ReferenceLimits.
+
+    Parameters
+    ----------
+    feasible : bool
+        True when no sample exceeds a limit.
+    max_acceleration : float
+        Largest |a| of the reference (m/s^2).
+    max_jerk : float
+        Largest |j| (m/s^3).
+    max_specific_thrust : float
+        Largest |a + g e_z| asked for (m/s^2).
+    min_vertical_thrust : float
+        Smallest (a + g e_z)_z (m/s^2); must be > 0 (rotors only push).
+    max_tilt_deg : float
+        Largest tilt of the thrust vector asked for (deg).
+    max_rate : float
+        Largest thrust-direction rate asked for (rad/s).
+    limits : ReferenceLimits
+        The vehicle's limits the reference was checked against.
+    first_violation_t : float or None
+        Time of the first sample beyond a limit (s), None when feasible.
+    reason : str or None
+        Which limits are exceeded and by how much, None when feasible.
+    """
     feasible: bool
     max_acceleration: float          # m/s^2, largest |a| of the reference
     max_jerk: float                  # m/s^3, largest |j|
@@ -43,14 +81,33 @@ class ReferenceCheck:
     first_violation_t: float | None  # s
     reason: str | None
 
-    def as_dict(self):
-        """Plain values, for metrics.json."""
+    def as_dict(self) -> dict[str, Any]:
+        """Plain values, for metrics.json.
+
+        Returns
+        -------
+        dict of str to Any
+            {field: value}, ``limits`` as a dict of its own.
+        """
         return asdict(self)
 
 
-def reference_limits(vehicle, max_tilt=None):
-    """ReferenceLimits of a quadcog.Vehicle (max_tilt in rad; default the divergence limit
-    ``config.defaults["limits.max_tilt_deg"]``)."""
+def reference_limits(vehicle: Vehicle, max_tilt: float | None = None) -> ReferenceLimits:
+    """What a vehicle can follow.
+
+    Parameters
+    ----------
+    vehicle : quadcog.Vehicle
+        The vehicle (its mass, inertia, mixer and rotor thrust limits).
+    max_tilt : float, optional
+        Largest tilt of the thrust (rad); default the divergence limit
+        ``config.defaults["limits.max_tilt_deg"]``.
+
+    Returns
+    -------
+    ReferenceLimits
+        Thrust per mass (m/s^2), tilt (rad) and thrust-direction rate (rad/s).
+    """
     if max_tilt is None:
         max_tilt = math.radians(config.defaults["limits.max_tilt_deg"])
     mixer = vehicle.mixer()                     # U = mixer @ f
@@ -63,8 +120,27 @@ def reference_limits(vehicle, max_tilt=None):
                            max_rate=float(math.sqrt(2 * alpha * math.pi / 4)))
 
 
-def check_reference(t, ref, vehicle, max_tilt=None):
-    """ReferenceCheck of reference rows ``ref`` (N, 14) at times ``t`` (N,) for ``vehicle``."""
+def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], vehicle: Vehicle,
+                    max_tilt: float | None = None) -> ReferenceCheck:
+    """Check reference rows against what a vehicle can follow.
+
+    Parameters
+    ----------
+    t : (N,) numpy.ndarray
+        Times of the rows (s).
+    ref : (N, 14) numpy.ndarray
+        Reference rows (``quadcog.trajectories.analytic``: p, v, a (m/s^2), j (m/s^3), yaw,
+        yaw rate).
+    vehicle : quadcog.Vehicle
+        The vehicle that is to follow them.
+    max_tilt : float, optional
+        Largest tilt of the thrust (rad); default as ``reference_limits``.
+
+    Returns
+    -------
+    ReferenceCheck
+        The worst demands, whether they are feasible, and the first time they are not.
+    """
     limits = reference_limits(vehicle, max_tilt)
     a, j = ref[:, ACC], ref[:, JERK]
     f = a + np.array([0.0, 0.0, vehicle.g])                     # specific thrust vector

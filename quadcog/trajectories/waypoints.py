@@ -14,13 +14,17 @@ trapezoidal speed profile along its straight line needs with speed at most ``max
 acceleration at most ``max_acceleration``: ``T = d / v + v / a`` when the segment is long
 enough to reach the speed (``d >= v^2 / a``), else ``T = 2 sqrt(d / a)``; at least
 ``min_segment_time``. The smooth curve then stays near those limits (not exactly within them:
-``quadcog.trajectories.feasibility.check_reference`` checks a reference against what the vehicle can follow).
+``quadcog.trajectories.feasibility.check_reference`` checks a reference against what the
+vehicle can follow).
 """
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import InputError
 from quadcog.kinds import Number, Points, Vector
 from quadcog.trajectories.analytic import Trajectory
+
+__all__ = ["MinimumSnap", "allocate_times", "DEGREE"]
 
 DEGREE = 7                   # minimum snap: 2 r - 1 with r = 4
 N_COEF = DEGREE + 1
@@ -34,9 +38,27 @@ def _derivative_row(tau, order):
     return row
 
 
-def allocate_times(points, max_speed=1.0, max_acceleration=1.0, min_segment_time=0.5):
-    """Segment durations (s) for ``points`` (n+1, 3) by the rest-to-rest trapezoidal rule of
-    the module docstring."""
+def allocate_times(points: npt.ArrayLike, max_speed: float = 1.0,
+                   max_acceleration: float = 1.0,
+                   min_segment_time: float = 0.5) -> npt.NDArray[np.float64]:
+    """Segment durations by the rest-to-rest trapezoidal rule of the module docstring.
+
+    Parameters
+    ----------
+    points : (n+1, 3) array_like
+        Waypoints (m).
+    max_speed : float
+        Largest speed along a segment (m/s), > 0.
+    max_acceleration : float
+        Largest acceleration along a segment (m/s^2), > 0.
+    min_segment_time : float
+        Shortest segment duration (s).
+
+    Returns
+    -------
+    (n,) numpy.ndarray
+        Duration of each segment (s).
+    """
     d = np.linalg.norm(np.diff(points, axis=0), axis=1)
     v, a = float(max_speed), float(max_acceleration)
     full = d >= v * v / a
@@ -61,12 +83,21 @@ class MinimumSnap(Trajectory):
     yaw : float
         Heading held along the path (rad).
 
+    Raises
+    ------
+    InputError
+        When the waypoints, times or limits are not what is expected.
+
+    Notes
+    -----
     Before the first time the reference rests at the first waypoint; after the last, at the
     last one.
     """
 
-    def __init__(self, waypoints: Points, times: Vector | None = None, max_speed: Number = 1.0,
-                 max_acceleration: Number = 1.0, yaw: Number = 0.0) -> None:
+    def __init__(self, waypoints: Points,
+                 times: Vector | npt.NDArray[np.float64] | None = None,
+                 max_speed: Number = 1.0, max_acceleration: Number = 1.0,
+                 yaw: Number = 0.0) -> None:
         pts = np.asarray(waypoints, dtype=float)
         if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2 or not np.isfinite(pts).all():
             raise InputError(f"waypoints: expected at least 2 rows of 3 finite numbers (m), got "
@@ -85,8 +116,8 @@ class MinimumSnap(Trajectory):
         self.coefficients = self._solve()          # (n, 8, 3), in tau = t - t_i
 
     @property
-    def duration(self):
-        """Time of the last waypoint minus the first (s)."""
+    def duration(self) -> float:
+        """float: Time of the last waypoint minus the first (s)."""
         return float(self.times[-1] - self.times[0])
 
     def _solve(self):
@@ -132,8 +163,25 @@ class MinimumSnap(Trajectory):
             out.append(np.einsum("nk,nkd->nd", powers * factor, c[:, order:, :]))
         return out[0], out[1], out[2], out[3]
 
-    def sample(self, t):
-        """(N, 14) reference rows; at rest before the first and after the last waypoint."""
+    def sample(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Reference rows; at rest before the first and after the last waypoint.
+
+        Parameters
+        ----------
+        t : float or (N,) array_like
+            Times (s).
+
+        Returns
+        -------
+        (N, 14) numpy.ndarray
+            One row ``[p (m), v (m/s), a (m/s^2), j (m/s^3), yaw (rad), yaw_rate (rad/s)]``
+            per time.
+
+        Raises
+        ------
+        InputError
+            When a row is not finite or beyond ``REFERENCE_LIMIT``.
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         ref = super().sample(t)
         resting = (t < self.times[0]) | (t > self.times[-1])

@@ -17,8 +17,10 @@ reads (``quadcog.logs`` standard names: ``"motor_pwm"`` or ``"motor_command"``) 
 ``uses_voltage`` whether it needs ``"battery_voltage"``.
 """
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.errors import InputError
@@ -65,13 +67,13 @@ class RotorModel:
     name: str
     kind: str
     signal: str
-    coefficients: tuple
+    coefficients: tuple[float, ...]
     source: str
     scale: float = 1.0
     thrust_unit: float = 1.0
     max_thrust: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         where = f"rotor model {self.name!r}"
         if not isinstance(self.name, str) or not self.name:
             validate.fail("RotorModel.name", "a non-empty string", self.name)
@@ -98,12 +100,14 @@ class RotorModel:
 
     @property
     def uses_voltage(self) -> bool:
-        """True when the thrust depends on the battery voltage (the ``"voltage"`` form)."""
+        """bool: True when the thrust depends on the battery voltage (the ``"voltage"``
+        form)."""
         return self.kind == "voltage"
 
     @property
-    def signals(self) -> tuple:
-        """The log signals the model reads: (signal,) or (signal, "battery_voltage")."""
+    def signals(self) -> tuple[str, ...]:
+        """tuple of str: The log signals the model reads, (signal,) or (signal,
+        "battery_voltage")."""
         return (self.signal, "battery_voltage") if self.uses_voltage else (self.signal,)
 
     def _voltage(self, voltage, shape):
@@ -119,7 +123,8 @@ class RotorModel:
                              f"> 0 V, got values from {np.nanmin(v):.4g} to {np.nanmax(v):.4g}")
         return v
 
-    def thrust(self, u: np.ndarray, voltage: "np.ndarray | None" = None) -> np.ndarray:
+    def thrust(self, u: npt.ArrayLike,
+               voltage: npt.ArrayLike | None = None) -> npt.NDArray[np.float64]:
         """Thrust of each rotor (N) from logged outputs.
 
         Parameters
@@ -133,8 +138,14 @@ class RotorModel:
         -------
         numpy.ndarray, shape of u
             Thrust of each rotor (N), >= 0.
+
+        Raises
+        ------
+        InputError
+            When an output is not finite, or the battery voltage is missing (``uses_voltage``),
+            not finite or not > 0 V.
         """
-        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        u = np.asarray(u, dtype=float).clip(0.0, 1.0)
         if not np.isfinite(u).all():
             raise InputError(f"rotor model {self.name!r}: motor outputs must be finite")
         c = self.coefficients
@@ -150,7 +161,8 @@ class RotorModel:
             f = self.thrust_unit * _quadratic_root(c[2], c[1], -np.maximum(volts, 0.0))
         return np.maximum(f, 0.0)
 
-    def command(self, f: np.ndarray, voltage: "np.ndarray | None" = None) -> np.ndarray:
+    def command(self, f: npt.ArrayLike,
+                voltage: npt.ArrayLike | None = None) -> npt.NDArray[np.float64]:
         """The logged output u (0..1) that gives the rotor thrusts ``f``: the inverse of
         ``thrust``.
 
@@ -164,7 +176,13 @@ class RotorModel:
         Returns
         -------
         numpy.ndarray, shape of f
-            Outputs in 0..1; InputError if a thrust needs more than full output.
+            Outputs in 0..1.
+
+        Raises
+        ------
+        InputError
+            When a thrust is not finite or < 0 N, needs more than full output, or the battery
+            voltage is missing (``uses_voltage``), not finite or not > 0 V.
         """
         f = np.asarray(f, dtype=float)
         if not (np.isfinite(f).all() and (f >= 0).all()):
@@ -185,7 +203,13 @@ class RotorModel:
         return np.minimum(u, 1.0)
 
     def describe(self) -> str:
-        """One line: name, form and source."""
+        """One line: name, form and source.
+
+        Returns
+        -------
+        str
+            ``"<name> (<kind> of <signal>): <source>"``.
+        """
         return f"{self.name} ({self.kind} of {self.signal}): {self.source}"
 
 
@@ -262,13 +286,18 @@ def px4_thrust_curve(max_thrust: float, thr_mdl_fac: float, name: str = "px4",
     -------
     RotorModel
         Of kind ``"thr_mdl_fac"`` reading ``"motor_command"``.
+
+    Raises
+    ------
+    InputError
+        When ``max_thrust`` is not > 0 N or ``thr_mdl_fac`` is not in [0, 1].
     """
     return RotorModel(name=name, kind="thr_mdl_fac", signal="motor_command",
                       coefficients=(thr_mdl_fac,), max_thrust=max_thrust, source=source)
 
 
 
-def px4_thrust_curve_from_log(log: object, max_thrust: float) -> RotorModel:
+def px4_thrust_curve_from_log(log: Any, max_thrust: float) -> RotorModel:
     """PX4's rotor model with the ``THR_MDL_FAC`` that a ULog recorded.
 
     Parameters
@@ -281,6 +310,7 @@ def px4_thrust_curve_from_log(log: object, max_thrust: float) -> RotorModel:
     Returns
     -------
     RotorModel
+        Of kind ``"thr_mdl_fac"`` reading ``"motor_command"``, named after the log's factor.
 
     Raises
     ------

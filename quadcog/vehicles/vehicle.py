@@ -17,8 +17,10 @@ adds ``y_i f_i`` to the roll moment U2 and ``-x_i f_i`` to the pitch moment U3. 
 counter-clockwise), -1 for counter-clockwise.
 """
 from dataclasses import asdict, dataclass, fields, replace
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import InputError, ParameterError
 from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
@@ -26,19 +28,45 @@ from quadcog.model.parameters import check_parameters
 from quadcog.validate import real
 from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
+__all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "PRESETS", "FIELD_NAMES", "N_ROTORS",
+           "plus_layout", "x_layout", "default_parameters"]
+
 N_ROTORS = 4
 
+Layout = tuple[tuple[float, float], ...]
 
-def plus_layout(arm):
-    """Rotor positions (m) of a "+" frame with arm length ``arm``: rotor 1 on +x (front),
-    2 on +y (left), 3 on -x, 4 on -y."""
+
+def plus_layout(arm: float) -> Layout:
+    """Rotor positions of a "+" frame: rotor 1 on +x (front), 2 on +y (left), 3 on -x, 4 on -y.
+
+    Parameters
+    ----------
+    arm : float
+        Arm length, centre to rotor (m).
+
+    Returns
+    -------
+    tuple of 4 (x, y) pairs of float
+        Rotor positions (m) in the body frame, for ``Vehicle.rotor_positions``.
+    """
     a = float(arm)
     return ((a, 0.0), (0.0, a), (-a, 0.0), (0.0, -a))
 
 
-def x_layout(arm):
-    """Rotor positions (m) of an "X" frame with arm length ``arm`` (centre to rotor): rotor 1
-    front-right (+x, -y), 2 back-right, 3 back-left, 4 front-left."""
+def x_layout(arm: float) -> Layout:
+    """Rotor positions of an "X" frame: rotor 1 front-right (+x, -y), 2 back-right,
+    3 back-left, 4 front-left (the Crazyflie firmware's M1..M4).
+
+    Parameters
+    ----------
+    arm : float
+        Arm length, centre to rotor (m).
+
+    Returns
+    -------
+    tuple of 4 (x, y) pairs of float
+        Rotor positions (m) in the body frame, for ``Vehicle.rotor_positions``.
+    """
     h = float(arm) / np.sqrt(2.0)
     return ((h, -h), (-h, -h), (-h, h), (h, h))     # the Crazyflie firmware's M1..M4
 
@@ -49,33 +77,54 @@ class Vehicle:
 
     Parameters
     ----------
-    m : mass (kg), > 0.
-    g : gravitational acceleration (m/s^2), > 0.
-    Ixx, Iyy, Izz : inertia about O (kg m^2), > 0; with ``r_G = 0`` the inertia about the CoG.
-        The model holds it constant as the CoG moves (the truth model's ``parallel_axis``
-        option adds the change).
-    c_x, c_y, c_z : linear drag of the body velocities (N s/m), >= 0.
-    c_phi, c_theta, c_psi : linear drag of the body rates (N m s/rad), >= 0.
-    rotor_positions : four (x, y) pairs (m) in the body frame, in the rotor plane through O
-        (``plus_layout(arm)``, ``x_layout(arm)`` or any).
-    rotor_directions : four signs d_i (+1 or -1): rotor i's drag moment on the body is
+    m : float
+        Mass (kg), > 0.
+    g : float
+        Gravitational acceleration (m/s^2), > 0.
+    Ixx, Iyy, Izz : float
+        Inertia about O (kg m^2), > 0; with ``r_G = 0`` the inertia about the CoG. The model
+        holds it constant as the CoG moves (the truth model's ``parallel_axis`` option adds the
+        change).
+    c_x, c_y, c_z : float
+        Linear drag of the body velocities (N s/m), >= 0.
+    c_phi, c_theta, c_psi : float
+        Linear drag of the body rates (N m s/rad), >= 0.
+    rotor_positions : (4, 2) array_like
+        Four (x, y) pairs (m) in the body frame, in the rotor plane through O
+        (``plus_layout(arm)``, ``x_layout(arm)`` or any); stored as a tuple of tuples.
+    rotor_directions : (4,) sequence of int
+        Four signs d_i (+1 or -1): rotor i's drag moment on the body is
         ``d_i * moment_constant * f_i`` about body z (+1: the rotor turns clockwise seen from
         above).
-    thrust_constant : rotor thrust per squared rotor speed (N / (rad/s)^2), > 0; converts
-        thrust limits to and from rotor speeds.
-    moment_constant : rotor drag moment per unit thrust (m), > 0.
-    max_rotor_thrust : largest thrust of one rotor (N), > min_rotor_thrust.
-    min_rotor_thrust : smallest thrust of one rotor (N), >= 0 (rotors only push).
-    motor_time_constant : first-order time constant from commanded to actual rotor thrust (s),
-        >= 0; 0 means instant. Used by the truth model's ``motor_lag`` option.
-    x_G, y_G, z_G : CoG offset r_G from O in the body frame (m). The inertia about the CoG,
+    thrust_constant : float
+        Rotor thrust per squared rotor speed (N / (rad/s)^2), > 0; converts thrust limits to
+        and from rotor speeds.
+    moment_constant : float
+        Rotor drag moment per unit thrust (m), > 0.
+    max_rotor_thrust : float
+        Largest thrust of one rotor (N), > min_rotor_thrust.
+    min_rotor_thrust : float, default 0
+        Smallest thrust of one rotor (N), >= 0 (rotors only push).
+    motor_time_constant : float, default 0
+        First-order time constant from commanded to actual rotor thrust (s), >= 0; 0 means
+        instant. Used by the truth model's ``motor_lag`` option.
+    x_G, y_G, z_G : float, default 0
+        CoG offset r_G from O in the body frame (m). The inertia about the CoG,
         ``I_O - m (|r_G|^2 I - r_G r_G^T)``, must stay positive definite.
-    name : a label.
-    rotor_model : a ``quadcog.vehicles.rotor_model.RotorModel`` or the name of one in its
+    name : str, default "vehicle"
+        A label.
+    rotor_model : RotorModel or str or None, default None
+        A ``quadcog.vehicles.rotor_model.RotorModel`` or the name of one in its
         ``ROTOR_MODELS`` (optional): what turns this vehicle's logged motor outputs into rotor
         thrust (``quadcog identify`` reads it); ``as_dict`` writes its name.
 
-    Raises ParameterError (or InputError for wrong types) naming the field and the value.
+    Raises
+    ------
+    ParameterError
+        Naming the field and the value, for a value out of range (or a singular mixer, or an
+        inertia about the CoG that is not positive definite).
+    InputError
+        Naming the field and the value, for a value of the wrong type or shape.
     """
     m: float
     g: float
@@ -88,8 +137,8 @@ class Vehicle:
     c_phi: float
     c_theta: float
     c_psi: float
-    rotor_positions: tuple
-    rotor_directions: tuple
+    rotor_positions: tuple[tuple[float, float], ...]
+    rotor_directions: tuple[int, ...]
     thrust_constant: float
     moment_constant: float
     max_rotor_thrust: float
@@ -101,7 +150,7 @@ class Vehicle:
     name: str = "vehicle"
     rotor_model: RotorModel | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         where = lambda f: f"vehicle {self.name!r}: {f}"
         for f in fields(self):
             if f.name in ("rotor_positions", "rotor_directions", "name", "rotor_model"):
@@ -153,68 +202,171 @@ class Vehicle:
         check_parameters(self.parameters(), where("parameters"))
 
     # -- what the generated functions and the plant need --------------------------------
-    def parameters(self):
-        """The (14,) parameter vector of the generated functions, ordered
-        ``[m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x_G, y_G, z_G]``."""
+    def parameters(self) -> npt.NDArray[np.float64]:
+        """The parameter vector p of the generated functions.
+
+        Returns
+        -------
+        (14,) numpy.ndarray
+            ``[m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x_G, y_G, z_G]``
+            [kg, m/s^2, kg m^2 (3), N s/m (3), N m s/rad (3), m (3)], a new array.
+        """
         return np.array([getattr(self, n) for n in PARAM_NAMES], dtype=float)
 
     @property
-    def r_G(self):
-        """The CoG offset [x_G, y_G, z_G] (m), a new (3,) array."""
+    def r_G(self) -> npt.NDArray[np.float64]:
+        """(3,) numpy.ndarray: The CoG offset [x_G, y_G, z_G] (m), a new array."""
         return np.array([self.x_G, self.y_G, self.z_G])
 
     @property
-    def arm_length(self):
-        """The largest distance of a rotor from O (m)."""
+    def arm_length(self) -> float:
+        """float: The largest distance of a rotor from O (m)."""
         return float(np.max(np.hypot(*np.asarray(self.rotor_positions).T)))
 
-    def mixer(self):
-        """(4, 4) matrix B with ``U = B @ f`` for rotor thrusts f (N): rows
-        [1 ...], [y_i ...], [-x_i ...], [d_i k ...] (thrust, roll, pitch, yaw about O)."""
+    def mixer(self) -> npt.NDArray[np.float64]:
+        """The mixer B from rotor thrusts to the input, ``U = B @ f``.
+
+        Returns
+        -------
+        (4, 4) numpy.ndarray
+            Rows [1 ...], [y_i ...] (m), [-x_i ...] (m), [d_i k ...] (m): thrust, roll, pitch
+            and yaw about O, so that U [N, N m, N m, N m] = B @ f (N).
+        """
         pos = np.asarray(self.rotor_positions, dtype=float)
         return np.vstack([np.ones(N_ROTORS), pos[:, 1], -pos[:, 0],
                           self.moment_constant * np.asarray(self.rotor_directions, float)])
 
-    def rotor_thrusts(self, U):
-        """The rotor thrusts f (4,) (N) that produce ``U`` (4,) = [U1, U2, U3, U4]: the inverse
-        of the mixer. Limits are not applied (see ``min_rotor_thrust``, ``max_rotor_thrust``)."""
+    def rotor_thrusts(self, U: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The rotor thrusts that produce ``U``: the inverse of the mixer.
+
+        Limits are not applied (see ``min_rotor_thrust``, ``max_rotor_thrust``).
+
+        Parameters
+        ----------
+        U : (4,) or (4, N) array_like
+            [U1 (N), U2, U3, U4 (N m, about O)], one column per sample.
+
+        Returns
+        -------
+        (4,) or (4, N) numpy.ndarray
+            Rotor thrusts f (N).
+
+        Raises
+        ------
+        InputError
+            When ``U`` does not have 4 rows.
+        """
         U = np.asarray(U, dtype=float)
         if U.shape[:1] != (4,):
             raise InputError(f"U must have 4 rows [U1, U2, U3, U4], got shape {U.shape}")
         return np.linalg.solve(self.mixer(), U)
 
-    def rotor_speeds(self, f):
-        """Rotor speeds (rad/s) of rotor thrusts f (N >= 0): sqrt(f / thrust_constant)."""
+    def rotor_speeds(self, f: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Rotor speeds of rotor thrusts: sqrt(f / thrust_constant).
+
+        Parameters
+        ----------
+        f : array_like
+            Rotor thrusts (N); negative values count as 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape of f
+            Rotor speeds (rad/s), >= 0.
+        """
         return np.sqrt(np.maximum(np.asarray(f, dtype=float), 0.0) / self.thrust_constant)
 
-    def hover_input(self):
-        """U (4,) that holds a level hover with this vehicle's CoG: [m g, m g y_G, -m g x_G, 0]
-        (``quadcog.model.conventions.hover_trim``)."""
+    def hover_input(self) -> npt.NDArray[np.float64]:
+        """The input that holds a level hover with this vehicle's CoG
+        (``quadcog.model.conventions.hover_trim``).
+
+        Returns
+        -------
+        (4,) numpy.ndarray
+            U = [m g, m g y_G, -m g x_G, 0] [N, N m, N m, N m].
+        """
         return hover_trim(self.parameters())
 
     # -- variants ------------------------------------------------------------------------
-    def replace(self, **changes):
-        """A copy with fields replaced by name (validated); unknown names raise InputError."""
+    def replace(self, **changes: Any) -> "Vehicle":
+        """A copy with fields replaced by name (validated).
+
+        Parameters
+        ----------
+        **changes
+            Field names (``FIELD_NAMES``) and their new values, in the units of the fields.
+
+        Returns
+        -------
+        Vehicle
+            The new vehicle.
+
+        Raises
+        ------
+        InputError
+            For an unknown field name, or a value of the wrong type.
+        ParameterError
+            For a value out of range.
+        """
         unknown = set(changes) - set(FIELD_NAMES)
         if unknown:
             raise InputError(f"unknown vehicle field(s) {sorted(unknown)}; expected some of "
                              f"{FIELD_NAMES}")
         return replace(self, **changes)
 
-    def with_cog(self, r_G):
-        """A copy with the CoG offset ``r_G`` (3,) (m)."""
+    def with_cog(self, r_G: npt.ArrayLike) -> "Vehicle":
+        """A copy with another CoG offset.
+
+        Parameters
+        ----------
+        r_G : (3,) array_like
+            The CoG offset [x_G, y_G, z_G] from O in the body frame (m).
+
+        Returns
+        -------
+        Vehicle
+            The new vehicle (validated).
+
+        Raises
+        ------
+        InputError
+            When ``r_G`` is not 3 numbers.
+        """
         r = np.asarray(r_G, dtype=float).reshape(-1)
         if r.shape != (3,):
             raise InputError(f"r_G must be 3 numbers (m), got {r_G!r}")
         return replace(self, x_G=float(r[0]), y_G=float(r[1]), z_G=float(r[2]))
 
-    def with_parameters(self, p):
-        """A copy whose 14 parameters (``parameters()`` order) are ``p``; rotors unchanged."""
-        p = check_parameters(p, "p")
-        return replace(self, **{n: float(p[IDX[n]]) for n in PARAM_NAMES})
+    def with_parameters(self, p: npt.ArrayLike) -> "Vehicle":
+        """A copy whose 14 parameters are ``p``; rotors unchanged.
 
-    def as_dict(self):
-        """Every field as plain Python values (for JSON and scenario files)."""
+        Parameters
+        ----------
+        p : (14,) array_like
+            The parameter vector in ``parameters()`` order and units.
+
+        Returns
+        -------
+        Vehicle
+            The new vehicle (validated).
+
+        Raises
+        ------
+        ParameterError
+            When ``p`` is not an admissible parameter vector.
+        """
+        q = check_parameters(p, "p")
+        return self.replace(**{n: float(q[IDX[n]]) for n in PARAM_NAMES})
+
+    def as_dict(self) -> dict[str, Any]:
+        """Every field as plain Python values (for JSON and scenario files).
+
+        Returns
+        -------
+        dict of str to Any
+            {field: value}; ``rotor_positions`` and ``rotor_directions`` as lists,
+            ``rotor_model`` as its name (or None).
+        """
         d = asdict(self)
         d["rotor_positions"] = [list(r) for r in self.rotor_positions]
         d["rotor_directions"] = list(self.rotor_directions)
@@ -261,13 +413,30 @@ CRAZYFLIE = Vehicle(
 PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE}
 
 
-def default_parameters(**overrides):
-    """The default vehicle's (``HUMMINGBIRD``) parameter vector (14,), entries replaced by name.
+def default_parameters(**overrides: float) -> npt.NDArray[np.float64]:
+    """The default vehicle's (``HUMMINGBIRD``) parameter vector, entries replaced by name.
 
-    Example: ``default_parameters(x_G=0.03, m=0.8)``. Unknown names raise InputError.
+    Parameters
+    ----------
+    **overrides
+        Parameter names (``quadcog.model.conventions.PARAM_NAMES``) and values in SI units,
+        e.g. ``default_parameters(x_G=0.03, m=0.8)``.
+
+    Returns
+    -------
+    (14,) numpy.ndarray
+        The parameter vector p, ordered as ``Vehicle.parameters()``.
+
+    Raises
+    ------
+    InputError
+        For an unknown name.
+    ParameterError
+        For a value that is not a real number or out of range.
     """
     unknown = set(overrides) - set(PARAM_NAMES)
     if unknown:
-        raise InputError(f"unknown parameter {sorted(unknown)[0]!r}; expected one of {PARAM_NAMES}")
+        raise InputError(f"unknown parameter {sorted(unknown)[0]!r}; expected one of "
+                         f"{PARAM_NAMES}")
     return HUMMINGBIRD.replace(**{k: real(v, k, error=ParameterError)
                                   for k, v in overrides.items()}).parameters()

@@ -12,9 +12,11 @@
    run, with diagnostic controller variants (``adaptive_variants``).
 4. ``failure_map``: tail RMS error of the three controllers over a grid of CoG offsets.
 """
+import os
 from pathlib import Path
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -86,7 +88,8 @@ def _zd_summary(zd):
         "rotate moves all its points alike, so where the mass sits does not matter for the "
         "translation. r_G only enters the moment rows, which fix U2..U4 (at level hover "
         "U* = [m g, m g y_G, -m g x_G, 0], docs/model.md sec. 3.3). Other equilibria: level "
-        "attitude is the only equilibrium the outputs can hold with the position free; a held tilt "
+        "attitude is the only equilibrium the outputs can hold with the position free; a held "
+        "tilt "
         "(phi0, theta0) != 0 has no equilibrium but a relative one, a steady drift at the "
         "velocity where drag balances the tilted thrust (u*, v* in the table, about 10 m/s for "
         "0.1 rad with this drag). Its linearization is again {0, 0, -c_x/m, -c_y/m}, also "
@@ -136,7 +139,8 @@ def _adaptive_summary(design, study):
             f"phi_d = theta_d = 0) the error model is exact, but V still rises by "
             f"{100 * r['max_rise_relative']:.3g} % within {1000 * (r['t_max_rise'] - 1.0):.0f} ms "
             f"of the step. Second reason, the law's own approximation: the exact error model has "
-            f"B_true = [0; H M(r_G)^{{-1}}], the law uses M_hat = M(r_hat) (docs/model.md sec. 3.2, 4.2), "
+            f"B_true = [0; H M(r_G)^{{-1}}], the law uses M_hat = M(r_hat) (docs/model.md "
+            f"sec. 3.2, 4.2), "
             f"so "
             f"V_dot = -e^T Q e + 2 e^T P (B_true - B) Phi r_tilde, and the second term is large "
             f"right after the step (the inertia about the CoG at [6, 6, 0] cm is 0.0021 kg m^2 "
@@ -180,16 +184,31 @@ def _fm_summary(fm, grid):
             "adaptive_vs_projection": fm.get("adaptive_vs_projection")}
 
 
-def analyze(out_dir, grid=41, progress=True, duration=20.0):
+def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = True,
+            duration: float = 20.0) -> dict[str, Any]:
     """Run the whole analysis and write it to ``out_dir`` (created if needed).
 
-    out_dir: folder (str or Path). grid: failure-map points per axis (grid x grid offsets over
-    [-arm, arm]^2 m, arm = the Hummingbird's 0.17 m). progress: print part names and a
-    progress bar for the failure map on stderr. duration: seconds per failure-map flight.
     Writes pd_sigma.png, zero_dynamics.png, lyapunov.png, failure_map.png, failure_map.npz,
     failure_map.json, analysis.json, analysis.md and report_fragment.tex (the PDF's analysis
-    section). Returns the summary dict (the numbers of
-    analysis.json, as Python/numpy values; complex eigenvalues stay complex).
+    section).
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        The folder.
+    grid : int
+        Failure-map points per axis (grid x grid offsets over [-arm, arm]^2 m, arm = the
+        Hummingbird's 0.17 m).
+    progress : bool
+        Print part names and a progress bar for the failure map on stderr.
+    duration : float
+        Seconds per failure-map flight [s].
+
+    Returns
+    -------
+    dict
+        The summary (the numbers of analysis.json, as Python/numpy values; complex
+        eigenvalues stay complex).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

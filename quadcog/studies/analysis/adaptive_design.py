@@ -6,12 +6,17 @@ update r_hat_dot = -Gamma Phi^T B^T P e_s, a constant r_G gives
 V_dot = -e_s^T Q e_s + 2 e_s^T P (B_true - B) Phi r_tilde. The last term (``mismatch``) is zero
 only when the law's B equals B_true = [0; H M(r_G)^{-1}]; the law uses M_hat = M(r_hat).
 """
+from collections.abc import Collection, Sequence
+import os
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
 from quadcog.controllers import AdaptiveFeedbackLinearization
 from quadcog.sim.divergence import Limits
 from quadcog.sim.flight import simulate
+from quadcog.sim.result import SimulationResult
 from quadcog.sim.timeline import CogProfile
 from quadcog.studies.analysis.adaptive_variants import (
     OracleAdaptive,
@@ -20,18 +25,29 @@ from quadcog.studies.analysis.adaptive_variants import (
     OutputRegulationAdaptive,
 )
 
+__all__ = ["STEP_TIME", "STEP_R", "FAR", "design_checks", "lyapunov_along", "lyapunov_summary",
+           "variants", "lyapunov_study", "plot_lyapunov"]
+
 STEP_TIME = 1.0                        # s
 STEP_R = (0.06, 0.06, 0.0)             # m, the Fig. 6 scenario
 FAR = Limits(max_position_error=1e6)   # without a position loop x, y drift (zero dynamics)
 
 
-def design_checks(ctl=None):
+def design_checks(ctl: AdaptiveFeedbackLinearization | None = None) -> dict[str, Any]:
     """Checks of the error-model design of an AdaptiveFeedbackLinearization.
 
-    Returns a dict: eig_A (8,) complex (1/s) and max_real_eig_A; P_asymmetry = max|P - P^T|;
-    eig_P (8,) (its smallest must be > 0); lyapunov_residual = max|A^T P + P A + Q| and its
-    ratio to max|Q|; gamma (3,) the diagonal of Gamma; kp (1/s^2), kd (1/s) (4,) the output
-    PD gains that make A.
+    Parameters
+    ----------
+    ctl : quadcog.controllers.AdaptiveFeedbackLinearization, optional
+        Default: the default design.
+
+    Returns
+    -------
+    dict
+        eig_A (8,) complex [1/s] and max_real_eig_A; P_asymmetry = max|P - P^T|; eig_P (8,)
+        (its smallest must be > 0); lyapunov_residual = max|A^T P + P A + Q| and its ratio
+        to max|Q|; gamma (3,) the diagonal of Gamma; kp [1/s^2], kd [1/s] (4,) the output
+        PD gains that make A.
     """
     ctl = ctl or AdaptiveFeedbackLinearization()
     A, P, Q = ctl.A_error, ctl.P, ctl.Q
@@ -42,7 +58,7 @@ def design_checks(ctl=None):
             "eig_P": np.linalg.eigvalsh(0.5 * (P + P.T)),
             "lyapunov_residual": float(res),
             "lyapunov_residual_relative": float(res / np.max(np.abs(Q))),
-            "gamma": ctl.gamma.copy(), "kp": ctl.kp.copy(), "kd": ctl.kd.copy()}
+            "gamma": np.copy(ctl.gamma), "kp": ctl.kp.copy(), "kd": ctl.kd.copy()}
 
 
 def _error_function(ctl):
@@ -57,14 +73,25 @@ def _error_function(ctl):
     return ca.Function("lyapunov_terms", [x, ref, rh, rt], [e_s, mismatch])
 
 
-def lyapunov_along(ctl, res):
-    """V and its parts along a SimulationResult ``res`` of the adaptive controller ``ctl``.
+def lyapunov_along(ctl: AdaptiveFeedbackLinearization,
+                   res: SimulationResult) -> dict[str, Any]:
+    """V and its parts along a run of an adaptive controller.
 
-    Uses res.x (N, 12), res.ref (N, 14), res.r_hat (N, 3) and the true CoG res.r_G (N, 3).
-    Returns a dict of (N,) arrays: t (s), V, V_e = e_s^T P e_s, V_r = r_tilde^T Gamma^{-1}
-    r_tilde (V in the units of P e_s^2, i.e. m^2 and rad^2 mixed: V is a number), the
-    continuous-time rate terms -e_s^T Q e_s and mismatch (1/s; zero for the oracle variants,
-    whose law uses the true B), and e_s (N, 8).
+    Parameters
+    ----------
+    ctl : quadcog.controllers.AdaptiveFeedbackLinearization
+        The controller flown (or a variant of ``variants``).
+    res : quadcog.sim.result.SimulationResult
+        Its run: uses res.x (N, 12), res.ref (N, 14), res.r_hat (N, 3) and the true CoG
+        res.r_G (N, 3).
+
+    Returns
+    -------
+    dict
+        (N,) arrays: t [s], V, V_e = e_s^T P e_s, V_r = r_tilde^T Gamma^{-1} r_tilde (V in
+        the units of P e_s^2, i.e. m^2 and rad^2 mixed: V is a number), the continuous-time
+        rate terms minus_eQe = -e_s^T Q e_s and mismatch [1/s; zero for the oracle variants,
+        whose law uses the true B], and e_s (N, 8).
     """
     fn = _error_function(ctl).map(res.t.size)
     E, mis = fn(res.x.T, res.ref.T, res.r_hat.T, res.r_G.T)
@@ -78,14 +105,27 @@ def lyapunov_along(ctl, res):
             "minus_eQe": -np.einsum("ni,ij,nj->n", E, ctl.Q, E), "mismatch": mis}
 
 
-def lyapunov_summary(lyap, t_step=STEP_TIME):
-    """Numbers of V after the step at t_step (s): V at the step, the largest rise of V above its
-    running minimum after the step (absolute and relative to V(t_step)) and when it peaks, the
-    number of increasing samples, the final V, the integral over t >= t_step of the positive
-    part of the mismatch rate (what the M_hat approximation can add to V), and the integral of
-    the positive part of what the continuous error model does not explain,
-    (V_{k+1} - V_k) / dt - (-e_s^T Q e_s + mismatch) at t_k: the neglected derivatives of the
-    commanded attitude (position loop) and the 1/dt zero-order hold and Euler update."""
+def lyapunov_summary(lyap: dict[str, Any], t_step: float = STEP_TIME) -> dict[str, Any]:
+    """Numbers of V after the CoG step.
+
+    Parameters
+    ----------
+    lyap : dict
+        The result of ``lyapunov_along``.
+    t_step : float
+        Time of the step [s].
+
+    Returns
+    -------
+    dict
+        V at the step, the largest rise of V above its running minimum after the step
+        (absolute and relative to V(t_step)) and when it peaks, the number of increasing
+        samples, the final V, the integral over t >= t_step of the positive part of the
+        mismatch rate (what the M_hat approximation can add to V), and the integral of the
+        positive part of what the continuous error model does not explain,
+        (V_{k+1} - V_k) / dt - (-e_s^T Q e_s + mismatch) at t_k: the neglected derivatives of
+        the commanded attitude (position loop) and the 1/dt zero-order hold and Euler update.
+    """
     t, V = lyap["t"], lyap["V"]
     k0 = int(np.searchsorted(t, t_step - 1e-12))
     Vp = V[k0:]
@@ -105,23 +145,60 @@ def lyapunov_summary(lyap, t_step=STEP_TIME):
             "dt": dt}
 
 
-def variants(t_step=STEP_TIME, r=STEP_R, gamma=0.01):
-    """The four controllers compared: {label: controller}. label 'paper' is the project's
-    AdaptiveFeedbackLinearization (position loop, B at the estimate)."""
-    kw = dict(gamma=gamma)
-    oracle = dict(t_step=t_step, r_after=r)
+def variants(t_step: float = STEP_TIME, r: Sequence[float] = STEP_R,
+             gamma: float = 0.01) -> dict[str, AdaptiveFeedbackLinearization]:
+    """The four controllers compared.
+
+    Parameters
+    ----------
+    t_step : float
+        Time of the CoG step [s] (for the oracle variants).
+    r : (3,) sequence of float
+        The CoG after the step [m] (for the oracle variants).
+    gamma : float
+        The adaptation gain of all four.
+
+    Returns
+    -------
+    dict of str to quadcog.controllers.AdaptiveFeedbackLinearization
+        {label: controller}; label 'paper' is the project's AdaptiveFeedbackLinearization
+        (position loop, B at the estimate).
+    """
+    kw: dict[str, Any] = dict(gamma=gamma)
+    oracle: dict[str, Any] = dict(t_step=t_step, r_after=r)
     return {"paper": AdaptiveFeedbackLinearization(**kw),
             "paper, oracle B": OracleAdaptive(**kw, **oracle),
             "output regulation": OutputRegulationAdaptive(**kw),
             "output regulation, oracle B": OracleOutputRegulationAdaptive(**kw, **oracle)}
 
 
-def lyapunov_study(duration=20.0, dt=None, t_step=STEP_TIME, r=STEP_R, which=None,
-                   path="compiled"):
-    """Fly the Fig. 6 scenario (hover, CoG step to r (m) at t_step (s)) with each variant and
-    evaluate V. which: labels of ``variants`` to run (default all); duration, dt in s.
-    Returns {label: {"lyapunov": lyapunov_along(...), "summary": lyapunov_summary(...),
-    "metrics": the run's Metrics as a dict}}."""
+def lyapunov_study(duration: float = 20.0, dt: float | None = None,
+                   t_step: float = STEP_TIME, r: Sequence[float] = STEP_R,
+                   which: Collection[str] | None = None,
+                   path: str = "compiled") -> dict[str, dict[str, Any]]:
+    """Fly the Fig. 6 scenario with each variant and evaluate V.
+
+    Parameters
+    ----------
+    duration : float
+        Simulated time [s].
+    dt : float, optional
+        Step [s] (default ``config.defaults["simulate.dt"]``).
+    t_step : float
+        Time of the CoG step [s].
+    r : (3,) sequence of float
+        The CoG after the step [m].
+    which : collection of str, optional
+        Labels of ``variants`` to run (default all).
+    path : str
+        'compiled' or 'python' (``quadcog.simulate``).
+
+    Returns
+    -------
+    dict
+        {label: {"lyapunov": lyapunov_along(...), "summary": lyapunov_summary(...),
+        "metrics": the run's Metrics as a dict}}.
+    """
     out = {}
     for label, ctl in variants(t_step, r).items():
         if which is not None and label not in which:
@@ -134,9 +211,20 @@ def lyapunov_study(duration=20.0, dt=None, t_step=STEP_TIME, r=STEP_R, which=Non
     return out
 
 
-def plot_lyapunov(study, path, t_step=STEP_TIME):
-    """Save V(t) of ``lyapunov_study`` to ``path``: log scale over the run, and two linear
-    zooms after the step at t_step (s)."""
+def plot_lyapunov(study: dict[str, dict[str, Any]], path: str | os.PathLike[str],
+                  t_step: float = STEP_TIME) -> None:
+    """Save V(t) of ``lyapunov_study``: log scale over the run, and two linear zooms after
+    the step.
+
+    Parameters
+    ----------
+    study : dict
+        The result of ``lyapunov_study``.
+    path : str or os.PathLike
+        The PNG to write.
+    t_step : float
+        Time of the CoG step [s].
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -1,12 +1,17 @@
 """Where each controller fails: tail RMS position error after a CoG step at hover, over a grid
 of CoG offsets (x_G, y_G) in the rotor plane: the shipped sweep file ``failure-map``."""
+from collections.abc import Callable, Sequence
+import os
 import time
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from quadcog import config
 from quadcog.controllers import AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization, make_controller
 from quadcog.controllers.adaptive import admissible_estimate_radius
+from quadcog.controllers.base import Controller
 from quadcog.errors import ParameterError
 from quadcog.model.conventions import N_STATE
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
@@ -14,21 +19,50 @@ from quadcog.sim.flight import RK4_LIMIT
 from quadcog.trajectories.analytic import Hover
 from quadcog.vehicles.vehicle import HUMMINGBIRD, default_parameters
 
+__all__ = ["THRESHOLD", "LABELS", "default_controllers", "admissibility", "rk4_stiffness",
+           "failure_map", "adaptive_failures_vs_projection", "save_failure_map",
+           "plot_failure_map"]
+
 THRESHOLD = 0.5          # m: tail RMS above this (or a diverged run) counts as a failure
 LABELS = {"pd": "cascade PD", "fl": "feedback linearization", "adaptive": "adaptive FL"}
 
 
-def default_controllers():
-    """{short name: controller} of the three controllers at their default settings."""
+def default_controllers() -> dict[str, Controller]:
+    """The three controllers of the paper at their default settings.
+
+    Returns
+    -------
+    dict of str to quadcog.Controller
+        {short name: controller}.
+    """
     return {"pd": CascadePD(), "fl": FeedbackLinearization(),
             "adaptive": AdaptiveFeedbackLinearization()}
 
 
-def admissibility(x_G, y_G, z_G=0.0, base=None):
-    """(admissible (ny, nx) bool, lambda_min (ny, nx) in kg m^2) over the grid x_G (nx,),
-    y_G (ny,) (m): whether quadcog.check_parameters accepts the base vehicle (default: the
-    default vehicle) with r_G = (x_G, y_G, z_G), and the smallest eigenvalue of the inertia about
-    the CoG (<= 0 where it does not)."""
+def admissibility(x_G: Sequence[float] | NDArray[np.float64],
+                  y_G: Sequence[float] | NDArray[np.float64], z_G: float = 0.0,
+                  base: NDArray[np.float64] | None = None
+                  ) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+    """Where on a grid of CoG offsets the vehicle is admissible.
+
+    Parameters
+    ----------
+    x_G : (nx,) array_like
+        Offsets along body x [m].
+    y_G : (ny,) array_like
+        Offsets along body y [m].
+    z_G : float
+        The offset along body z [m].
+    base : (14,) numpy.ndarray, optional
+        The parameters (default: the default vehicle's).
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, numpy.ndarray)
+        admissible (ny, nx) bool: whether quadcog.check_parameters accepts the base vehicle
+        with r_G = (x_G, y_G, z_G); lambda_min (ny, nx) [kg m^2], the smallest eigenvalue of
+        the inertia about the CoG (<= 0 where it is not admissible).
+    """
     base = default_parameters() if base is None else base
     adm = np.zeros((len(y_G), len(x_G)), dtype=bool)
     lam = np.zeros_like(adm, dtype=float)
@@ -44,12 +78,27 @@ def admissibility(x_G, y_G, z_G=0.0, base=None):
     return adm, lam
 
 
-def rk4_stiffness(controller, params, dt=None):
-    """|lambda|_max dt of the closed-loop Jacobian at level hover (1 m, r_hat = 0) for each
-    truth parameter row of params (B, 14), the CoG already moved: above quadcog.simulate's
-    RK4_LIMIT (2.5) a fixed RK4 step of dt (s) is itself unstable, so a 'diverged' result there
-    says more about the integrator than about the controller. dt defaults to
-    ``config.defaults["simulate.dt"]``. Returns (B,)."""
+def rk4_stiffness(controller: Controller, params: NDArray[np.float64],
+                  dt: float | None = None) -> NDArray[np.float64]:
+    """|lambda|_max dt of the closed-loop Jacobian at level hover (1 m, r_hat = 0).
+
+    Above quadcog.simulate's RK4_LIMIT (2.5) a fixed RK4 step of dt is itself unstable, so a
+    'diverged' result there says more about the integrator than about the controller.
+
+    Parameters
+    ----------
+    controller : quadcog.Controller
+        The controller.
+    params : (B, 14) numpy.ndarray
+        Truth parameter rows, the CoG already moved.
+    dt : float, optional
+        Step [s] (default ``config.defaults["simulate.dt"]``).
+
+    Returns
+    -------
+    (B,) numpy.ndarray
+        |lambda|_max dt of each row (dimensionless).
+    """
     dt = config.get("simulate.dt", dt)
     ref = Hover()(0.0)
     x0 = np.zeros(N_STATE)
@@ -60,24 +109,46 @@ def rk4_stiffness(controller, params, dt=None):
                      range(params.shape[0])]) * dt
 
 
-def failure_map(grid=41, half_width=HUMMINGBIRD.arm_length, duration=20.0, t_step=1.0,
-                controllers=("pd", "fl", "adaptive"), threshold=THRESHOLD, progress=None):
-    """Tail RMS position error (m; the tail is the last ``config.defaults["metrics.tail_fraction"]``
-    of each run) after a CoG step at hover: the shipped sweep ``failure-map``
-    (``quadcog/sweeps/failure-map.toml``, also ``quadcog sweep failure-map --out DIR``) with
-    its grid, duration, step time, controllers and threshold set from the arguments.
+def failure_map(grid: int = 41, half_width: float = HUMMINGBIRD.arm_length,
+                duration: float = 20.0, t_step: float = 1.0,
+                controllers: Sequence[str] = ("pd", "fl", "adaptive"),
+                threshold: float = THRESHOLD,
+                progress: Callable[[float], object] | None = None) -> dict[str, Any]:
+    """Tail RMS position error after a CoG step at hover, over a grid of CoG offsets.
 
-    grid: points per axis; the offsets are x_G, y_G = linspace(-half_width, half_width, grid)
-    (m), z_G = 0. duration: s per flight (fixed RK4, dt = 1 ms); the CoG steps from 0 to
-    (x_G, y_G, 0) at t_step (s). controllers: short names ("pd", "fl", "adaptive").
-    Inadmissible offsets (quadcog.check_parameters raises ParameterError) are not simulated.
-    threshold: tail RMS (m) above which a run counts as failed (diverged runs always do).
-    progress: callable(fraction) for the whole map, or None.
-    Returns a dict: x_G (grid,), y_G (grid,) (m); admissible (grid, grid) bool and lambda_min
-    (grid, grid) (kg m^2), indexed [i_y, i_x]; per controller name a dict with tail_rms
-    (grid, grid) (m; NaN where inadmissible, inf where diverged), diverged, failed (bool),
-    diverged_at (s, NaN if not), survive_fraction (of the admissible offsets), rk4_stiff (number
-    of admissible points with |lambda|_max dt > RK4_LIMIT), seconds; and the totals.
+    The tail is the last ``config.defaults["metrics.tail_fraction"]`` of each run. This is
+    the shipped sweep ``failure-map`` (``quadcog/sweeps/failure-map.toml``, also ``quadcog
+    sweep failure-map --out DIR``) with its grid, duration, step time, controllers and
+    threshold set from the arguments. Inadmissible offsets (quadcog.check_parameters raises
+    ParameterError) are not simulated.
+
+    Parameters
+    ----------
+    grid : int
+        Points per axis; the offsets are x_G, y_G = linspace(-half_width, half_width, grid),
+        z_G = 0.
+    half_width : float
+        The grid's half width [m].
+    duration : float
+        Seconds per flight [s] (fixed RK4, dt = 1 ms).
+    t_step : float
+        When the CoG steps from 0 to (x_G, y_G, 0) [s].
+    controllers : sequence of str
+        Short names ("pd", "fl", "adaptive").
+    threshold : float
+        Tail RMS [m] above which a run counts as failed (diverged runs always do).
+    progress : callable, optional
+        Called with the fraction done of the whole map.
+
+    Returns
+    -------
+    dict
+        x_G (grid,), y_G (grid,) [m]; admissible (grid, grid) bool and lambda_min
+        (grid, grid) [kg m^2], indexed [i_y, i_x]; per controller name a dict with tail_rms
+        (grid, grid) [m; NaN where inadmissible, inf where diverged], diverged, failed
+        (bool), diverged_at [s, NaN if not], survive_fraction (of the admissible offsets),
+        rk4_stiff (number of admissible points with |lambda|_max dt > RK4_LIMIT), seconds;
+        and the totals.
     """
     from quadcog.sweeps.runner import sweep
     from quadcog.sweeps.spec import from_dict, read_sweep_file
@@ -127,11 +198,24 @@ def failure_map(grid=41, half_width=HUMMINGBIRD.arm_length, duration=20.0, t_ste
     return out
 
 
-def adaptive_failures_vs_projection(fm, name="adaptive"):
-    """Where controller ``name`` failed, against the default projection radius of the adaptive
-    controller (the estimate cannot leave that ball). Returns a dict: radius (m), n_failed,
-    n_beyond (failed offsets with |r_G| > radius), largest and smallest failed |r_G| (m);
-    or None when nothing failed."""
+def adaptive_failures_vs_projection(fm: dict[str, Any],
+                                    name: str = "adaptive") -> dict[str, Any] | None:
+    """Where a controller failed, against the default projection radius of the adaptive
+    controller (the estimate cannot leave that ball).
+
+    Parameters
+    ----------
+    fm : dict
+        The result of ``failure_map``.
+    name : str
+        The controller's short name.
+
+    Returns
+    -------
+    dict or None
+        radius [m], n_failed, n_beyond (failed offsets with |r_G| > radius), the largest
+        and smallest failed |r_G| [m]; None when nothing failed.
+    """
     c = fm["controllers"].get(name)
     if c is None or not np.any(c["failed"]):
         return None
@@ -142,9 +226,19 @@ def adaptive_failures_vs_projection(fm, name="adaptive"):
             "min_failed_radius": float(r.min()), "max_failed_radius": float(r.max())}
 
 
-def save_failure_map(fm, npz_path, json_path):
-    """Write the raw grid of ``failure_map`` to an .npz (arrays) and a .json (lists; inf/NaN
-    as the strings "inf"/"nan")."""
+def save_failure_map(fm: dict[str, Any], npz_path: str | os.PathLike[str],
+                     json_path: str | os.PathLike[str]) -> None:
+    """Write the raw grid of ``failure_map`` to an .npz and a .json.
+
+    Parameters
+    ----------
+    fm : dict
+        The result of ``failure_map``.
+    npz_path : str or os.PathLike
+        The .npz (arrays).
+    json_path : str or os.PathLike
+        The .json (lists; inf/NaN as the strings "inf"/"nan").
+    """
     import json
     arrays = {"x_G": fm["x_G"], "y_G": fm["y_G"], "admissible": fm["admissible"],
               "lambda_min": fm["lambda_min"]}
@@ -158,10 +252,19 @@ def save_failure_map(fm, npz_path, json_path):
         fh.write("\n")
 
 
-def plot_failure_map(fm, path):
-    """Three heat maps side by side (log colour scale of the tail RMS, m), inadmissible offsets
-    grey, diverged runs red, failure boundary (tail RMS = threshold or diverged) and admissible
-    boundary as contours; saved to ``path`` (PNG)."""
+def plot_failure_map(fm: dict[str, Any], path: str | os.PathLike[str]) -> None:
+    """Heat maps side by side, one per controller.
+
+    Log colour scale of the tail RMS [m], inadmissible offsets grey, diverged runs red,
+    failure boundary (tail RMS = threshold or diverged) and admissible boundary as contours.
+
+    Parameters
+    ----------
+    fm : dict
+        The result of ``failure_map``.
+    path : str or os.PathLike
+        The PNG to write.
+    """
     import matplotlib
     matplotlib.use("Agg")
     from matplotlib.colors import ListedColormap, LogNorm
@@ -217,7 +320,8 @@ def plot_failure_map(fm, path):
                Line2D([], [], color="black", ls="--", lw=1.5, label="admissible boundary")]
     leg = fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=9, frameon=True)
     leg.get_frame().set_facecolor("0.6")
-    cb = fig.colorbar(mesh, cax=cax)
+    # mesh is set: the loop above runs once per controller, and there is at least one
+    cb = fig.colorbar(mesh, cax=cax)  # type: ignore[arg-type]
     cb.set_label(f"tail RMS position error, last "
                  f"{100 * config.defaults['metrics.tail_fraction']:g} % of "
                  f"{fm['duration']:g} s (m)")

@@ -6,16 +6,37 @@ closed loop is stable exactly when A - B K is Hurwitz. ``channel_margins`` reads
 margins of one input channel with ``control.stability_margins``; ``gain_range_by_eigenvalues``
 finds the same gain range from eigenvalues only (no frequency response), the cross-check.
 """
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from quadcog.errors import InputError
 
+__all__ = ["channel_loop", "channel_margins", "gain_range_by_eigenvalues"]
 
-def channel_loop(A, B, K, i):
-    """(A_i, b_i, k_i) of the SISO loop of input channel i with the other channels closed.
 
-    The loop is broken at input i only: A_i = A - B_j K_j (j != i), b_i = B[:, i] (n,),
-    k_i = K[i] (n,), so L_i(s) = k_i (s I - A_i)^{-1} b_i.
+def channel_loop(A: ArrayLike, B: ArrayLike, K: ArrayLike, i: int
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The SISO loop of input channel i with the other channels closed.
+
+    The loop is broken at input i only, so L_i(s) = k_i (s I - A_i)^{-1} b_i.
+
+    Parameters
+    ----------
+    A : (n, n) array_like
+        State matrix [1/s].
+    B : (n, m) array_like
+        Input matrix.
+    K : (m, n) array_like
+        State feedback gain (u = -K x).
+    i : int
+        The channel.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, numpy.ndarray, numpy.ndarray)
+        A_i = A - B_j K_j (j != i) (n, n), b_i = B[:, i] (n,), k_i = K[i] (n,).
     """
     A, B, K = (np.asarray(a, dtype=float) for a in (A, B, K))
     others = [j for j in range(B.shape[1]) if j != i]
@@ -23,15 +44,29 @@ def channel_loop(A, B, K, i):
     return A_i, B[:, i], K[i]
 
 
-def channel_margins(A_i, b_i, k_i):
-    """Gain and phase margins of L_i(s) = k_i (s I - A_i)^{-1} b_i by
-    ``control.stability_margins`` (all crossovers).
+def channel_margins(A_i: ArrayLike, b_i: ArrayLike, k_i: ArrayLike) -> dict[str, Any]:
+    """Gain and phase margins of L_i(s) = k_i (s I - A_i)^{-1} b_i.
 
-    Returns a dict: phase_margin_deg (the smallest over the gain crossovers, inf if none) and
-    gain_crossover_rad_s; gain_margin_db, the upper margin (how much the gain may grow: the
-    smallest positive one, inf if none) at phase_crossover_rad_s; lower_gain_margin_db (how much
-    it may shrink, negative: a conditionally stable loop; -inf if the gain may go to zero) at
-    lower_phase_crossover_rad_s; and the lists of all crossovers.
+    By ``control.stability_margins`` (all crossovers).
+
+    Parameters
+    ----------
+    A_i : (n, n) array_like
+        The loop's state matrix [1/s] (``channel_loop``).
+    b_i : (n,) array_like
+        Its input vector.
+    k_i : (n,) array_like
+        Its output (gain) vector.
+
+    Returns
+    -------
+    dict
+        phase_margin_deg (the smallest over the gain crossovers, inf if none) and
+        gain_crossover_rad_s; gain_margin_db, the upper margin (how much the gain may grow:
+        the smallest positive one, inf if none) at phase_crossover_rad_s;
+        lower_gain_margin_db (how much it may shrink, negative: a conditionally stable loop;
+        -inf if the gain may go to zero) at lower_phase_crossover_rad_s; and the lists of all
+        crossovers.
     """
     import control
     L = control.ss(A_i, np.asarray(b_i, float)[:, None], np.asarray(k_i, float)[None, :], 0.0)
@@ -45,8 +80,8 @@ def channel_margins(A_i, b_i, k_i):
     up = min(upper) if upper else (float("inf"), float("nan"))
     lo = max(lower) if lower else (float("-inf"), float("nan"))
     return {
-        "phase_margin_deg": pms[k_pm] if pms else float("inf"),
-        "gain_crossover_rad_s": gc[k_pm] if pms else float("nan"),
+        "phase_margin_deg": pms[k_pm] if k_pm is not None else float("inf"),
+        "gain_crossover_rad_s": gc[k_pm] if k_pm is not None else float("nan"),
         "gain_margin_db": up[0], "phase_crossover_rad_s": up[1],
         "lower_gain_margin_db": lo[0], "lower_phase_crossover_rad_s": lo[1],
         "all_gain_crossovers_rad_s": gc, "all_phase_margins_deg": pms,
@@ -54,14 +89,39 @@ def channel_margins(A_i, b_i, k_i):
     }
 
 
-def gain_range_by_eigenvalues(A, B, K, i, k_max=1e4, n_grid=4000):
-    """Scalar gains k on channel i (u_i = -k K_i x) that keep A - B K(k) Hurwitz, found by
-    eigenvalues on a log grid of k in [1/k_max, k_max] and refined by bisection.
+def gain_range_by_eigenvalues(A: ArrayLike, B: ArrayLike, K: ArrayLike, i: int,
+                              k_max: float = 1e4, n_grid: int = 4000) -> tuple[float, float]:
+    """Scalar gains k on channel i (u_i = -k K_i x) that keep A - B K(k) Hurwitz.
 
-    A: (n, n), B: (n, m), K: (m, n). Returns (k_low, k_high), the stable interval around
-    k = 1 (k_low = 0 / k_high = inf when stability holds to the grid ends): an independent
-    check of the gain margins, 20 log10 k_high = gain_margin_db, 20 log10 k_low =
-    lower_gain_margin_db.
+    Found by eigenvalues on a log grid of k in [1/k_max, k_max] and refined by bisection:
+    an independent check of the gain margins, 20 log10 k_high = gain_margin_db,
+    20 log10 k_low = lower_gain_margin_db.
+
+    Parameters
+    ----------
+    A : (n, n) array_like
+        State matrix [1/s].
+    B : (n, m) array_like
+        Input matrix.
+    K : (m, n) array_like
+        State feedback gain.
+    i : int
+        The channel.
+    k_max : float
+        The grid's end.
+    n_grid : int
+        Grid points (half above k = 1, half below).
+
+    Returns
+    -------
+    tuple of (float, float)
+        (k_low, k_high), the stable interval around k = 1 (k_low = 0 / k_high = inf when
+        stability holds to the grid ends).
+
+    Raises
+    ------
+    quadcog.errors.InputError
+        When the nominal loop (k = 1) is not stable.
     """
     A, B, K = (np.asarray(a, dtype=float) for a in (A, B, K))
 

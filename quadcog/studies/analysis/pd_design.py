@@ -1,31 +1,47 @@
 """The cascade PD design checked as the paper does: closed-loop eigenvalues and a MIMO Bode
 (singular value) analysis of the loop broken at the plant input, with per-channel margins,
 through python-control (``control.singular_values_response``, ``control.stability_margins``)."""
+import os
+from typing import Any
+
 import numpy as np
+from numpy.typing import NDArray
 
 from quadcog.controllers import CascadePD
 from quadcog.studies.analysis.frequency import channel_loop, channel_margins, gain_range_by_eigenvalues
 from quadcog.studies.analysis.linear import loop_statespace
+
+__all__ = ["CHANNELS", "OMEGA", "pd_design", "plot_sigma"]
 
 CHANNELS = ("U1 thrust (z loop)", "U2 roll moment (y-phi loop)",
             "U3 pitch moment (x-theta loop)", "U4 yaw moment (psi loop)")
 OMEGA = np.logspace(-2, 3, 1001)          # rad/s
 
 
-def pd_design(controller=None, omega=OMEGA):
+def pd_design(controller: CascadePD | None = None,
+              omega: NDArray[np.float64] = OMEGA) -> dict[str, Any]:
     """Eigenvalues, singular values and margins of a CascadePD design.
 
-    controller: a CascadePD (default: the default design); it supplies the hover linearization
-    A (12, 12) (1/s), B (12, 4) and the equivalent state feedback K (4, 12), U = U_trim - K dx.
-    omega: (N,) frequencies in rad/s for the singular-value plot.
-    Returns a dict: eigenvalues (12,) complex (1/s); omega (N,); sigma_L (N, 4), the singular
-    values of L(j omega) = K (j omega I - A)^{-1} B, largest first (absolute, not dB);
-    sigma_min_return_difference (N,) = sigma_min(I + L) and sigma_min_inverse_return_difference
-    (N,) = sigma_min(I + L^{-1}); their minima over omega with the frequency; the guaranteed
-    simultaneous gain (dB) and phase (deg) margins that sigma_min(I + L) >= a implies
-    (gain in [1/(1 + a), 1/(1 - a)], phase +-2 asin(a / 2)); and margins, one dict per input
-    channel from ``channel_margins`` (that channel broken, the others closed) plus the stable
-    gain interval found independently from eigenvalues; loop, the ``control.StateSpace`` of L.
+    Parameters
+    ----------
+    controller : quadcog.controllers.CascadePD, optional
+        Default: the default design. It supplies the hover linearization A (12, 12) [1/s],
+        B (12, 4) and the equivalent state feedback K (4, 12), U = U_trim - K dx.
+    omega : (N,) numpy.ndarray
+        Frequencies [rad/s] for the singular-value plot.
+
+    Returns
+    -------
+    dict
+        eigenvalues (12,) complex [1/s]; omega (N,); sigma_L (N, 4), the singular values of
+        L(j omega) = K (j omega I - A)^{-1} B, largest first (absolute, not dB);
+        sigma_min_return_difference (N,) = sigma_min(I + L) and
+        sigma_min_inverse_return_difference (N,) = sigma_min(I + L^{-1}); their minima over
+        omega with the frequency; the guaranteed simultaneous gain (dB) and phase (deg)
+        margins that sigma_min(I + L) >= a implies (gain in [1/(1 + a), 1/(1 - a)], phase
+        +-2 asin(a / 2)); and margins, one dict per input channel from ``channel_margins``
+        (that channel broken, the others closed) plus the stable gain interval found
+        independently from eigenvalues; loop, the ``control.StateSpace`` of L.
     """
     import control
     ctl = controller or CascadePD()
@@ -60,13 +76,22 @@ def pd_design(controller=None, omega=OMEGA):
         "min_sigma_inverse_return_difference": float(ird.min()),
         "min_sigma_inverse_return_difference_at_rad_s": float(omega[np.argmin(ird)]),
         "guaranteed_simultaneous_gain_margin_db": gm,
-        "guaranteed_simultaneous_phase_margin_deg": float(np.degrees(2 * np.arcsin(min(a, 2) / 2))),
+        "guaranteed_simultaneous_phase_margin_deg":
+            float(np.degrees(2 * np.arcsin(min(a, 2) / 2))),
         "margins": margins, "loop": loop,
     }
 
 
-def plot_sigma(result, path):
-    """Save the singular-value (MIMO Bode) plot of ``pd_design``'s result to ``path`` (PNG)."""
+def plot_sigma(result: dict[str, Any], path: str | os.PathLike[str]) -> None:
+    """Save the singular-value (MIMO Bode) plot of ``pd_design``'s result.
+
+    Parameters
+    ----------
+    result : dict
+        The result of ``pd_design``.
+    path : str or os.PathLike
+        The PNG to write.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -14,30 +14,51 @@ rows) drop out. r_G enters only the moment rows, which fix U2..U4. So the zero d
 depend on r_G, at level or at any tilt the outputs are held at; what depends on r_G is the input
 that holds them, and the internal dynamics when the outputs move (nu2 != 0).
 """
+from collections.abc import Sequence
+import os
+from typing import Any
+
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
 from quadcog.errors import QuadcogError
 from quadcog.model.conventions import IDX, N_PARAM, N_STATE, NU, OUTPUT_ROWS, R_G
-from quadcog.model.functions import load
+from quadcog.model.functions import Model, load
 from quadcog.model.parameters import check_parameters, with_cog
 from quadcog.vehicles.vehicle import default_parameters
+
+__all__ = ["ZETA_ROWS", "ZETA_NAMES", "DEFAULT_OFFSETS", "DEFAULT_ATTITUDES",
+           "zero_dynamics_function", "relative_equilibrium", "zero_dynamics_eigenvalues",
+           "rg_sensitivity", "nonlinear_check", "zero_dynamics_study", "plot_zero_dynamics"]
 
 ZETA_ROWS = [0, 1, 6, 7]           # x, y, u, v in the state
 ZETA_NAMES = ("x", "y", "u", "v")
 
-_cache = {}
+_cache: dict[int, tuple[ca.Function, ca.Function]] = {}
 
 
-def zero_dynamics_function(model=None):
-    """CasADi Function (zeta (4), y0 (4), p (14)) -> (zeta_dot (4), U* (4), residual (10)).
+def zero_dynamics_function(model: Model | None = None) -> tuple[ca.Function, ca.Function]:
+    """The zero-dynamics vector field and its Jacobians as CasADi Functions.
 
+    The first is (zeta (4), y0 (4), p (14)) -> (zeta_dot (4), U* (4), residual (10)):
     zeta = [x, y (m), u, v (m/s)]; y0 = [z0 (m), phi0, theta0, psi0 (rad)]; p the 14
     parameters. zeta_dot in m/s and m/s^2; U* the input that holds the outputs (N, N m).
     residual stacks what must vanish on the zero-dynamics manifold: y_dot (4), y_ddot (4, from
-    alpha U* + b), the consistency of the generated w_dot with d/dt of w(zeta) (1), and |nu2_dot|
-    (1), so a nonzero residual means the manifold is not invariant.
+    alpha U* + b), the consistency of the generated w_dot with d/dt of w(zeta) (1), and
+    |nu2_dot| (1), so a nonzero residual means the manifold is not invariant.
+
+    Parameters
+    ----------
+    model : quadcog.model.functions.Model, optional
+        The generated model (default ``quadcog.load()``).
+
+    Returns
+    -------
+    tuple of (casadi.Function, casadi.Function)
+        The vector field above, and (zeta, y0, p) -> (A_zd (4, 4) = d zeta_dot / d zeta,
+        dzeta_dot_dr (4, 3), dU_dr (4, 3)). Cached per model.
     """
     model = model or load()
     key = id(model)
@@ -70,13 +91,35 @@ def zero_dynamics_function(model=None):
     return fn, jac
 
 
-def relative_equilibrium(p, y0, model=None, tol=1e-13):
-    """The zero-dynamics equilibrium velocity [u*, v*] (m/s) with the outputs held at y0.
+def relative_equilibrium(p: NDArray[np.float64], y0: NDArray[np.float64],
+                         model: Model | None = None,
+                         tol: float = 1e-13) -> NDArray[np.float64]:
+    """The zero-dynamics equilibrium velocity [u*, v*] with the outputs held at y0.
 
-    p: (14,) parameters; y0: (4,) [z0 (m), phi0, theta0, psi0 (rad)]. At level attitude this is
-    [0, 0] (hover); tilted, the held attitude accelerates the vehicle sideways until drag
-    balances it: a steady drift (positions change, velocities do not), by Newton's method.
-    Returns zeta* (4,) = [0, 0, u*, v*].
+    At level attitude this is [0, 0] (hover); tilted, the held attitude accelerates the
+    vehicle sideways until drag balances it: a steady drift (positions change, velocities do
+    not), by Newton's method.
+
+    Parameters
+    ----------
+    p : (14,) numpy.ndarray
+        Parameters.
+    y0 : (4,) numpy.ndarray
+        Held outputs [z0 (m), phi0, theta0, psi0 (rad)].
+    model : quadcog.model.functions.Model, optional
+        The generated model (default ``quadcog.load()``).
+    tol : float
+        Largest |[u_dot, v_dot]| accepted [m/s^2].
+
+    Returns
+    -------
+    (4,) numpy.ndarray
+        zeta* = [0, 0, u*, v*] (m, m, m/s, m/s).
+
+    Raises
+    ------
+    quadcog.errors.QuadcogError
+        When Newton's method does not converge in 50 steps.
     """
     fn, jac = zero_dynamics_function(model)
     zeta = np.zeros(4)
@@ -91,15 +134,34 @@ def relative_equilibrium(p, y0, model=None, tol=1e-13):
     return zeta
 
 
-def zero_dynamics_eigenvalues(p, y0=(1.0, 0.0, 0.0, 0.0), model=None):
+def zero_dynamics_eigenvalues(p: NDArray[np.float64], y0: ArrayLike = (1.0, 0.0, 0.0, 0.0),
+                              model: Model | None = None) -> dict[str, Any]:
     """Linearized zero dynamics at the (relative) equilibrium for outputs held at y0.
 
-    p: (14,) parameters (r_G = p[11:14] in m); y0: (4,) as in ``relative_equilibrium``.
-    Returns a dict: eigenvalues (4,) complex (1/s), A_zd (4, 4) the Jacobian
-    d zeta_dot / d zeta, zeta_eq (4,), U_hold (4,) the input on the manifold there (N, N m),
-    residual (max abs of the invariance residual) and dzeta_dot_dr (4, 3), the sensitivity of
-    the zero-dynamics vector field to r_G at that point (1/s^2, m/s^2 per m).
+    Parameters
+    ----------
+    p : (14,) numpy.ndarray
+        Parameters (r_G = p[11:14] in m).
+    y0 : (4,) array_like
+        Held outputs, as in ``relative_equilibrium``.
+    model : quadcog.model.functions.Model, optional
+        The generated model (default ``quadcog.load()``).
+
+    Returns
+    -------
+    dict
+        eigenvalues (4,) complex [1/s], A_zd (4, 4) the Jacobian d zeta_dot / d zeta,
+        zeta_eq (4,), U_hold (4,) the input on the manifold there [N, N m], residual (max abs
+        of the invariance residual) and dzeta_dot_dr (4, 3), the sensitivity of the
+        zero-dynamics vector field to r_G at that point (1/s^2, m/s^2 per m).
+
+    Raises
+    ------
+    quadcog.errors.ParameterError
+        When ``p`` is not an admissible parameter vector.
     """
+    U: Any                              # the Functions' DM outputs, then their arrays
+    A_zd: Any
     p = check_parameters(p)
     fn, jac = zero_dynamics_function(model)
     y0 = np.asarray(y0, dtype=float)
@@ -116,14 +178,29 @@ def zero_dynamics_eigenvalues(p, y0=(1.0, 0.0, 0.0, 0.0), model=None):
             "dzeta_dot_dr": np.array(dz_dr)}
 
 
-def rg_sensitivity(n_points=200, seed=0, model=None):
+def rg_sensitivity(n_points: int = 200, seed: int = 0,
+                   model: Model | None = None) -> dict[str, Any]:
     """Largest |d zeta_dot / d r_G| and |d U* / d r_G| over random points of the manifold.
 
-    Samples n_points random zeta (|x|, |y| < 5 m, |u|, |v| < 3 m/s), held outputs
-    y0 (|phi0|, |theta0| < 0.5 rad, any psi0) and admissible r_G (|r_G| < 0.09 m) on the default
-    vehicle with random drag. Returns a dict: max_dzeta_dot_dr (should be round-off if the zero
-    dynamics do not depend on r_G, m/s^2 per m), max_dU_dr (the input does depend on r_G:
-    N m per m), and max_residual (manifold invariance).
+    Samples random zeta (|x|, |y| < 5 m, |u|, |v| < 3 m/s), held outputs y0 (|phi0|,
+    |theta0| < 0.5 rad, any psi0) and admissible r_G (|r_G| < 0.09 m) on the default vehicle
+    with random drag.
+
+    Parameters
+    ----------
+    n_points : int
+        Random points.
+    seed : int
+        Seed of the generator.
+    model : quadcog.model.functions.Model, optional
+        The generated model (default ``quadcog.load()``).
+
+    Returns
+    -------
+    dict
+        n_points, max_dzeta_dot_dr (should be round-off if the zero dynamics do not depend
+        on r_G, m/s^2 per m), max_dU_dr (the input does depend on r_G: N m per m), and
+        max_residual (manifold invariance).
     """
     rng = np.random.default_rng(seed)
     fn, jac = zero_dynamics_function(model)
@@ -159,17 +236,35 @@ def _output_tracking_law(model, kp, kd):
     return ca.Function("fl_true", [x, p, yd, ydd, yddd], [f(x, U, p)])
 
 
-def nonlinear_check(r_list, duration=5.0, u0=(0.5, -0.3), moving=False, model=None):
-    """Fly the exact output-tracking closed loop (true parameters, so y follows y_d exactly)
-    from level hover at 1 m with body velocity [u0, 0] (m/s) and compare the free states.
+def nonlinear_check(r_list: Sequence[Sequence[float]], duration: float = 5.0,
+                    u0: Sequence[float] = (0.5, -0.3), moving: bool = False,
+                    model: Model | None = None) -> dict[str, Any]:
+    """Fly the exact output-tracking closed loop and compare the free states.
 
-    r_list: CoG offsets (m), each (3,); duration in s. moving=False holds y_d = [1, 0, 0, 0]
-    (the zero dynamics themselves); moving=True makes the attitude move,
-    phi_d = 0.1 (1 - cos 2t), theta_d = -0.08 (1 - cos 3t) rad (internal dynamics with nu2 != 0).
-    Integrated with scipy DOP853 (rtol 1e-11). Returns a dict: t (N,), zeta (len(r_list), N, 4)
-    [x, y, u, v], analytic (N, 4) the level solution u0 exp(-c t / m) etc. (moving=False only),
-    max_spread (largest difference of zeta between the r_G cases, m or m/s) and
-    max_error_vs_analytic.
+    True parameters, so y follows y_d exactly, from level hover at 1 m with body velocity
+    [u0, 0]; integrated with scipy DOP853 (rtol 1e-11).
+
+    Parameters
+    ----------
+    r_list : sequence of (3,) sequence of float
+        CoG offsets [m].
+    duration : float
+        Simulated time [s].
+    u0 : (2,) sequence of float
+        Initial body velocities u, v [m/s].
+    moving : bool
+        False holds y_d = [1, 0, 0, 0] (the zero dynamics themselves); True makes the
+        attitude move, phi_d = 0.1 (1 - cos 2t), theta_d = -0.08 (1 - cos 3t) rad (internal
+        dynamics with nu2 != 0).
+    model : quadcog.model.functions.Model, optional
+        The generated model (default ``quadcog.load()``).
+
+    Returns
+    -------
+    dict
+        t (N,), zeta (len(r_list), N, 4) [x, y, u, v], analytic (N, 4) the level solution
+        u0 exp(-c t / m) etc. (moving=False only), max_spread (largest difference of zeta
+        between the r_G cases, m or m/s) and max_error_vs_analytic.
     """
     model = model or load()
     kp, kd = np.array([12.0, 120.0, 120.0, 20.0]), np.array([7.0, 22.0, 22.0, 9.0])
@@ -209,16 +304,29 @@ DEFAULT_OFFSETS = ((0.0, 0.0, 0.0), (0.03, 0.02, 0.01), (0.06, 0.06, 0.0), (-0.0
 DEFAULT_ATTITUDES = ((1.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.7), (1.0, 0.15, -0.1, 0.0))
 
 
-def zero_dynamics_study(offsets=DEFAULT_OFFSETS, attitudes=DEFAULT_ATTITUDES, model=None):
+def zero_dynamics_study(offsets: Sequence[Sequence[float]] = DEFAULT_OFFSETS,
+                        attitudes: Sequence[Sequence[float]] = DEFAULT_ATTITUDES,
+                        model: Model | None = None) -> dict[str, Any]:
     """Everything reported about the zero dynamics.
 
-    offsets: CoG offsets r_G (m), each (3,); attitudes: held outputs y0 (4,) [z0 (m), phi0,
-    theta0, psi0 (rad)]. Returns a dict with, per (y0, r_G): the eigenvalues (1/s), the
-    equilibrium velocity and the holding input; the paper's eq. 7 values {0, 0, -c_x/m,
-    -c_y/m}; the largest eigenvalue difference from r_G = 0 (1/s); an anisotropic-drag vehicle
-    (c = [0.1, 0.2, 0.3]) to show that the tilt can change the eigenvalues while r_G does not;
-    the random-point sensitivity (``rg_sensitivity``); and the nonlinear simulations
-    (``nonlinear_check``) with held and with moving outputs.
+    Parameters
+    ----------
+    offsets : sequence of (3,) sequence of float
+        CoG offsets r_G [m].
+    attitudes : sequence of (4,) sequence of float
+        Held outputs y0 = [z0 (m), phi0, theta0, psi0 (rad)].
+    model : quadcog.model.functions.Model, optional
+        The generated model (default ``quadcog.load()``).
+
+    Returns
+    -------
+    dict
+        Per (y0, r_G): the eigenvalues [1/s], the equilibrium velocity and the holding
+        input; the paper's eq. 7 values {0, 0, -c_x/m, -c_y/m}; the largest eigenvalue
+        difference from r_G = 0 [1/s]; an anisotropic-drag vehicle (c = [0.1, 0.2, 0.3]) to
+        show that the tilt can change the eigenvalues while r_G does not; the random-point
+        sensitivity (``rg_sensitivity``); and the nonlinear simulations
+        (``nonlinear_check``) with held and with moving outputs.
     """
     model = model or load()
     p0 = default_parameters()
@@ -248,9 +356,18 @@ def zero_dynamics_study(offsets=DEFAULT_OFFSETS, attitudes=DEFAULT_ATTITUDES, mo
             "nonlinear_held": held, "nonlinear_moving": moving}
 
 
-def plot_zero_dynamics(study, path):
-    """Save the nonlinear check of ``zero_dynamics_study`` (held vs moving outputs) to ``path``:
-    top row the body velocity u(t) per r_G, bottom row its difference from r_G = 0."""
+def plot_zero_dynamics(study: dict[str, Any], path: str | os.PathLike[str]) -> None:
+    """Save the nonlinear check of ``zero_dynamics_study`` (held vs moving outputs).
+
+    Top row the body velocity u(t) per r_G, bottom row its difference from r_G = 0.
+
+    Parameters
+    ----------
+    study : dict
+        The result of ``zero_dynamics_study``.
+    path : str or os.PathLike
+        The PNG to write.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -6,6 +6,7 @@ the one lookup from a name or a path to a file; ``read_toml`` is the one reader,
 name the file and say what is wrong with it.
 """
 from importlib import resources
+import os
 from pathlib import Path
 import tomllib
 from typing import Any
@@ -55,7 +56,7 @@ def shipped_names(kind: str) -> tuple[str, ...]:
     return tuple(sorted(p.stem for p in shipped_folder(kind).glob(f"*{SUFFIX}")))
 
 
-def find_file(spec: str | Path, kind: str) -> Path:
+def find_file(spec: str | os.PathLike[str], kind: str) -> Path:
     """The file that ``spec`` stands for: a path, or the name of a shipped file.
 
     Parameters
@@ -92,12 +93,13 @@ def find_file(spec: str | Path, kind: str) -> Path:
                 f"(shipped: {', '.join(shipped_names(kind))}; `quadcog {kind}s` lists them)")
 
 
-def read_toml(path: Path, error: type[InputError] = ScenarioError) -> dict[str, Any]:
+def read_toml(path: str | os.PathLike[str],
+              error: type[InputError] = ScenarioError) -> dict[str, Any]:
     """A TOML file as a dict, with every failure a typed error naming the file.
 
     Parameters
     ----------
-    path : pathlib.Path
+    path : str or os.PathLike
         The file.
     error : type of quadcog.InputError
         The class raised (ScenarioError, SweepError).
@@ -155,7 +157,7 @@ def shipped_scenarios() -> dict[str, str]:
             for name in scenario_names()}
 
 
-def scenario_path(spec: str | Path) -> Path:
+def scenario_path(spec: str | os.PathLike[str]) -> Path:
     """The scenario file that ``spec`` stands for (``find_file(spec, "scenario")``).
 
     Parameters

@@ -49,19 +49,19 @@ _I = [(k, "xyz".index(n[1]), "xyz".index(n[2])) for k, n in enumerate(PI_NAMES)
 TOLERANCE = 1e-12
 
 
-def _shift(m, r):
+def _shift(m: float, r: np.ndarray) -> np.ndarray:
     """m (|r|^2 I - r r^T): the parallel-axis term (kg m^2) of mass m at r (m)."""
     return m * (r @ r * np.eye(3) - np.outer(r, r))
 
 
-def _inertia_matrix(pi):
+def _inertia_matrix(pi: np.ndarray) -> np.ndarray:
     I = np.empty((3, 3))
     for k, i, j in _I:
         I[i, j] = I[j, i] = pi[k]
     return I
 
 
-def _symmetric(value, where):
+def _symmetric(value: ArrayLike, where: str) -> np.ndarray:
     I = array(value, where, (3, 3))
     if not np.allclose(I, I.T, rtol=1e-12, atol=0):
         raise InputError(f"{where}: expected a symmetric 3x3 inertia matrix (kg m^2), got "
@@ -69,7 +69,7 @@ def _symmetric(value, where):
     return 0.5 * (I + I.T)
 
 
-def _pi(value, where):
+def _pi(value: ArrayLike, where: str) -> np.ndarray:
     """pi as a (10,) float array: shape checked (InputError), every entry finite
     (ParameterError naming the entry)."""
     pi = vector(value, where, N_PI, finite=False)
@@ -313,7 +313,7 @@ def inertia_about_cog(pi: ArrayLike) -> np.ndarray:
     return I_O - _shift(m, r_G)
 
 
-def _consistency(pi):
+def _consistency(pi: np.ndarray) -> tuple[float, np.ndarray, bool]:
     """(smallest eigenvalue of J, all eigenvalues, consistent?) of a finite (10,) pi."""
     eig = np.linalg.eigvalsh(pseudo_inertia(pi))
     return eig[0], eig, bool(eig[0] > TOLERANCE * max(abs(eig[-1]), np.finfo(float).tiny))
@@ -337,7 +337,7 @@ def is_physically_consistent(pi: ArrayLike) -> bool:
     return bool(np.isfinite(pi).all()) and _consistency(pi)[2]
 
 
-def _g(values):
+def _g(values: Sequence[float] | np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
 
 

@@ -1,0 +1,48 @@
+"""bench/run.py's smallest configuration runs (no timing is asserted: the machine is shared):
+the machine rows, the FMA roofline, the scale table at 10 flights, and peers that are not
+installed reported as absent, never with a number."""
+import importlib.util
+from pathlib import Path
+import shutil
+import sys
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture
+def run(monkeypatch):
+    monkeypatch.setattr(sys, "path", list(sys.path))          # run.py inserts the root
+    spec = importlib.util.spec_from_file_location("bench_run_quick", ROOT / "bench" / "run.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    monkeypatch.setattr(mod, "rows", [])
+    return mod
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+def test_smallest_configuration(run):
+    from bench.machine import machine
+    m = machine()
+    assert m["isa"] in ("avx512", "avx2", "sse2", "portable") and m["compiler"] != "none"
+    assert "-ffp-contract=off" in m["flags"]
+    roof = run.bench_vector_limits(200.0, seconds=0.05)
+    assert roof["flops"] > 0
+    out = run.bench_scale((10, 20), duration=0.05)
+    assert [n for n, *_ in out] == [10, 20]
+    names = [r[0] for r in run.rows]
+    assert any(n.startswith("roofline:") for n in names)
+    assert "scale: 10 flights x 0.05 s" in names
+    ratio = next(r for r in run.rows if r[0] == "vector step: operation rate (1 thread, CPU time)")
+    assert ratio[3].endswith("x roofline")
+
+
+def test_absent_peers_are_reported_absent(run, monkeypatch):
+    for name in ("crazyflow", "rotorpy", "jax", "torch"):
+        monkeypatch.setitem(sys.modules, name, None)          # import raises ImportError
+    run.bench_crazyflow(10, 5, 1.0)
+    run.bench_rotorpy_batched(10, 0.01, 1.0)
+    run.bench_rotorpy()
+    assert [r[1] for r in run.rows] == ["absent"] * 3
+    assert all("not installed" in r[5] for r in run.rows)
