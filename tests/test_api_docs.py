@@ -51,6 +51,9 @@ CHECKED = ("quadcog.kinds", "quadcog.controllers.registry", "quadcog.trajectorie
            "quadcog.codegen",
            "quadcog.model",
            "quadcog.logs",
+           "quadcog.sim",
+           "quadcog.viz",
+           "quadcog.identification",
            )
 MODULES = [m for m in _modules()
            if any(m == c or m.startswith(c + ".") for c in CHECKED)]

@@ -9,19 +9,29 @@ and its mass, free of the vehicle's own rotor asymmetry (which reads as a CoG of
 that gives 5 % less thrust per command than the model moves the apparent CoG by 5 % / 4 of its
 distance from O toward it).
 """
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
-from quadcog.identification.estimators import REGRESSION_SIGNALS, missing_for, regression, static_balance
+from quadcog.identification.estimators import (
+    REGRESSION_SIGNALS,
+    FlightEstimate,
+    missing_for,
+    regression,
+    static_balance,
+)
+from quadcog.logs.flightlog import FlightLog
 from quadcog.vehicles.rotor_model import RotorModel
 from quadcog.vehicles.vehicle import PRESETS, Vehicle
 
 __all__ = ["METHODS", "JSON_KEYS", "R_G_NAMES", "IDENTIFIABLE_FRACTION", "NEVER_DETERMINED",
-           "Identification", "pooled_estimate",
-           "identify", "as_logs", "as_vehicle"]
+           "ROTOR_ASYMMETRY", "Identification", "pooled_estimate", "identify", "as_logs",
+           "as_vehicle"]
 
 METHODS = ("auto", "static", "regression")
 R_G_NAMES = ("x_G", "y_G", "z_G")
@@ -84,12 +94,13 @@ class Identification:
     baseline: tuple = ()
     condition: float | None = None
 
-    def as_json(self) -> dict:
+    def as_json(self) -> dict[str, Any]:
         """Exactly the ``JSON_KEYS`` as plain JSON values (None for null).
 
         Returns
         -------
         dict
+            What ``quadcog identify --json`` writes (m, kg).
         """
         return {"r_G": [float(v) for v in self.r_G],
                 "r_G_ci95": [None if v is None else float(v) for v in self.r_G_ci95],
@@ -103,6 +114,7 @@ class Identification:
         Returns
         -------
         str
+            Several lines, without a final newline.
         """
         what = "shift relative to the baseline" if self.mass_change is not None else \
             "offset from O"
@@ -123,16 +135,18 @@ class Identification:
         return "\n".join(lines)
 
 
-def as_vehicle(vehicle: "str | Vehicle") -> Vehicle:
+def as_vehicle(vehicle: str | Vehicle) -> Vehicle:
     """A Vehicle from a preset name (``quadcog.vehicles.vehicle.PRESETS``) or a Vehicle.
 
     Parameters
     ----------
     vehicle : str or Vehicle
+        A preset name, e.g. ``"crazyflie"``, or a Vehicle (returned as it is).
 
     Returns
     -------
     Vehicle
+        The vehicle.
 
     Raises
     ------
@@ -147,19 +161,23 @@ def as_vehicle(vehicle: "str | Vehicle") -> Vehicle:
                               f"{', '.join(PRESETS)} or a quadcog Vehicle")
 
 
-def as_logs(logs: object, what: str = "logs") -> list:
-    """FlightLogs from one log or path, or a sequence of them (paths are read with
-    ``quadcog.logs.read_log``, the format from the file).
+def as_logs(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
+            what: str = "logs") -> list[FlightLog]:
+    """FlightLogs from one log or path, or a sequence of them.
+
+    Paths are read with ``quadcog.logs.read_log``, the format from the file.
 
     Parameters
     ----------
     logs : FlightLog, str, Path or a sequence of them
+        The flights.
     what : str
         The argument's name, for messages.
 
     Returns
     -------
     list of FlightLog
+        At least one.
 
     Raises
     ------
@@ -181,7 +199,7 @@ def as_logs(logs: object, what: str = "logs") -> list:
     return out
 
 
-def _choose(method, logs):
+def _choose(method: str, logs: list[FlightLog]) -> tuple[str, str]:
     if method not in METHODS:
         raise IdentificationError(f"method {method!r} is unknown; expected one of "
                                   f"{', '.join(METHODS)}")
@@ -201,7 +219,9 @@ def _choose(method, logs):
     return "regression", "regression (auto: every log has the signals it needs)"
 
 
-def pooled_estimate(estimates) -> tuple:
+def pooled_estimate(estimates: Sequence[FlightEstimate]
+                    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], float, float,
+                               int]:
     """The estimate of several logs: the static balance's blocks pooled (speed-corrected);
     the regression's per-log results combined by inverse variance.
 
@@ -237,8 +257,10 @@ def _estimate(logs, vehicle, method, rotor_model):
     return [run(log, vehicle, rotor_model) for log in logs]
 
 
-def identify(logs: object, vehicle: "str | Vehicle" = "crazyflie", baseline: object = None,
-             method: str = "auto", rotor_model: "RotorModel | str | None" = None
+def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
+             vehicle: str | Vehicle = "crazyflie",
+             baseline: FlightLog | str | Path | Sequence[FlightLog | str | Path] | None = None,
+             method: str = "auto", rotor_model: RotorModel | str | None = None
              ) -> Identification:
     """Identify the CoG offset r_G and the mass from flight logs (module docstring).
 
@@ -258,6 +280,7 @@ def identify(logs: object, vehicle: "str | Vehicle" = "crazyflie", baseline: obj
     Returns
     -------
     Identification
+        The estimate, its intervals and the verdict.
 
     Raises
     ------

@@ -21,10 +21,12 @@ from the thrust balance. z = Y r_G is solved by least squares; the covariance is
 cluster-robust (sandwich) one over 1 s blocks, because neighbouring samples share their noise.
 Needs the velocity, the three Euler angles, the body rates and the rotor outputs.
 """
+from collections.abc import Sequence
 from dataclasses import dataclass
 import inspect
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.errors import IdentificationError
@@ -49,8 +51,8 @@ from quadcog.model.parameters import with_cog
 from quadcog.vehicles.rotor_model import RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["FILTER_RATE", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT",
-           "FlightEstimate", "static_balance", "regression", "missing_for"]
+__all__ = ["FILTER_RATE", "WARM_UP", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT",
+           "STATIC_MAX_TILT", "FlightEstimate", "static_balance", "regression", "missing_for"]
 
 # the composite law's filter rate lam (1/s): one definition, read from its signature
 FILTER_RATE = inspect.signature(CompositeAdaptive.__init__).parameters["filter_rate"].default
@@ -66,17 +68,20 @@ Z_G_MIN_TILT = np.radians(2.0)
 STATIC_MAX_TILT = np.radians(3.0)
 
 
-def missing_for(log: FlightLog, names: tuple) -> list:
+def missing_for(log: FlightLog, names: Sequence[str]) -> list[str]:
     """The signals of ``names`` that ``log`` lacks.
 
     Parameters
     ----------
     log : quadcog.logs.FlightLog
+        The flight.
     names : sequence of str
+        Standard signal names (``quadcog.logs.SIGNALS``).
 
     Returns
     -------
     list of str
+        Those of ``names`` the log does not have, in their order.
     """
     return [n for n in names if not log.has(n)]
 
@@ -136,21 +141,21 @@ class FlightEstimate:
     notes: tuple
 
 
-def _tilt_cosine(log, notes):
+def _tilt_cosine(log: FlightLog, notes: list[str]) -> npt.NDArray[np.float64]:
     if log.has("roll") and log.has("pitch"):
         return np.cos(log.signal("roll")) * np.cos(log.signal("pitch"))
     notes.append("no roll and pitch together in the log: the thrust taken as vertical")
     return np.ones(log.n_samples)
 
 
-def _rms_tilt(log, sel):
+def _rms_tilt(log: FlightLog, sel: npt.NDArray[np.bool_]) -> float | None:
     """RMS of the logged roll and pitch (those present) over the window (rad), or None."""
     have = [log.signal(n)[sel] for n in ("roll", "pitch") if log.has(n)]
     return float(np.sqrt(sum((a ** 2).mean() for a in have))) if have else None
 
 
-def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str | None" = None,
-                   window: "HoverWindow | None" = None) -> FlightEstimate:
+def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str | None = None,
+                   window: HoverWindow | None = None) -> FlightEstimate:
     """x_G, y_G and m from the thrust and moment balance of the hover (module docstring).
 
     Parameters
@@ -176,7 +181,7 @@ def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | 
     """
     window = hover_window(log) if window is None else window
     f_all, rotor, _ = rotor_thrusts(log, vehicle, rotor_model)
-    notes = []
+    notes: list[str] = []
     a_z, a_from = vertical_acceleration(log)
     cos_tilt = _tilt_cosine(log, notes)
     sel = window.mask
@@ -241,9 +246,9 @@ def _states(log, sel):
     return np.column_stack([p, eta, nu1, log.signal("body_rates")[sel]])
 
 
-def regression(log: FlightLog, vehicle: Vehicle, rotor_model: "RotorModel | str | None" = None,
-               window: "HoverWindow | None" = None, filter_rate: float = FILTER_RATE,
-               mass: "float | None" = None, min_tilt: float = Z_G_MIN_TILT) -> FlightEstimate:
+def regression(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str | None = None,
+               window: HoverWindow | None = None, filter_rate: float = FILTER_RATE,
+               mass: float | None = None, min_tilt: float = Z_G_MIN_TILT) -> FlightEstimate:
     """r_G by filtered least squares with the generated regressor (module docstring).
 
     Parameters

@@ -6,21 +6,28 @@ moment ``m g [y_G, -x_G]`` of the estimate (docs/model.md sec. 3.3). House style
 ``quadcog.viz.plots``: units on every axis, legends above the panels.
 """
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from quadcog.files import plot_text
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from quadcog.identification.core import Identification
+
 __all__ = ["plot_identification"]
 
 
-def plot_identification(result: object, path: "str | Path | None" = None,
-                        title: str = "quadcog identify") -> object:
+def plot_identification(result: "Identification", path: str | Path | None = None,
+                        title: str = "quadcog identify") -> "Figure":
     """Draw the figure of an Identification; saved to ``path`` (PNG) if given.
 
     Parameters
     ----------
     result : quadcog.identification.Identification
+        The identification, with its per-log estimates (``flights``, ``baseline``).
     path : str or Path, optional
         Where to save (dpi 100); the figure is then closed.
     title : str
@@ -29,6 +36,7 @@ def plot_identification(result: object, path: "str | Path | None" = None,
     Returns
     -------
     matplotlib.figure.Figure
+        The figure (closed when saved).
     """
     import matplotlib
     if path is not None:

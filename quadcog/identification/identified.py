@@ -9,15 +9,20 @@ identified = "file.json"`` (the seed); ``quadcog run SCENARIO --identified FILE`
 """
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
+
+if TYPE_CHECKING:
+    from quadcog.identification.core import Identification
 
 __all__ = ["identified_cog"]
 
 
-def identified_cog(source: object) -> np.ndarray:
+def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.float64]:
     """The CoG offset r_G (3,) (m, body frame) of an identification.
 
     Parameters

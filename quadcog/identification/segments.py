@@ -12,14 +12,17 @@ lag-one correlation).
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
+from quadcog.logs.flightlog import FlightLog
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
+from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "HoverWindow", "hover_window",
-           "rotor_thrusts", "vertical_acceleration", "block_means", "block_mean_ci95",
-           "ar1_inflation", "speed_corrected", "body_velocity", "SPEED_SPREAD",
-           "t_quantile"]
+__all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "MIN_BLOCKS", "HoverWindow",
+           "hover_window", "rotor_thrusts", "vertical_acceleration", "block_means",
+           "block_mean_ci95", "ar1_inflation", "speed_corrected", "body_velocity",
+           "SPEED_SPREAD", "t_quantile"]
 
 HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
 HOVER_TRIM = 1.5         # s cut at both ends of the plateau (the climb and descent settle)
@@ -70,7 +73,8 @@ class HoverWindow:
         """End of the last segment (s)."""
         return self.segments[-1][1]
 
-    def blocks(self, t: np.ndarray, seconds: float = BLOCK_SECONDS) -> np.ndarray:
+    def blocks(self, t: npt.NDArray[np.float64], seconds: float = BLOCK_SECONDS
+               ) -> npt.NDArray[np.int_]:
         """Block number of each time in ``t`` (the window's samples): consecutive blocks of
         ``seconds`` within each segment, -1 for the rest of a segment shorter than a block.
 
@@ -84,6 +88,7 @@ class HoverWindow:
         Returns
         -------
         numpy.ndarray of int, shape (n,)
+            Block numbers from 0 over the segments in turn; -1 outside every block.
         """
         index = np.full(len(t), -1)
         first = 0
@@ -99,7 +104,7 @@ class HoverWindow:
         return index
 
 
-def hover_window(log: object, band: float = HOVER_BAND, trim: float = HOVER_TRIM
+def hover_window(log: FlightLog, band: float = HOVER_BAND, trim: float = HOVER_TRIM
                  ) -> HoverWindow:
     """The hover window of ``log`` (module docstring: plateaus of the height, trimmed).
 
@@ -115,6 +120,7 @@ def hover_window(log: object, band: float = HOVER_BAND, trim: float = HOVER_TRIM
     Returns
     -------
     HoverWindow
+        The plateaus, trimmed, with at least ``MIN_BLOCKS`` blocks.
 
     Raises
     ------
@@ -152,7 +158,7 @@ def hover_window(log: object, band: float = HOVER_BAND, trim: float = HOVER_TRIM
     return window
 
 
-def _commands_from_mixer(log, vehicle):
+def _commands_from_mixer(log: FlightLog, vehicle: Vehicle) -> npt.NDArray[np.float64]:
     """Rotor commands (N, 4) from thrust_command and moment_command, by the mixer the signals
     are defined with (quadcog.logs.SIGNALS['moment_command'])."""
     pos = np.asarray(vehicle.rotor_positions)
@@ -164,13 +170,15 @@ def _commands_from_mixer(log, vehicle):
     return np.clip(u, 0.0, 1.0)
 
 
-def rotor_thrusts(log: object, vehicle: object, rotor_model: "RotorModel | str | None" = None
-                  ) -> tuple:
+def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str | None = None
+                  ) -> tuple[npt.NDArray[np.float64], str, RotorModel]:
     """The thrust of each rotor (N) over the whole log, and how it was obtained.
 
     Parameters
     ----------
     log : quadcog.logs.FlightLog
+        With the rotor model's signals (or a fallback's: motor_command, or thrust_command and
+        moment_command).
     vehicle : quadcog.Vehicle
         Its ``rotor_model`` is used unless ``rotor_model`` is given.
     rotor_model : RotorModel or str, optional
@@ -219,17 +227,19 @@ def rotor_thrusts(log: object, vehicle: object, rotor_model: "RotorModel | str |
         f"{', '.join(log.signals) or 'no standard signals'})")
 
 
-def vertical_acceleration(log: object) -> tuple:
+def vertical_acceleration(log: FlightLog) -> tuple[npt.NDArray[np.float64], str]:
     """Kinematic vertical acceleration (N,) (m/s^2, z up) and where it came from: the
     ``"acceleration"`` signal, else the derivative of the vertical velocity, else zero.
 
     Parameters
     ----------
     log : quadcog.logs.FlightLog
+        The flight.
 
     Returns
     -------
     (numpy.ndarray of shape (N,), str)
+        The acceleration (m/s^2) and a phrase saying where it came from.
     """
     if log.has("acceleration"):
         return log.signal("acceleration")[:, 2], "the logged acceleration"
@@ -238,7 +248,8 @@ def vertical_acceleration(log: object) -> tuple:
     return np.zeros(log.n_samples), "none logged (taken as 0)"
 
 
-def block_means(index: np.ndarray, values: np.ndarray) -> np.ndarray:
+def block_means(index: npt.NDArray[np.int_], values: npt.NDArray[np.float64]
+                ) -> npt.NDArray[np.float64]:
     """Means of ``values`` per block number (``HoverWindow.blocks``; -1 is left out).
 
     Parameters
@@ -267,17 +278,19 @@ def t_quantile(dof: int) -> float:
     Returns
     -------
     float
+        The quantile.
     """
     from scipy import stats  # here: slow to import
     return float(stats.t.ppf(0.975, max(int(dof), 1)))
 
 
-def block_mean_ci95(blocks: np.ndarray) -> tuple:
+def block_mean_ci95(blocks: npt.ArrayLike
+                    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """Mean of block means and the half-width of its 95 % interval (Student t on the blocks).
 
     Parameters
     ----------
-    blocks : numpy.ndarray, shape (B, ...)
+    blocks : array_like, shape (B, ...)
         Block means (``block_means``), B >= 2.
 
     Returns
@@ -291,17 +304,19 @@ def block_mean_ci95(blocks: np.ndarray) -> tuple:
         * np.sqrt(ar1_inflation(b))
 
 
-def ar1_inflation(blocks: np.ndarray) -> np.ndarray:
+def ar1_inflation(blocks: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """Variance factor (1 + rho) / (1 - rho) of the mean of block means whose neighbours
     correlate with lag-one coefficient rho > 0 (AR(1)); 1 when rho <= 0 or too few blocks.
 
     Parameters
     ----------
-    blocks : numpy.ndarray, shape (B, ...)
+    blocks : array_like, shape (B, ...)
+        Block means (or residuals), in time order.
 
     Returns
     -------
     numpy.ndarray, shape (...)
+        The factor, >= 1.
     """
     b = np.asarray(blocks, dtype=float)
     if b.shape[0] < 4:
@@ -313,17 +328,19 @@ def ar1_inflation(blocks: np.ndarray) -> np.ndarray:
     return (1 + rho) / (1 - rho)
 
 
-def body_velocity(log: object) -> np.ndarray:
+def body_velocity(log: FlightLog) -> npt.NDArray[np.float64]:
     """Horizontal velocity in heading axes (N, 2) (m/s: forward, left), the ground velocity
     (else the derivative of the position) turned by -yaw (when logged); zeros without either.
 
     Parameters
     ----------
     log : quadcog.logs.FlightLog
+        The flight.
 
     Returns
     -------
     numpy.ndarray, shape (N, 2)
+        Forward and left velocity (m/s).
     """
     if log.has("velocity"):
         v = log.signal("velocity")[:, :2]
@@ -337,8 +354,10 @@ def body_velocity(log: object) -> np.ndarray:
     return np.column_stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1]])
 
 
-def speed_corrected(blocks_r: np.ndarray, blocks_v: np.ndarray, spread: float = SPEED_SPREAD
-                    ) -> tuple:
+def speed_corrected(blocks_r: npt.NDArray[np.float64], blocks_v: npt.NDArray[np.float64],
+                    spread: float = SPEED_SPREAD
+                    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64],
+                               npt.NDArray[np.float64]]:
     """x_G and y_G from block estimates, free of a moment proportional to the speed.
 
     For each of x and y: when the blocks' speeds along that axis spread by more than
@@ -353,7 +372,7 @@ def speed_corrected(blocks_r: np.ndarray, blocks_v: np.ndarray, spread: float = 
     blocks_v : numpy.ndarray, shape (B, 2)
         Block mean speeds forward and left (m/s).
     spread : float
-        m/s.
+        Spread of the block speeds (m/s) above which the line is fitted.
 
     Returns
     -------

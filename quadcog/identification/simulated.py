@@ -8,11 +8,19 @@ and the motor outputs that the vehicle's rotor model needs for the applied rotor
 battery voltage that falls linearly over the flight. It is the other end of the round trip
 simulate -> log -> ``identify``.
 """
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from quadcog.errors import IdentificationError
 from quadcog.model.conventions import rotation_matrix
 from quadcog.sim.sensing import Sensing
+
+if TYPE_CHECKING:
+    from quadcog.logs.flightlog import FlightLog
+    from quadcog.sim.result import SimulationResult
+    from quadcog.vehicles.rotor_model import RotorModel
+    from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["LOG_RATE", "simulated_log"]
 
@@ -20,10 +28,10 @@ LOG_RATE = 100.0           # Hz: the Crazyflie uSD deck's rate in the CrazyPAD f
 PWM_STEP = 1.0 / 65535     # the 16-bit resolution of a logged motor output
 
 
-def simulated_log(result: object, vehicle: object, sensing: "Sensing | None" = None,
-                  rate: float = LOG_RATE, voltage: tuple = (4.1, 3.7),
-                  rotor_model: object = None, seed: "int | None" = None,
-                  source: str = "simulated") -> object:
+def simulated_log(result: "SimulationResult", vehicle: "Vehicle", sensing: Sensing | None = None,
+                  rate: float = LOG_RATE, voltage: tuple[float, float] = (4.1, 3.7),
+                  rotor_model: "RotorModel | None" = None, seed: int | None = None,
+                  source: str = "simulated") -> "FlightLog":
     """The FlightLog a logger on ``vehicle`` would have written during ``result``.
 
     Parameters

@@ -15,6 +15,7 @@ import argparse
 import math
 from pathlib import Path
 import sys
+from typing import Any
 
 from quadcog.errors import QuadcogError
 from quadcog.identification.core import identify
@@ -30,7 +31,7 @@ NORMAL = "normal_flight"
 BEGIN, END = "<!-- survey:begin -->", "<!-- survey:end -->"
 
 
-def flights(root: "str | Path") -> list:
+def flights(root: str | Path) -> list[tuple[str, str, str, Path]]:
     """The flights under ``root``: (kind, folder, drone, path), sorted.
 
     Parameters
@@ -41,6 +42,12 @@ def flights(root: "str | Path") -> list:
     Returns
     -------
     list of (str, str, str, Path)
+        Kind, folder, drone and file of each flight.
+
+    Raises
+    ------
+    quadcog.QuadcogError
+        No flight files under ``root``.
     """
     root = Path(root)
     out = []
@@ -52,11 +59,11 @@ def flights(root: "str | Path") -> list:
     return out
 
 
-def _direction(dx, dy):
+def _direction(dx: float, dy: float) -> float:
     return math.degrees(math.atan2(dy, dx))
 
 
-def _row(result):
+def _row(result: Any) -> dict[str, Any]:
     dx, dy = result.r_G[0], result.r_G[1]
     hx, hy = result.r_G_ci95[0], result.r_G_ci95[1]
     return dict(dx=1e3 * dx, dy=1e3 * dy, size=1e3 * math.hypot(dx, dy),
@@ -64,7 +71,7 @@ def _row(result):
                 dm=1e3 * result.mass_change, mass=1e3 * result.mass)
 
 
-def survey_rows(root: "str | Path", rotor_model: "str | None" = None) -> list:
+def survey_rows(root: str | Path, rotor_model: str | None = None) -> list[dict[str, Any]]:
     """One row per flight (and a pooled row per weighted folder), each a dict.
 
     Parameters
@@ -104,12 +111,13 @@ def survey_rows(root: "str | Path", rotor_model: "str | None" = None) -> list:
     return rows
 
 
-def rotor_model_rows(root: "str | Path") -> list:
+def rotor_model_rows(root: str | Path) -> list[dict[str, Any]]:
     """The pooled shift of each weighted folder with each Crazyflie rotor model.
 
     Parameters
     ----------
     root : str or Path
+        The CrazyPAD folder.
 
     Returns
     -------
@@ -124,20 +132,22 @@ def rotor_model_rows(root: "str | Path") -> list:
     return out
 
 
-def _fmt(v, spec="+.2f"):
+def _fmt(v: float, spec: str = "+.2f") -> str:
     return format(v, spec)
 
 
-def tables(root: "str | Path") -> str:
+def tables(root: str | Path) -> str:
     """The survey as markdown (both tables, with the command that made them).
 
     Parameters
     ----------
     root : str or Path
+        The CrazyPAD folder.
 
     Returns
     -------
     str
+        The markdown, ending in a newline.
     """
     lines = ["Shift of the CoG against the same drone's normal flights (static hover balance, "
              "rotor model bitcraze-voltage where the log has PWM and battery voltage, else "
@@ -166,12 +176,13 @@ def tables(root: "str | Path") -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv: "list | None" = None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """The command line (module docstring).
 
     Parameters
     ----------
     argv : list of str, optional
+        The arguments (default ``sys.argv[1:]``).
 
     Returns
     -------

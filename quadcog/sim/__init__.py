@@ -3,3 +3,5 @@
 divergence rule (``divergence``), one flight (``flight``), many flights (``batch``,
 ``vector_batch``), sensing (``sensing``), CoG changes and disturbances (``timeline``) and the
 results (``result``)."""
+
+__all__: list[str] = []      # the names live in the modules (and in ``quadcog``)

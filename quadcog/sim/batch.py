@@ -1,20 +1,24 @@
 """Many flights at once, keeping metrics (the same definition and divergence rule as single
 flights) instead of trajectories: the monitored closed-loop step run by the vector kernel
-(``quadcog.codegen.vector_kernel``, flights in the CPU's vector lanes, ``threads`` threads) or, where that
-cannot be built, by CasADi's map."""
+(``quadcog.codegen.vector_kernel``, flights in the CPU's vector lanes, ``threads`` threads)
+or, where that cannot be built, by CasADi's map."""
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 import time
+from typing import Any
 
+import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import config, validate
-from quadcog.codegen.vector_kernel import kernel_for
+from quadcog.codegen.vector_kernel import VectorKernel, kernel_for
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_STATE, R_G
 from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, monitored_chunk_function, monitored_step, packed
-from quadcog.sim.divergence import DivergenceCause, divergence_rule, magnitude
-from quadcog.sim.plant import Actuation
+from quadcog.sim.divergence import DivergenceCause, Limits, divergence_rule, magnitude
+from quadcog.sim.plant import Actuation, TruthOptions
 from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference
 from quadcog.sim.result import metric_arrays, position_errors
 from quadcog.sim.schedule import Schedule, cog_at
@@ -22,11 +26,35 @@ from quadcog.sim.timeline import CogProfile
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
+__all__ = ["BatchResult", "batch_kernel", "simulate_batch", "run_kernel", "run_map",
+           "batch_metrics"]
+
 
 @dataclass
 class BatchResult:
-    """Metrics of many flights (arrays with one entry per flight, lengths in m, times in s),
-    each as ``quadcog.Metrics`` defines it for a single flight."""
+    """Metrics of many flights, each as ``quadcog.Metrics`` defines it for a single flight.
+
+    Parameters
+    ----------
+    rms_position_error : (B,) numpy.ndarray
+        RMS position error of each flight (m).
+    max_position_error : (B,) numpy.ndarray
+        Largest position error (m).
+    rms_position_error_tail : (B,) numpy.ndarray
+        RMS position error over the tail (m; inf where the flight diverged).
+    final_position_error : (B,) numpy.ndarray
+        Position error at the last counted sample (m).
+    diverged : (B,) numpy.ndarray of bool
+        True where the flight diverged.
+    diverged_at : (B,) numpy.ndarray
+        Time of the first diverged sample (s; NaN where the flight did not diverge).
+    diverged_cause : list of DivergenceCause or None
+        Why each flight diverged (None where it did not).
+    final_state : (B, 12 + rotor states + n_state) numpy.ndarray
+        The state after the last step.
+    seconds : float
+        Wall time of the step loop (s).
+    """
     rms_position_error: np.ndarray
     max_position_error: np.ndarray
     rms_position_error_tail: np.ndarray   # inf where the flight diverged
@@ -38,9 +66,26 @@ class BatchResult:
     seconds: float
 
 
-def batch_kernel(controller, actuation, limits):
-    """The vector kernel of the monitored step (``quadcog.codegen.vector_kernel.kernel_for``), or None where
-    it cannot be built. Rows come from ``Schedule.rows``."""
+def batch_kernel(controller: Controller, actuation: Actuation, limits: Limits
+                 ) -> VectorKernel | None:
+    """The vector kernel of the monitored step (``quadcog.codegen.vector_kernel.kernel_for``).
+
+    Rows come from ``Schedule.rows``.
+
+    Parameters
+    ----------
+    controller : Controller
+        The law (designed for its model already).
+    actuation : Actuation
+        The truth's rotors.
+    limits : Limits
+        The divergence limits.
+
+    Returns
+    -------
+    VectorKernel or None
+        None where it cannot be built.
+    """
     return kernel_for(("batch", controller.cache_key(), actuation, limits),
                       lambda: packed(monitored_step(controller, actuation, limits)))
 
@@ -50,7 +95,8 @@ _ROTOR_FIELDS = ("rotor_positions", "rotor_directions", "thrust_constant", "mome
                  "max_rotor_thrust", "min_rotor_thrust", "motor_time_constant")
 
 
-def _vehicles(vehicles, options):
+def _vehicles(vehicles: Any, options: TruthOptions
+              ) -> tuple[list[Vehicle], npt.NDArray[np.float64], Actuation]:
     """The checked list of truth vehicles, their parameters (B, 14) and shared Actuation.
 
     Each Vehicle was checked when it was built; here only what the batch adds is checked, in
@@ -82,7 +128,7 @@ def _same_but_cog(params):
     return int(bad[0]) if bad.size else None
 
 
-def _cog_scale(cog_shape):
+def _cog_scale(cog_shape: Any) -> Callable[[float], float] | None:
     """cog_shape as a checked function of time (or None)."""
     if cog_shape is None:
         return None
@@ -94,28 +140,57 @@ def _cog_scale(cog_shape):
     return lambda t: validate.real(cog_shape(t), f"cog_shape({validate.plain(float(t))})")
 
 
-def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=None,
-                   controller_model=None, cog_shape=None, disturbances=(), truth=None,
-                   limits=None, threads=2, progress=None):
+def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle,
+                   trajectory: Any = "hover", duration: float = 10.0, dt: float | None = None,
+                   controller_model: Vehicle | None = None,
+                   cog_shape: Callable[[float], float] | CogProfile | None = None,
+                   disturbances: Any = (), truth: TruthOptions | None = None,
+                   limits: Limits | None = None, threads: int = 2,
+                   progress: Callable[[float], Any] | None = None) -> BatchResult:
     """Fly one controller over many truth vehicles in parallel; keep metrics, not trajectories.
 
     Parameters
     ----------
-    controller : a quadcog Controller.
-    vehicles : a sequence of B truth Vehicles. They may differ in the 14 parameters
-        (``Vehicle.parameters()``); their rotors (layout, constants, limits, time constant) must
-        agree, since the compiled step holds them.
-    controller_model : the Vehicle the controller is designed for (one for all flights);
-        default: the vehicles with r_G = 0, which must then be one vehicle.
-    cog_shape : flight b's CoG at time t is ``cog_shape(t) * vehicles[b].r_G``: a function of
-        time, a CogProfile whose x component is used as the shape, or None (the CoG is there
-        from t = 0).
-    trajectory, duration, dt, disturbances, truth, limits, progress : as ``simulate``.
-    threads : the number of threads that share the flights.
+    controller : Controller
+        The law; it is redesigned for ``controller_model``.
+    vehicles : sequence of Vehicle
+        The B truth vehicles. They may differ in the 14 parameters (``Vehicle.parameters()``);
+        their rotors (layout, constants, limits, time constant) must agree, since the compiled
+        step holds them.
+    trajectory : Trajectory, str or callable
+        The reference, as for ``simulate``.
+    duration : float
+        Seconds.
+    dt : float, optional
+        The step (s); default ``quadcog.config.defaults["simulate.dt"]``.
+    controller_model : Vehicle, optional
+        The Vehicle the controller is designed for (one for all flights); default: the
+        vehicles with r_G = 0, which must then be one vehicle.
+    cog_shape : callable, CogProfile or None
+        Flight b's CoG at time t is ``cog_shape(t) * vehicles[b].r_G``: a function of time,
+        a CogProfile whose x component is used as the shape, or None (the CoG is there from
+        t = 0).
+    disturbances : sequence of Disturbance
+        Wrench pulses, as for ``simulate``.
+    truth : TruthOptions, optional
+        As for ``simulate``.
+    limits : Limits, optional
+        As for ``simulate``.
+    threads : int
+        The number of threads that share the flights.
+    progress : callable, optional
+        ``progress(fraction)``, e.g. a ProgressBar.
 
     Returns
     -------
-    BatchResult.
+    BatchResult
+        One entry per flight.
+
+    Raises
+    ------
+    quadcog.InputError
+        An argument of the wrong kind, vehicles with other rotors, or vehicles that differ in
+        more than r_G without a ``controller_model``.
     """
     if not isinstance(controller, Controller):
         validate.fail("controller", "a quadcog Controller", controller)
@@ -152,9 +227,35 @@ def simulate_batch(controller, vehicles, trajectory="hover", duration=10.0, dt=N
     return batch_metrics(Z, nX, schedule, limits, seconds)
 
 
-def run_kernel(kernel, Z, Q, schedule, *extra, threads=1, progress=None):
-    """Z (B, nZ) after the schedule's steps through a vector kernel, a chunk of steps at a
-    time (for progress); ``extra``: per-step arrays appended to the rows."""
+def run_kernel(kernel: VectorKernel, Z: npt.NDArray[np.float64], Q: npt.NDArray[np.float64],
+               schedule: Schedule, *extra: npt.ArrayLike, threads: int = 1,
+               progress: Callable[[float], Any] | None = None) -> npt.NDArray[np.float64]:
+    """The flights' states after the schedule's steps through a vector kernel.
+
+    A chunk of steps at a time (for progress).
+
+    Parameters
+    ----------
+    kernel : VectorKernel
+        The step (``batch_kernel``).
+    Z : (B, nZ) numpy.ndarray
+        The flights' states at the start.
+    Q : (B, nQ) numpy.ndarray
+        The flights' parameters.
+    schedule : Schedule
+        The per-step inputs.
+    *extra : (N, k) array_like
+        Per-step arrays appended to the rows.
+    threads : int
+        Threads that share the flights.
+    progress : callable, optional
+        ``progress(fraction)``.
+
+    Returns
+    -------
+    (B, nZ) numpy.ndarray
+        Z after the last step.
+    """
     n = schedule.n_steps
     k = 0
     while k < n:
@@ -166,12 +267,38 @@ def run_kernel(kernel, Z, Q, schedule, *extra, threads=1, progress=None):
     return Z
 
 
-def run_map(chunk, Z, Q, schedule, *extra, threads=1, progress=None):
-    """Z (B, nZ) after the schedule's steps through CasADi's map of ``chunk``
-    (``quadcog.sim.closed_loop.chunk_of``): ``threads`` threads, each mapping its share of the
-    flights serially (a plain "thread" map starts about one thread per flight); the per-step
-    inputs and the ``extra`` per-step arrays (N, k) are shared by all flights (reduce_in, not
-    B copies). Padding steps have dt = 0 and count nothing."""
+def run_map(chunk: ca.Function, Z: npt.NDArray[np.float64], Q: npt.NDArray[np.float64],
+            schedule: Schedule, *extra: Any, threads: int = 1,
+            progress: Callable[[float], Any] | None = None) -> npt.NDArray[np.float64]:
+    """The flights' states after the schedule's steps through CasADi's map of ``chunk``.
+
+    ``threads`` threads, each mapping its share of the flights serially (a plain "thread" map
+    starts about one thread per flight); the per-step inputs and the ``extra`` per-step
+    arrays are shared by all flights (reduce_in, not B copies). Padding steps have dt = 0 and
+    count nothing.
+
+    Parameters
+    ----------
+    chunk : casadi.Function
+        CHUNK steps (``quadcog.sim.closed_loop.chunk_of``).
+    Z : (B, nZ) numpy.ndarray
+        The flights' states at the start.
+    Q : (B, nQ) numpy.ndarray
+        The flights' parameters.
+    schedule : Schedule
+        The per-step inputs.
+    *extra : (N, k) array_like
+        Further per-step inputs of ``chunk``.
+    threads : int
+        Threads that share the flights.
+    progress : callable, optional
+        ``progress(fraction)``.
+
+    Returns
+    -------
+    (B, nZ) numpy.ndarray
+        Z after the last step.
+    """
     B = Z.shape[0]
     n_shared = chunk.n_in() - 2
     shared = list(range(2, 2 + n_shared))
@@ -185,8 +312,11 @@ def run_map(chunk, Z, Q, schedule, *extra, threads=1, progress=None):
     Qp = np.vstack([Q, np.repeat(Q[-1:], pad, axis=0)]).T if pad else Q.T
     padded, n = schedule.padded(CHUNK), schedule.n_steps
     n_pad = padded.n_steps - n
-    extra = [np.asarray(a, dtype=float).reshape(len(a), -1) for a in extra]
-    extra = [np.vstack([a, np.repeat(a[-1:], n_pad, axis=0)]) if n_pad else a for a in extra]
+    # extra: the *extra tuple, rebound to lists of 2-d arrays
+    extra = [np.asarray(a, dtype=float).reshape(len(a), -1)  # type: ignore[assignment]
+             for a in extra]
+    extra = [np.vstack([a, np.repeat(a[-1:], n_pad, axis=0)])  # type: ignore[assignment]
+             if n_pad else a for a in extra]
     k = 0
     while k < n:
         Zp = np.array(mapped(Zp, Qp, *padded.matrices(k, k + CHUNK),
@@ -197,11 +327,31 @@ def run_map(chunk, Z, Q, schedule, *extra, threads=1, progress=None):
     return Zp[:, :B].T
 
 
-def batch_metrics(Z, nX, schedule, limits, seconds):
-    """BatchResult from the monitored states Z (B, nX + accumulators) after the last step:
-    metrics over the samples t_0 .. t_n, as for a single flight (the steps counted
+def batch_metrics(Z: npt.NDArray[np.float64], nX: int, schedule: Schedule, limits: Limits,
+                  seconds: float) -> BatchResult:
+    """The BatchResult of the monitored states after the last step.
+
+    Metrics over the samples t_0 .. t_n, as for a single flight (the steps counted
     t_0 .. t_{n-1}; the final sample is checked and counted here, with the same rule).
-    ``seconds``: the wall time to report."""
+
+    Parameters
+    ----------
+    Z : (B, nX + accumulators) numpy.ndarray
+        The monitored states after the last step.
+    nX : int
+        12 + rotor states + controller states.
+    schedule : Schedule
+        The per-step inputs (reference, tail, times).
+    limits : Limits
+        The divergence limits.
+    seconds : float
+        The wall time to report (s).
+
+    Returns
+    -------
+    BatchResult
+        One entry per flight.
+    """
     a = dict(zip(ACCUMULATORS, Z[:, nX:].T))
     n, B = schedule.n_steps, Z.shape[0]
     e_final = position_errors(Z[:, :3], np.repeat(schedule.ref[n:n + 1], B, axis=0))
@@ -210,7 +360,8 @@ def batch_metrics(Z, nX, schedule, limits, seconds):
     tail_n = schedule.tail[n]
     code, at = a["code"].astype(int), a["diverged_at"].copy()
     count, sum_sq, mx = a["count"].copy(), a["sum_sq"].copy(), a["max"].copy()
-    count_tail, sum_sq_tail, last = a["count_tail"].copy(), a["sum_sq_tail"].copy(), a["last"].copy()
+    count_tail, sum_sq_tail = a["count_tail"].copy(), a["sum_sq_tail"].copy()
+    last = a["last"].copy()
     final_hit = (code == 0) & (final_codes != 0)
     code[final_hit], at[final_hit] = final_codes[final_hit].astype(int), schedule.t[n]
     ok = code == 0                  # the final sample counts

@@ -5,29 +5,49 @@ for the step, the truth plant takes one RK4 step, the controller state takes an 
 The state is X = [x (12); f (rotor thrusts, 0 or 4); c (controller state)]. Everything that
 changes with time comes from the Schedule's named per-step inputs (``STEP_INPUTS``).
 """
+from collections.abc import Hashable
 import itertools
 
 import casadi as ca
 
 from quadcog.codegen.compiled import cached_compile
+from quadcog.controllers.base import Controller
 from quadcog.model.conventions import N_PARAM, N_STATE
-from quadcog.sim.divergence import divergence_code
-from quadcog.sim.plant import rk4_step_expression
+from quadcog.sim.divergence import Limits, divergence_code
+from quadcog.sim.plant import Actuation, rk4_step_expression
 from quadcog.sim.schedule import STEP_INPUTS, truth_parameters
+
+__all__ = ["CHUNK", "ACCUMULATORS", "closed_loop_step", "chunk_function", "monitored_step",
+           "chunk_of", "monitored_chunk_function", "packed"]
 
 CHUNK = 1000          # steps per compiled call
 
 
-def _step_symbols():
+def _step_symbols() -> dict[str, ca.SX]:
     return {name: ca.SX.sym(name, rows) for name, rows in STEP_INPUTS}
 
 
-def closed_loop_step(controller, actuation, limits):
-    """CasADi Function step(X, P, t, dt, ref, cog, cog_scale, wrench, tail) -> (X_next,
-    U_applied, code) for a Controller, the truth's Actuation and the divergence Limits; P is
-    the vehicle's parameter vector (14,), the per-step inputs are those of ``STEP_INPUTS``;
-    code is the divergence code of the sample at the start of the step (X and the controller's
-    input U there, with ref)."""
+def closed_loop_step(controller: Controller, actuation: Actuation, limits: Limits
+                     ) -> ca.Function:
+    """One closed-loop step as a CasADi Function.
+
+    Parameters
+    ----------
+    controller : Controller
+        The law (designed for its model already).
+    actuation : Actuation
+        The truth's rotors.
+    limits : Limits
+        The divergence limits.
+
+    Returns
+    -------
+    casadi.Function
+        ``step(X, P, t, dt, ref, cog, cog_scale, wrench, tail) -> (X_next, U_applied, code)``:
+        P is the vehicle's parameter vector (14,), the per-step inputs are those of
+        ``STEP_INPUTS``; code is the divergence code of the sample at the start of the step
+        (X and the controller's input U there, with ref).
+    """
     nc, nf = controller.n_state, actuation.n_rotor_states
     X, P = ca.SX.sym("X", N_STATE + nf + nc), ca.SX.sym("P", N_PARAM)
     s = _step_symbols()
@@ -47,10 +67,28 @@ def closed_loop_step(controller, actuation, limits):
                        ["X_next", "U_applied", "code"])
 
 
-def chunk_function(controller, actuation, limits, n=CHUNK):
-    """Compiled Function (X0, P, per-step inputs with n columns each) -> (X (nX x n),
-    U (4 x n), code (1 x n)): n closed-loop steps, X after each, code of the sample before
-    each (``divergence_code``). P is shared by all steps."""
+def chunk_function(controller: Controller, actuation: Actuation, limits: Limits,
+                   n: int = CHUNK) -> ca.Function:
+    """n closed-loop steps as one compiled Function (cached).
+
+    Parameters
+    ----------
+    controller : Controller
+        The law (designed for its model already).
+    actuation : Actuation
+        The truth's rotors.
+    limits : Limits
+        The divergence limits.
+    n : int
+        Steps per call.
+
+    Returns
+    -------
+    casadi.Function
+        ``(X0, P, per-step inputs with n columns each) -> (X (nX x n), U (4 x n),
+        code (1 x n))``: X after each step, code of the sample before each
+        (``divergence_code``). P is shared by all steps.
+    """
     def build():
         step = closed_loop_step(controller, actuation, limits)
         acc = step.mapaccum("closed_loop_steps", n)
@@ -67,12 +105,28 @@ ACCUMULATORS = ("sum_sq", "max", "sum_sq_tail", "count", "count_tail", "last", "
                 "diverged_at")
 
 
-def monitored_step(controller, actuation, limits):
+def monitored_step(controller: Controller, actuation: Actuation, limits: Limits
+                   ) -> ca.Function:
     """Step with metric accumulators, for batches that keep no trajectory.
 
     State Z = [X; accumulators (``ACCUMULATORS``)]: the position error e of the sample at the
     start of each real step (dt > 0) is added to the sums unless that sample has diverged
-    (``divergence_code``); then the code and the time are kept and the state is frozen."""
+    (``divergence_code``); then the code and the time are kept and the state is frozen.
+
+    Parameters
+    ----------
+    controller : Controller
+        The law (designed for its model already).
+    actuation : Actuation
+        The truth's rotors.
+    limits : Limits
+        The divergence limits.
+
+    Returns
+    -------
+    casadi.Function
+        ``monitored_step(Z, P, *per_step) -> Z_next`` (SX).
+    """
     step = closed_loop_step(controller, actuation, limits)
     nX = step.size1_in(0)
     Z, P = ca.SX.sym("Z", nX + len(ACCUMULATORS)), ca.SX.sym("P", N_PARAM)
@@ -92,10 +146,25 @@ def monitored_step(controller, actuation, limits):
                        [Z_next])
 
 
-def chunk_of(step, key, n=CHUNK):
-    """Compiled Function (Z, Q, per-step inputs (n columns each)) -> Z after n steps of the SX
-    Function ``step(Z, Q, *per_step) -> Z_next``: the CasADi path of every batch (the vector
-    kernel's fallback). ``key``: the compile-cache key of ``step``."""
+def chunk_of(step: ca.Function, key: Hashable, n: int = CHUNK) -> ca.Function:
+    """n steps of an SX step Function, compiled: the CasADi path of every batch.
+
+    It is the vector kernel's fallback.
+
+    Parameters
+    ----------
+    step : casadi.Function
+        ``step(Z, Q, *per_step) -> Z_next``.
+    key : hashable
+        The compile-cache key of ``step``.
+    n : int
+        Steps per call.
+
+    Returns
+    -------
+    casadi.Function
+        ``(Z, Q, per-step inputs (n columns each)) -> Z`` after n steps.
+    """
     def build():
         acc = step.mapaccum(step.name() + "_chunk", n)
         Z, Q = ca.MX.sym("Z", step.size1_in(0)), ca.MX.sym("Q", step.size1_in(1))
@@ -105,16 +174,46 @@ def chunk_of(step, key, n=CHUNK):
     return cached_compile(("chunk", key, n), build)
 
 
-def monitored_chunk_function(controller, actuation, limits, n=CHUNK):
-    """Compiled Function (Z, P, per-step inputs (n columns)) -> Z after n monitored steps."""
+def monitored_chunk_function(controller: Controller, actuation: Actuation, limits: Limits,
+                             n: int = CHUNK) -> ca.Function:
+    """n monitored steps (``monitored_step``) as one compiled Function.
+
+    Parameters
+    ----------
+    controller : Controller
+        The law (designed for its model already).
+    actuation : Actuation
+        The truth's rotors.
+    limits : Limits
+        The divergence limits.
+    n : int
+        Steps per call.
+
+    Returns
+    -------
+    casadi.Function
+        ``(Z, P, per-step inputs (n columns)) -> Z`` after n monitored steps.
+    """
     return chunk_of(monitored_step(controller, actuation, limits),
                     ("batch", controller.cache_key(), actuation, limits), n)
 
 
-def packed(step):
-    """The SX Function ``step(Z, Q, *per_step)`` as ``step(Z, Q, row) -> Z_next``, with row
-    the per-step inputs stacked in their order (for the vector kernel, ``quadcog.codegen.vector_kernel``,
-    which takes one row per step; ``Schedule.rows`` writes them in the same order)."""
+def packed(step: ca.Function) -> ca.Function:
+    """A step Function with its per-step inputs stacked into one row.
+
+    For the vector kernel (``quadcog.codegen.vector_kernel``), which takes one row per step;
+    ``Schedule.rows`` writes them in the same order.
+
+    Parameters
+    ----------
+    step : casadi.Function
+        The SX Function ``step(Z, Q, *per_step) -> Z_next``.
+
+    Returns
+    -------
+    casadi.Function
+        ``step(Z, Q, row) -> Z_next``, with row the per-step inputs stacked in their order.
+    """
     Z, Q = ca.SX.sym("Z", step.size1_in(0)), ca.SX.sym("Q", step.size1_in(1))
     sizes = [step.size1_in(i) for i in range(2, step.n_in())]
     row = ca.SX.sym("row", sum(sizes))

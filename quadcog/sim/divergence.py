@@ -6,21 +6,42 @@ import math
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import config, validate
 from quadcog.errors import EulerSingularityError
 
+__all__ = ["Limits", "DivergenceCause", "divergence_code", "divergence_rule", "magnitude",
+           "first_divergence", "check_euler_singularity"]
+
 
 @dataclass(frozen=True)
 class Limits:
-    """When a run counts as diverged: position error over ``max_position_error`` (m) or
-    |phi| or |theta| over ``max_tilt`` (rad). Defaults: ``quadcog.config.defaults``."""
+    """When a run counts as diverged.
+
+    A run diverges when its position error exceeds ``max_position_error`` or |phi| or |theta|
+    exceeds ``max_tilt``. Defaults: ``quadcog.config.defaults``.
+
+    Parameters
+    ----------
+    max_position_error : float
+        Largest position error |p - p_ref| (m), > 0; default
+        ``config.defaults["limits.max_position_error"]``.
+    max_tilt : float
+        Largest roll or pitch angle (rad), in (0, pi]; default
+        ``config.defaults["limits.max_tilt_deg"]`` in radians.
+
+    Raises
+    ------
+    quadcog.InputError
+        A limit that is not a number in its range.
+    """
     max_position_error: float = field(
         default_factory=lambda: config.defaults["limits.max_position_error"])
     max_tilt: float = field(
         default_factory=lambda: math.radians(config.defaults["limits.max_tilt_deg"]))
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         # frozen: set the checked floats through object.__setattr__
         object.__setattr__(self, "max_position_error", validate.positive(
             self.max_position_error, "Limits.max_position_error", "m"))
@@ -29,14 +50,28 @@ class Limits:
 
 
 class DivergenceCause(enum.IntEnum):
-    """Why a run stopped; ``describe(limits)`` says it in words. The values are the codes of
-    ``divergence_rule`` (0: running)."""
+    """Why a run stopped; ``describe(limits)`` says it in words.
+
+    The values are the codes of ``divergence_rule`` (0: running): ``NON_FINITE`` (1), a
+    non-finite state, controller state or input; ``POSITION_ERROR`` (2); ``TILT`` (3).
+    """
     NON_FINITE = 1
     POSITION_ERROR = 2
     TILT = 3
 
-    def describe(self, limits):
-        """A readable sentence naming the limit, e.g. 'position error over 10 m'."""
+    def describe(self, limits: Limits) -> str:
+        """A readable sentence naming the limit, e.g. 'position error over 10 m'.
+
+        Parameters
+        ----------
+        limits : Limits
+            The limits the run was held to (their values are named).
+
+        Returns
+        -------
+        str
+            The cause in words.
+        """
         if self is DivergenceCause.NON_FINITE:
             return "non-finite state, controller state or input"
         if self is DivergenceCause.POSITION_ERROR:
@@ -44,11 +79,29 @@ class DivergenceCause(enum.IntEnum):
         return f"|phi| or |theta| over {math.degrees(limits.max_tilt):.0f} deg"
 
 
-def divergence_code(x, position_error, limits, rest=0.0):
-    """SX: 0 while running, else the DivergenceCause value of a sample: the state x (12) with
-    its position error (m); ``rest`` is the sum of |.| of everything else the sample carries
-    (rotor thrusts, controller state, input), which must be finite too. Non-finite first, then
-    the position error, then the tilt."""
+def divergence_code(x: ca.SX, position_error: ca.SX | float, limits: Limits,
+                    rest: ca.SX | float = 0.0) -> ca.SX:
+    """The divergence code of a sample, as a CasADi expression.
+
+    Non-finite is checked first, then the position error, then the tilt.
+
+    Parameters
+    ----------
+    x : (12,) casadi.SX
+        The state [m, rad, m/s, rad/s].
+    position_error : casadi.SX or float
+        Its position error |p - p_ref| (m).
+    limits : Limits
+        When the sample counts as diverged.
+    rest : casadi.SX or float
+        The sum of |.| of everything else the sample carries (rotor thrusts, controller
+        state, input), which must be finite too.
+
+    Returns
+    -------
+    casadi.SX
+        0 while running, else the ``DivergenceCause`` value.
+    """
     # a sum propagates NaN (fmax would drop it) and overflows to inf
     finite = (ca.sum1(ca.fabs(x)) + position_error + rest) < np.inf
     tilt = ca.fmax(ca.fabs(x[3]), ca.fabs(x[4]))
@@ -58,12 +111,24 @@ def divergence_code(x, position_error, limits, rest=0.0):
                                  ca.if_else(tilt > limits.max_tilt, int(DivergenceCause.TILT), 0)))
 
 
-_rules = {}
+_rules: dict[Limits, ca.Function] = {}
 
 
-def divergence_rule(limits):
-    """CasADi Function (x (12), position_error, rest) -> code (see ``divergence_code``), one
-    per Limits (cached). ``first_divergence`` maps it over samples."""
+def divergence_rule(limits: Limits) -> ca.Function:
+    """The divergence rule as a CasADi Function, one per Limits (cached).
+
+    ``first_divergence`` maps it over samples.
+
+    Parameters
+    ----------
+    limits : Limits
+        When a sample counts as diverged.
+
+    Returns
+    -------
+    casadi.Function
+        ``divergence(x (12), position_error, rest) -> code`` (see ``divergence_code``).
+    """
     if limits not in _rules:
         x, e, rest = ca.SX.sym("x", 12), ca.SX.sym("position_error"), ca.SX.sym("rest")
         _rules[limits] = ca.Function("divergence", [x, e, rest],
@@ -72,17 +137,44 @@ def divergence_rule(limits):
     return _rules[limits]
 
 
-def magnitude(a):
-    """Sum of |a| over the last axis (inf or NaN when an entry is): the ``rest`` of
-    ``divergence_rule``, quietly."""
+def magnitude(a: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """Sum of |a| over the last axis: the ``rest`` of ``divergence_rule``, quietly.
+
+    Parameters
+    ----------
+    a : (..., k) array_like
+        What a sample carries besides its state (rotor thrusts, controller state, input).
+
+    Returns
+    -------
+    (...) numpy.ndarray
+        The sums (inf or NaN when an entry is; no warning).
+    """
     with np.errstate(over="ignore", invalid="ignore"):
         return np.abs(np.asarray(a, dtype=float)).sum(axis=-1)
 
 
-def first_divergence(x, position_error, limits, rest=None):
-    """(index, DivergenceCause) of the first diverged sample of x (N, 12) with errors (N,) and
-    ``rest`` (N,) (see ``divergence_code``; default 0), or (None, None): ``divergence_rule``
-    over every sample."""
+def first_divergence(x: npt.NDArray[np.float64], position_error: npt.ArrayLike, limits: Limits,
+                     rest: npt.ArrayLike | None = None
+                     ) -> tuple[int, DivergenceCause] | tuple[None, None]:
+    """The first diverged sample: ``divergence_rule`` over every sample.
+
+    Parameters
+    ----------
+    x : (N, 12) numpy.ndarray
+        States [m, rad, m/s, rad/s].
+    position_error : (N,) array_like
+        Their position errors (m).
+    limits : Limits
+        When a sample counts as diverged.
+    rest : (N,) array_like, optional
+        The ``rest`` of each sample (see ``divergence_code``); default 0.
+
+    Returns
+    -------
+    tuple of (int, DivergenceCause) or (None, None)
+        The index of the first diverged sample and why, or (None, None) when none is.
+    """
     n = x.shape[0]
     if n == 0:
         return None, None
@@ -96,9 +188,26 @@ def first_divergence(x, position_error, limits, rest=None):
     return int(hit[0]), DivergenceCause(int(codes[hit[0]]))
 
 
-def check_euler_singularity(t, x, limits):
-    """Raise EulerSingularityError when |theta| reaches pi/2 in x (N, 12) at times t (N,)
-    (only possible when the tilt limit is at or above 90 deg)."""
+def check_euler_singularity(t: npt.NDArray[np.float64], x: npt.NDArray[np.float64],
+                            limits: Limits) -> None:
+    """Raise EulerSingularityError when |theta| reaches pi/2.
+
+    Only possible when the tilt limit is at or above 90 deg.
+
+    Parameters
+    ----------
+    t : (N,) numpy.ndarray
+        Sample times (s).
+    x : (N, 12) numpy.ndarray
+        States [m, rad, m/s, rad/s].
+    limits : Limits
+        The run's limits (``max_tilt``).
+
+    Raises
+    ------
+    quadcog.EulerSingularityError
+        |theta| reached pi/2: the Euler-angle kinematics are singular there.
+    """
     if limits.max_tilt < np.pi / 2 - 1e-6:
         return
     th = np.abs(x[:, 4])

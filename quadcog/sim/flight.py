@@ -8,20 +8,24 @@ CoG is what it does not know).
 
 Controllers. A quadcog ``Controller`` runs on both paths. With ``path="python"`` any callable
 with the same protocol runs too: ``ctrl(t, x, ref, c)`` returns ``U`` (4,), or ``(U, c_dot)``
-when it has a state; t in s, x (12,), ref (14,) the reference row (``quadcog.trajectories.analytic``), c
-its state. Optional attributes, as on a Controller: ``n_state`` (default 0),
-``initial_state()`` (default zeros), ``project_numpy(c)`` (applied after each update),
-``estimates_cog`` (True when the first 3 states estimate r_G), ``name``.
+when it has a state; t in s, x (12,), ref (14,) the reference row
+(``quadcog.trajectories.analytic``), c its state. Optional attributes, as on a Controller:
+``n_state`` (default 0), ``initial_state()`` (default zeros), ``project_numpy(c)`` (applied
+after each update), ``estimates_cog`` (True when the first 3 states estimate r_G), ``name``.
 """
+from collections.abc import Callable
 import math
 import time
+from typing import Any
 import warnings
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.codegen.compiled import cached_compile
 from quadcog.codegen.fastcall import FastCall
+from quadcog.controllers.base import Controller
 from quadcog.errors import InputError, ReferenceWarning
 from quadcog.model.conventions import N_STATE, R_G
 from quadcog.model.functions import load
@@ -34,7 +38,7 @@ from quadcog.sim.divergence import (
     first_divergence,
     magnitude,
 )
-from quadcog.sim.plant import plant_step_function
+from quadcog.sim.plant import TruthOptions, plant_step_function
 from quadcog.sim.prepare import (
     RK4_LIMIT,
     as_cog_profile,
@@ -46,46 +50,77 @@ from quadcog.sim.prepare import (
     start_at_reference,
 )
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
-from quadcog.sim.schedule import truth_parameters
+from quadcog.sim.schedule import Schedule, truth_parameters
 from quadcog.sim.user_controller import user_call
 from quadcog.trajectories.feasibility import check_reference
+from quadcog.vehicles.vehicle import Vehicle
 
 # check_time ... start_at_reference live in quadcog.sim.prepare; importable here as before
 __all__ = ["simulate", "check_time", "check_step_size", "start_at_reference", "run_options",
            "as_cog_profile", "check_cog_changes", "RK4_LIMIT", "Limits"]
 
 
-def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=None,
-             controller_model=None, cog=None, disturbances=(), truth=None, x0=None,
-             path="compiled", limits=None, progress=None, check_dt=True):
+def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hover",
+             duration: float = 10.0, dt: float | None = None, vehicle: Vehicle | None = None,
+             controller_model: Vehicle | None = None, cog: Any = None, disturbances: Any = (),
+             truth: TruthOptions | None = None, x0: npt.ArrayLike | None = None,
+             path: str = "compiled", limits: Limits | None = None,
+             progress: Callable[[float], Any] | None = None, check_dt: bool = True
+             ) -> SimulationResult:
     """Fly one closed-loop run and return a SimulationResult.
 
     Parameters
     ----------
-    controller : a quadcog Controller, or (path="python" only) a callable with the same
-        protocol, ``ctrl(t, x, ref, c) -> U or (U, c_dot)`` (see the module docstring).
-    trajectory : a Trajectory, 'hover' | 'circle' | 'figure8' | 'helix', or a callable
-        (see quadcog.trajectories.analytic).
-    duration, dt : seconds (fixed-step RK4; dt defaults to
-        ``quadcog.config.defaults["simulate.dt"]``, 1 ms).
-    vehicle : the truth Vehicle that flies (default: the controller's model, or the
-        Hummingbird for a callable). Its CoG during the run is ``vehicle.r_G + cog(t)``.
-    controller_model : the Vehicle the controller is designed for, i.e. what it believes
-        (default: ``vehicle`` with r_G = 0 when ``vehicle`` is given, else the controller's own
-        model). The controller is redesigned for it with ``controller.for_vehicle``.
-    cog : a CogProfile or a list of (t, r, ramp) changes (m, body frame).
-    disturbances : Disturbance pulses.
-    truth : TruthOptions (parallel axis, rotor saturation, motor lag); default all off.
-    x0 : initial state (12,) (default: at the reference, level, with the reference velocity).
-    path : "compiled" (one compiled call per 1000 steps) or "python" (a step loop).
-    limits : Limits of divergence (default ``Limits()``).
-    progress : a callable(fraction), e.g. a ProgressBar.
-    check_dt : refuse a dt too large for RK4 on the closed loop at the start.
+    controller : Controller or callable
+        A quadcog Controller, or (path="python" only) a callable with the same protocol,
+        ``ctrl(t, x, ref, c) -> U or (U, c_dot)`` (see the module docstring).
+    trajectory : Trajectory, str or callable
+        A Trajectory, 'hover' | 'circle' | 'figure8' | 'helix', or a callable (see
+        quadcog.trajectories.analytic).
+    duration : float
+        Seconds (fixed-step RK4).
+    dt : float, optional
+        The step (s); default ``quadcog.config.defaults["simulate.dt"]``, 1 ms.
+    vehicle : Vehicle, optional
+        The truth Vehicle that flies (default: the controller's model, or the Hummingbird
+        for a callable). Its CoG during the run is ``vehicle.r_G + cog(t)``.
+    controller_model : Vehicle, optional
+        The Vehicle the controller is designed for, i.e. what it believes (default:
+        ``vehicle`` with r_G = 0 when ``vehicle`` is given, else the controller's own model).
+        The controller is redesigned for it with ``controller.for_vehicle``.
+    cog : CogProfile or list of (t, r, ramp), optional
+        The CoG changes (s, m in the body frame, s).
+    disturbances : sequence of Disturbance
+        Wrench pulses.
+    truth : TruthOptions, optional
+        Parallel axis, rotor saturation, motor lag; default all off.
+    x0 : (12,) array_like, optional
+        Initial state [m, rad, m/s, rad/s] (default: at the reference, level, with the
+        reference velocity).
+    path : {"compiled", "python"}
+        "compiled" (one compiled call per 1000 steps) or "python" (a step loop).
+    limits : Limits, optional
+        Limits of divergence (default ``Limits()``).
+    progress : callable, optional
+        ``progress(fraction)``, e.g. a ProgressBar.
+    check_dt : bool
+        Refuse a dt too large for RK4 on the closed loop at the start.
 
     Returns
     -------
-    SimulationResult. A diverged run stops at the first diverged sample (kept when finite);
-    result.metrics counts the samples before it and says when and why.
+    SimulationResult
+        A diverged run stops at the first diverged sample (kept when finite); result.metrics
+        counts the samples before it and says when and why.
+
+    Raises
+    ------
+    quadcog.InputError
+        An argument that is wrong (named, with what was expected), or a controller that
+        gives a non-finite input or state at t = 0.
+    quadcog.ParameterError
+        A vehicle that is inadmissible with one of the CoG changes.
+    quadcog.EulerSingularityError
+        |theta| reached pi/2 (only with a tilt limit at or above 90 deg).
     """
     setup = prepare_flight(controller, trajectory, duration, dt, vehicle, controller_model, cog,
                            disturbances, truth, x0, path, limits, progress, check_dt)
@@ -100,7 +135,8 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=Non
     return result
 
 
-def _check_reference(result, schedule, vehicle, limits):
+def _check_reference(result: SimulationResult, schedule: Schedule, vehicle: Vehicle,
+                     limits: Limits) -> None:
     """Metrics entry ``reference`` and a ReferenceWarning when the reference asks for more
     acceleration or jerk than the vehicle can give (quadcog.trajectories.feasibility)."""
     check = check_reference(schedule.t, schedule.ref, vehicle, limits.max_tilt)
@@ -228,7 +264,8 @@ def _result(setup, X, U, code, elapsed):
     if code:
         idx, cause = n - 1, DivergenceCause(code)
     else:
-        idx, cause = first_divergence(X[-1:, :N_STATE], e[-1:], limits, magnitude(X[-1:, N_STATE:]))
+        idx, cause = first_divergence(X[-1:, :N_STATE], e[-1:], limits,
+                                      magnitude(X[-1:, N_STATE:]))
         idx = None if idx is None else n - 1
     if idx == 0:       # x0 was checked: the controller's first output or state is not finite
         raise InputError(f"the controller gives a non-finite input or state at t = 0 (U = "

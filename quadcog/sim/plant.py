@@ -8,13 +8,21 @@ mapped to rotor thrusts by the inverse mixer, clipped, and mapped back. Saturati
 follow the clipped command with the vehicle's motor time constant.
 """
 from dataclasses import dataclass
+from typing import TypeVar
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import InputError
 from quadcog.model.conventions import IDX, R_G, hover_trim
-from quadcog.vehicles.vehicle import N_ROTORS
+from quadcog.model.functions import Model
+from quadcog.vehicles.vehicle import N_ROTORS, Vehicle
+
+__all__ = ["TruthOptions", "Actuation", "truth_arguments", "rk4_step_expression",
+           "plant_step_function", "initial_rotor_thrusts"]
+
+_Matrix = TypeVar("_Matrix", ca.SX, ca.DM)      # a symbolic or a numeric CasADi matrix
 
 
 @dataclass(frozen=True)
@@ -24,20 +32,28 @@ class TruthOptions:
 
     Parameters
     ----------
-    parallel_axis : the inertia about O follows the moving mass,
+    parallel_axis : bool
+        The inertia about O follows the moving mass,
         ``I_O = I_G + m (|r_G|^2 I - r_G r_G^T)``, ``I_G`` being the vehicle's diagonal inertia
         (its inertia about the CoG when r_G = 0).
-    rotor_saturation : each rotor's thrust is clipped to the vehicle's
+    rotor_saturation : bool
+        Each rotor's thrust is clipped to the vehicle's
         ``[min_rotor_thrust, max_rotor_thrust]`` (without it: to ``[0, inf)``).
-    motor_lag : rotor thrusts follow the clipped command through a first-order lag with the
+    motor_lag : bool
+        Rotor thrusts follow the clipped command through a first-order lag with the
         vehicle's ``motor_time_constant`` (adds 4 rotor-thrust states; a time constant of 0 is
         instant, i.e. no lag).
+
+    Raises
+    ------
+    quadcog.InputError
+        An option that is not True or False.
     """
     parallel_axis: bool = False
     rotor_saturation: bool = False
     motor_lag: bool = False
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("parallel_axis", "rotor_saturation", "motor_lag"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InputError(f"TruthOptions.{name} must be True or False, got "
@@ -46,8 +62,23 @@ class TruthOptions:
 
 @dataclass(frozen=True)
 class Actuation:
-    """The rotors of one vehicle under given truth options: what the plant step bakes in
-    (hashable, so it keys the compile cache). Build it with ``Actuation.of(vehicle, options)``.
+    """The rotors of one vehicle under given truth options: what the plant step bakes in.
+
+    It is hashable, so it keys the compile cache. Build it with
+    ``Actuation.of(vehicle, options)``.
+
+    Parameters
+    ----------
+    options : TruthOptions
+        The truth options it was built under.
+    mixer : tuple of 16 float
+        The (4, 4) mixer, row-major: U = mixer @ f.
+    lower : float
+        Lowest rotor thrust (N, per rotor).
+    upper : float
+        Highest rotor thrust (N, per rotor; inf without saturation).
+    time_constant : float
+        Motor time constant (s); 0: instant.
     """
     options: TruthOptions
     mixer: tuple                 # (4, 4) row-major, U = mixer @ f
@@ -56,8 +87,21 @@ class Actuation:
     time_constant: float         # s; 0: instant
 
     @classmethod
-    def of(cls, vehicle, options=None):
-        """The actuation of ``vehicle`` (a Vehicle) under ``options`` (TruthOptions)."""
+    def of(cls, vehicle: Vehicle, options: TruthOptions | None = None) -> "Actuation":
+        """The actuation of a vehicle under truth options.
+
+        Parameters
+        ----------
+        vehicle : Vehicle
+            Its mixer, rotor thrust limits and motor time constant are used.
+        options : TruthOptions, optional
+            Default ``TruthOptions()`` (all off).
+
+        Returns
+        -------
+        Actuation
+            The rotors as the truth model has them.
+        """
         options = options or TruthOptions()
         sat = options.rotor_saturation
         return cls(options, tuple(vehicle.mixer().ravel().tolist()),
@@ -66,16 +110,35 @@ class Actuation:
                    vehicle.motor_time_constant if options.motor_lag else 0.0)
 
     @property
-    def n_rotor_states(self):
+    def n_rotor_states(self) -> int:
         """4 when the rotor thrusts are states (motor lag with a time constant > 0), else 0."""
         return N_ROTORS if self.time_constant > 0 else 0
 
-    def mixer_matrix(self):
-        """The (4, 4) mixer as a numpy array."""
+    def mixer_matrix(self) -> npt.NDArray[np.float64]:
+        """The (4, 4) mixer as a numpy array.
+
+        Returns
+        -------
+        (4, 4) numpy.ndarray
+            U = mixer @ f (N, N m from rotor thrusts in N).
+        """
         return np.array(self.mixer).reshape(4, 4)
 
-    def rotor_command(self, U):
-        """Rotor thrusts (SX or DM 4x1) for input U: inverse mixer, then the limits."""
+    def rotor_command(self, U: _Matrix) -> _Matrix:
+        """Rotor thrusts for input U: inverse mixer, then the limits.
+
+        A non-finite command stays non-finite.
+
+        Parameters
+        ----------
+        U : (4,) casadi.SX or casadi.DM
+            The input [N, N m, N m, N m].
+
+        Returns
+        -------
+        (4,) casadi.SX or casadi.DM
+            Rotor thrusts (N).
+        """
         f = ca.DM(np.linalg.inv(self.mixer_matrix())) @ U
         clipped = ca.fmax(f, self.lower)
         if not np.isinf(self.upper):
@@ -83,15 +146,41 @@ class Actuation:
         # a non-finite command stays non-finite (fmax(NaN, 0) = 0 would hide a failed law)
         return ca.if_else(ca.fabs(f) < np.inf, clipped, f)
 
-    def rotor_command_numpy(self, U):
-        """``rotor_command`` for a numpy U (4,), or (B, 4) for many flights."""
+    def rotor_command_numpy(self, U: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """``rotor_command`` for numpy inputs, of one flight or many.
+
+        Parameters
+        ----------
+        U : (4,) or (B, 4) array_like
+            The input [N, N m, N m, N m], or one per flight.
+
+        Returns
+        -------
+        (4,) or (B, 4) numpy.ndarray
+            Rotor thrusts (N), within the limits.
+        """
         U = np.asarray(U, dtype=float)
         f = np.linalg.solve(self.mixer_matrix(), U.T).T
         return np.clip(f, self.lower, self.upper)
 
 
-def truth_arguments(p, options):
-    """(p with adjusted diagonal inertia, I_products) for the truth model (SX)."""
+def truth_arguments(p: ca.SX, options: TruthOptions) -> tuple[ca.SX, ca.SX]:
+    """The parameter and inertia-product arguments of the truth model.
+
+    Parameters
+    ----------
+    p : (14,) casadi.SX
+        The parameter vector (``quadcog.PARAM_NAMES``).
+    options : TruthOptions
+        With ``parallel_axis``, the inertia about O follows the CoG.
+
+    Returns
+    -------
+    p_eff : (14,) casadi.SX
+        ``p`` with the adjusted diagonal inertia (kg m^2).
+    products : (3,) casadi.SX
+        The products of inertia (Ixy, Ixz, Iyz) (kg m^2); zeros without ``parallel_axis``.
+    """
     if not options.parallel_axis:
         return p, ca.SX.zeros(3)
     m, r = p[IDX["m"]], p[R_G.start:R_G.stop]
@@ -101,12 +190,38 @@ def truth_arguments(p, options):
     return p_eff, -m * ca.vertcat(x * y, x * z, y * z)
 
 
-def rk4_step_expression(model, x, f, U, p, wrench, dt, actuation):
+def rk4_step_expression(model: Model, x: ca.SX, f: ca.SX, U: ca.SX, p: ca.SX, wrench: ca.SX,
+                        dt: ca.SX, actuation: Actuation) -> tuple[ca.SX, ca.SX, ca.SX]:
     """One RK4 step of length dt of the truth plant with U, p and wrench held.
 
-    x: 12 states; f: the rotor thrusts (4x1) when ``actuation.n_rotor_states`` is 4, else an
-    empty SX. Returns (x_next, f_next, U_applied): U_applied is the input the rotors deliver at
-    the start of the step (mixer @ rotor thrusts)."""
+    Parameters
+    ----------
+    model : Model
+        The generated functions (``truth_dynamics``).
+    x : (12,) casadi.SX
+        The state [m, rad, m/s, rad/s].
+    f : (4,) or (0,) casadi.SX
+        The rotor thrusts (N) when ``actuation.n_rotor_states`` is 4, else an empty SX.
+    U : (4,) casadi.SX
+        The commanded input [N, N m, N m, N m].
+    p : (14,) casadi.SX
+        The truth parameter vector.
+    wrench : (6,) casadi.SX
+        Disturbance force (N, ground axes) and moment (N m, body axes).
+    dt : casadi.SX
+        Step length (s).
+    actuation : Actuation
+        The rotors.
+
+    Returns
+    -------
+    x_next : (12,) casadi.SX
+        The state after the step.
+    f_next : (4,) or (0,) casadi.SX
+        The rotor thrusts after the step.
+    U_applied : (4,) casadi.SX
+        The input the rotors deliver at the start of the step (mixer @ rotor thrusts).
+    """
     truth = model.casadi_function("truth_dynamics")
     mix = ca.DM(actuation.mixer_matrix())
     p_eff, products = truth_arguments(p, actuation.options)
@@ -122,7 +237,7 @@ def rk4_step_expression(model, x, f, U, p, wrench, dt, actuation):
     tau = actuation.time_constant
     n = x.numel()
 
-    def rhs(s):
+    def rhs(s):  # type: ignore[no-redef]  # the motor-lag branch's rhs, of [x; f]
         xs, fs = s[:n], s[n:]
         return ca.vertcat(truth(xs, mix @ fs, p_eff, products, wrench), (f_cmd - fs) / tau)
 
@@ -135,9 +250,22 @@ def rk4_step_expression(model, x, f, U, p, wrench, dt, actuation):
     return s_next[:n], s_next[n:], mix @ f
 
 
-def plant_step_function(model, actuation):
-    """CasADi Function plant_step(x, f, U, p, wrench, dt) -> (x_next, f_next, U_applied);
-    f has ``actuation.n_rotor_states`` entries (0 or 4)."""
+def plant_step_function(model: Model, actuation: Actuation) -> ca.Function:
+    """The truth plant's RK4 step as a CasADi Function.
+
+    Parameters
+    ----------
+    model : Model
+        The generated functions.
+    actuation : Actuation
+        The rotors; f has ``actuation.n_rotor_states`` entries (0 or 4).
+
+    Returns
+    -------
+    casadi.Function
+        ``plant_step(x, f, U, p, wrench, dt) -> (x_next, f_next, U_applied)``, see
+        ``rk4_step_expression``.
+    """
     nf = actuation.n_rotor_states
     x, f, U, p = ca.SX.sym("x", 12), ca.SX.sym("f", nf), ca.SX.sym("U", 4), ca.SX.sym("p", 14)
     w, dt = ca.SX.sym("wrench", 6), ca.SX.sym("dt")
@@ -146,10 +274,24 @@ def plant_step_function(model, actuation):
                        ["x", "f", "U", "p", "wrench", "dt"], ["x_next", "f_next", "U_applied"])
 
 
-def initial_rotor_thrusts(P0, actuation):
-    """Rotor thrusts (n_rotor_states,) at t = 0: those of a level hover of the truth
-    parameters ``P0`` (14,) (r_G at t = 0), within the limits (the motors spin up before the
-    run starts); (B, n_rotor_states) for parameters (B, 14) of many flights."""
+def initial_rotor_thrusts(P0: npt.NDArray[np.float64], actuation: Actuation
+                          ) -> npt.NDArray[np.float64]:
+    """Rotor thrusts at t = 0: those of a level hover, within the limits.
+
+    The motors spin up before the run starts.
+
+    Parameters
+    ----------
+    P0 : (14,) or (B, 14) numpy.ndarray
+        The truth parameters (r_G at t = 0), of one flight or of B flights.
+    actuation : Actuation
+        The rotors.
+
+    Returns
+    -------
+    (n_rotor_states,) or (B, n_rotor_states) numpy.ndarray
+        Rotor thrusts (N); empty without motor lag.
+    """
     if not actuation.n_rotor_states:
         return np.zeros(np.shape(P0)[:-1] + (0,))
     return actuation.rotor_command_numpy(hover_trim(P0))

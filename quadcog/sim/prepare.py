@@ -6,10 +6,12 @@ designs the controller for its model, builds the schedule of per-step inputs and
 state, and hands the loop a ``FlightSetup``. The batch paths (``quadcog.sim.batch``,
 ``quadcog.sim.vector_batch``) use the same checks and ``batch_start``.
 """
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import config, validate
 from quadcog.controllers.base import Controller
@@ -39,7 +41,7 @@ RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region wi
 class FlightSetup:
     """Everything the step loop of one flight needs, checked.
 
-    Attributes
+    Parameters
     ----------
     controller : Controller or callable
         The controller, designed for its model (or a user's Python callable).
@@ -47,12 +49,12 @@ class FlightSetup:
         True for a quadcog Controller.
     vehicle : Vehicle
         The truth vehicle.
-    P : numpy.ndarray
-        (14,) the truth vehicle's parameters (r_G at the vehicle's own CoG).
+    P : (14,) numpy.ndarray
+        The truth vehicle's parameters (r_G at the vehicle's own CoG).
     schedule : Schedule
         The per-step inputs.
-    X0 : numpy.ndarray
-        (12 + rotor states + controller states,) the start.
+    X0 : (12 + rotor states + controller states,) numpy.ndarray
+        The start.
     actuation : Actuation
         The rotors as the truth model has them.
     limits : Limits
@@ -83,10 +85,34 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
 
     Parameters
     ----------
-    controller, trajectory, duration, dt, vehicle, controller_model, cog : see simulate
+    controller : Controller or callable
         As for ``quadcog.simulate``.
-    disturbances, truth, x0, path, limits, progress, check_dt : see simulate
+    trajectory : Trajectory, str or callable
         As for ``quadcog.simulate``.
+    duration : float
+        Seconds.
+    dt : float or None
+        The step (s); None for ``quadcog.config.defaults["simulate.dt"]``.
+    vehicle : Vehicle or None
+        The truth vehicle, as for ``quadcog.simulate``.
+    controller_model : Vehicle or None
+        What the controller believes, as for ``quadcog.simulate``.
+    cog : CogProfile, list of (t, r, ramp) or None
+        The CoG changes (s, m, s).
+    disturbances : sequence of Disturbance
+        Wrench pulses.
+    truth : TruthOptions or None
+        As for ``quadcog.simulate``.
+    x0 : (12,) array_like or None
+        Initial state [m, rad, m/s, rad/s].
+    path : {"compiled", "python"}
+        The step loop.
+    limits : Limits or None
+        As for ``quadcog.simulate``.
+    progress : callable or None
+        ``progress(fraction)``.
+    check_dt : bool
+        Refuse a dt too large for RK4 on the closed loop at the start.
 
     Returns
     -------
@@ -142,8 +168,8 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
                        f0.size)
 
 
-def batch_start(controller: Controller, actuation: Actuation, P0: np.ndarray,
-                x0: np.ndarray) -> np.ndarray:
+def batch_start(controller: Controller, actuation: Actuation, P0: npt.NDArray[np.float64],
+                x0: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """The start of many flights: state, rotor thrusts, controller state and accumulators.
 
     Parameters
@@ -152,16 +178,15 @@ def batch_start(controller: Controller, actuation: Actuation, P0: np.ndarray,
         Designed for its model already.
     actuation : Actuation
         The rotors (shared by the flights).
-    P0 : numpy.ndarray
-        (B, 14) each flight's truth parameters at t = 0 (its CoG at the start).
-    x0 : numpy.ndarray
-        (12,) the start state, shared.
+    P0 : (B, 14) numpy.ndarray
+        Each flight's truth parameters at t = 0 (its CoG at the start).
+    x0 : (12,) array_like
+        The start state [m, rad, m/s, rad/s], shared.
 
     Returns
     -------
-    numpy.ndarray
-        Z (B, 12 + rotor states + controller states + accumulators), as the monitored step
-        (``quadcog.sim.closed_loop``) takes it.
+    (B, 12 + rotor states + controller states + accumulators) numpy.ndarray
+        Z, as the monitored step (``quadcog.sim.closed_loop``) takes it.
     """
     nc, nf = controller.n_state, actuation.n_rotor_states
     nX = N_STATE + nf + nc
@@ -173,9 +198,29 @@ def batch_start(controller: Controller, actuation: Actuation, P0: np.ndarray,
     return Z
 
 
-def check_time(duration, dt):
-    """(duration, dt) as floats; InputError unless both are positive numbers (s), dt <=
-    duration and the step count is within ``config.defaults["simulate.max_steps"]``."""
+def check_time(duration: Any, dt: Any) -> tuple[float, float]:
+    """The checked duration and step of a run.
+
+    Parameters
+    ----------
+    duration : float
+        The run's duration (s).
+    dt : float
+        The step (s).
+
+    Returns
+    -------
+    duration : float
+        The duration (s).
+    dt : float
+        The step (s).
+
+    Raises
+    ------
+    quadcog.InputError
+        Unless both are positive numbers, dt <= duration and the step count is within
+        ``config.defaults["simulate.max_steps"]``.
+    """
     duration, dt = positive(duration, "duration", "s"), positive(dt, "dt", "s")
     if dt > duration:
         raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
@@ -184,10 +229,33 @@ def check_time(duration, dt):
 
 
 
-def run_options(truth, limits, progress):
-    """The checked (TruthOptions, Limits) of a run (defaults for None); a typed error naming
-    ``truth``, ``limits`` or ``progress`` when one is of the wrong kind. Shared by ``simulate``
-    and the batch paths."""
+def run_options(truth: TruthOptions | None, limits: Limits | None,
+                progress: Callable[[float], Any] | None) -> tuple[TruthOptions, Limits]:
+    """The checked truth options and limits of a run (defaults for None).
+
+    Shared by ``simulate`` and the batch paths.
+
+    Parameters
+    ----------
+    truth : TruthOptions, optional
+        Default ``TruthOptions()``.
+    limits : Limits, optional
+        Default ``Limits()``.
+    progress : callable, optional
+        ``progress(fraction)``; only checked here.
+
+    Returns
+    -------
+    options : TruthOptions
+        The truth options.
+    limits : Limits
+        The divergence limits.
+
+    Raises
+    ------
+    quadcog.InputError
+        Naming ``truth``, ``limits`` or ``progress`` when one is of the wrong kind.
+    """
     options = TruthOptions() if truth is None else truth
     if not isinstance(options, TruthOptions):
         validate.fail("truth", "a quadcog TruthOptions", truth)
@@ -200,11 +268,34 @@ def run_options(truth, limits, progress):
 
 
 
-def check_step_size(controller, x0, ref0, P, dt, actuation):
-    """Raise InputError if RK4 with step dt is unstable for the closed loop at the start, or
-    for the motor lag. ``controller`` may be None (a Python controller: no closed-loop check).
+def check_step_size(controller: Controller | None, x0: npt.NDArray[np.float64],
+                    ref0: npt.NDArray[np.float64], P: npt.NDArray[np.float64], dt: float,
+                    actuation: Actuation) -> None:
+    """Raise InputError if RK4 with step dt is unstable for the closed loop at the start.
 
-    The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from CasADi AD."""
+    Also for the motor lag. The closed-loop Jacobian d/dx f(x, U(x)) at (x0, ref0) comes from
+    CasADi AD.
+
+    Parameters
+    ----------
+    controller : Controller or None
+        None for a Python controller: no closed-loop check.
+    x0 : (12,) numpy.ndarray
+        The start state [m, rad, m/s, rad/s].
+    ref0 : (14,) numpy.ndarray
+        The reference row at t = 0.
+    P : (14,) numpy.ndarray
+        The truth parameters at t = 0.
+    dt : float
+        The step (s).
+    actuation : Actuation
+        The rotors (motor time constant).
+
+    Raises
+    ------
+    quadcog.InputError
+        dt too large for the motor time constant or for the closed loop's fastest eigenvalue.
+    """
     if actuation.n_rotor_states and dt / actuation.time_constant > RK4_LIMIT:
         raise InputError(f"dt = {dt} s is too large for the motor time constant "
                          f"{actuation.time_constant} s: RK4 needs dt < "
@@ -220,9 +311,19 @@ def check_step_size(controller, x0, ref0, P, dt, actuation):
 
 
 
-def start_at_reference(ref):
-    """The state (12,) on the reference row ``ref`` (14,): its position and heading, level,
-    moving with its velocity (expressed in body axes)."""
+def start_at_reference(ref: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """The state on a reference row: its position and heading, level, with its velocity.
+
+    Parameters
+    ----------
+    ref : (14,) numpy.ndarray
+        A reference row (``quadcog.trajectories.analytic``).
+
+    Returns
+    -------
+    (12,) numpy.ndarray
+        The state [m, rad, m/s, rad/s] (velocity expressed in body axes).
+    """
     x0 = np.zeros(N_STATE)
     x0[:3], x0[5] = ref[POS], ref[YAW]
     x0[6:9] = rotation_matrix(0.0, 0.0, ref[YAW]).T @ ref[VEL]
@@ -230,8 +331,24 @@ def start_at_reference(ref):
 
 
 
-def as_cog_profile(cog):
-    """A CogProfile from ``cog`` (None, a CogProfile or a list of (t, r, ramp) changes)."""
+def as_cog_profile(cog: Any) -> CogProfile:
+    """A CogProfile from what ``simulate`` takes as ``cog``.
+
+    Parameters
+    ----------
+    cog : CogProfile, list of (t, r, ramp) or None
+        The CoG changes (s, m, s).
+
+    Returns
+    -------
+    CogProfile
+        Empty for None.
+
+    Raises
+    ------
+    quadcog.InputError
+        ``cog`` is none of those.
+    """
     if cog is None:
         return CogProfile([])
     if isinstance(cog, CogProfile):
@@ -242,10 +359,24 @@ def as_cog_profile(cog):
 
 
 
-def check_cog_changes(P, cog):
-    """Raise ParameterError if the vehicle (parameters P) is inadmissible with any CoG of the
-    profile. The admissible set of r_G is convex (|r|^2 - (u.r)^2 is convex for every unit u),
-    so checking where each change ends covers the ramps between them."""
+def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile) -> None:
+    """Raise ParameterError if the vehicle is inadmissible with any CoG of the profile.
+
+    The admissible set of r_G is convex (|r|^2 - (u.r)^2 is convex for every unit u), so
+    checking where each change ends covers the ramps between them.
+
+    Parameters
+    ----------
+    P : (14,) numpy.ndarray
+        The vehicle's parameters.
+    cog : CogProfile
+        The CoG changes.
+
+    Raises
+    ------
+    quadcog.ParameterError
+        Naming the change whose CoG makes the vehicle inadmissible.
+    """
     for i, change in enumerate(cog.changes):
         check_parameters(with_cog(P, cog_at(P[R_G], 1.0, np.asarray(change.r))),
                          f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")

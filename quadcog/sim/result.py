@@ -1,88 +1,216 @@
 """What a simulation returns: arrays, metrics (one definition for every path), and a plot."""
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import config
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from quadcog.sim.divergence import DivergenceCause, Limits
+
+__all__ = ["Metrics", "metric_arrays", "metrics_from_sums", "position_errors", "flight_metrics",
+           "position_metrics", "SimulationResult"]
 
 
 @dataclass
 class Metrics:
     """Position-error metrics (m) of one flight, over the samples before any divergence.
 
-    rms_position_error, max_position_error; final_position_error (at the last counted
-    sample); rms_position_error_tail over the tail, the last
-    ``quadcog.config.defaults["metrics.tail_fraction"]`` of the run (inf when the run
-    diverged: it has no finished tail). diverged, diverged_at (s, the time of the first
-    diverged sample), diverged_cause (a DivergenceCause) and diverged_reason (in words).
-    r_hat_final, r_G_final: estimate and true CoG at the last counted sample (m; adaptive
-    controllers only)."""
+    Parameters
+    ----------
+    rms_position_error : float
+        RMS of the position error (m).
+    max_position_error : float
+        Its largest value (m).
+    final_position_error : float
+        At the last counted sample (m).
+    rms_position_error_tail : float
+        RMS over the tail, the last ``quadcog.config.defaults["metrics.tail_fraction"]`` of
+        the run (m; inf when the run diverged: it has no finished tail).
+    diverged : bool
+        True when the run stopped early.
+    diverged_at : float or None
+        The time of the first diverged sample (s).
+    diverged_cause : DivergenceCause or None
+        Why it diverged.
+    diverged_reason : str or None
+        The cause in words.
+    r_hat_final : list of 3 float or None
+        The CoG estimate at the last counted sample (m; adaptive controllers only).
+    r_G_final : list of 3 float or None
+        The true CoG at the last counted sample (m; adaptive controllers only).
+    reference : dict or None
+        ``quadcog.trajectories.feasibility.ReferenceCheck.as_dict()`` of the run.
+    """
     rms_position_error: float
     max_position_error: float
     final_position_error: float
     rms_position_error_tail: float
     diverged: bool = False
     diverged_at: float | None = None
-    diverged_cause: object = None
+    diverged_cause: "DivergenceCause | None" = None
     diverged_reason: str | None = None
     r_hat_final: list | None = None
     r_G_final: list | None = None
-    reference: dict | None = None    # quadcog.trajectories.feasibility.ReferenceCheck.as_dict() of the run
+    reference: dict | None = None    # feasibility.ReferenceCheck.as_dict() of the run
 
-    def as_dict(self):
-        """The metrics as a plain dict (the keys of metrics.json); the cause as its name."""
+    def as_dict(self) -> dict[str, Any]:
+        """The metrics as a plain dict (the keys of metrics.json).
+
+        Returns
+        -------
+        dict
+            The fields by name; the cause as its lower-case name.
+        """
         d = dict(self.__dict__)
         if self.diverged_cause is not None:
             d["diverged_cause"] = self.diverged_cause.name.lower()
         return d
 
 
-def metric_arrays(count, sum_sq, max_error, count_tail, sum_sq_tail, last_error, diverged):
-    """The metrics of many flights from their sums (arrays of one entry per flight): the one
-    definition behind single flights (``metrics_from_sums``) and batches.
+def metric_arrays(count: npt.ArrayLike, sum_sq: npt.ArrayLike, max_error: npt.ArrayLike,
+                  count_tail: npt.ArrayLike, sum_sq_tail: npt.ArrayLike,
+                  last_error: npt.ArrayLike, diverged: npt.ArrayLike
+                  ) -> dict[str, npt.NDArray[np.float64]]:
+    """The metrics of many flights from their sums (arrays of one entry per flight).
 
-    count, count_tail: samples counted (all, tail); sum_sq, sum_sq_tail: their sums of e^2
-    (m^2); max_error, last_error (m); diverged: bool. Returns {name: array}: the RMS (NaN
-    without samples), the tail RMS (inf for a diverged flight), the max and the final error."""
+    The one definition behind single flights (``metrics_from_sums``) and batches.
+
+    Parameters
+    ----------
+    count : (B,) array_like
+        Samples counted.
+    sum_sq : (B,) array_like
+        Their sums of e^2 (m^2).
+    max_error : (B,) array_like
+        Their largest e (m).
+    count_tail : (B,) array_like
+        Samples counted in the tail.
+    sum_sq_tail : (B,) array_like
+        Their sums of e^2 (m^2).
+    last_error : (B,) array_like
+        e at the last counted sample (m).
+    diverged : (B,) array_like of bool
+        True for a diverged flight.
+
+    Returns
+    -------
+    dict of str to (B,) numpy.ndarray
+        rms_position_error (NaN without samples), max_position_error,
+        rms_position_error_tail (inf for a diverged flight) and final_position_error (m).
+    """
     count, count_tail = np.asarray(count, float), np.asarray(count_tail, float)
     with np.errstate(invalid="ignore", divide="ignore"):
-        rms = np.where(count > 0, np.sqrt(np.asarray(sum_sq, float) / np.where(count > 0, count, 1)),
+        rms = np.where(count > 0,
+                       np.sqrt(np.asarray(sum_sq, float) / np.where(count > 0, count, 1)),
                        np.nan)
         tail = np.where(count_tail > 0, np.sqrt(np.asarray(sum_sq_tail, float)
                                                 / np.where(count_tail > 0, count_tail, 1)), np.nan)
     tail = np.where(np.asarray(diverged, bool), np.inf, tail)
     return {"rms_position_error": rms, "max_position_error": np.asarray(max_error, float),
-            "rms_position_error_tail": tail, "final_position_error": np.asarray(last_error, float)}
+            "rms_position_error_tail": tail,
+            "final_position_error": np.asarray(last_error, float)}
 
 
-def metrics_from_sums(count, sum_sq, max_error, count_tail, sum_sq_tail, last_error,
-                      diverged_at=None, cause=None, limits=None):
+def metrics_from_sums(count: float, sum_sq: float, max_error: float, count_tail: float,
+                      sum_sq_tail: float, last_error: float, diverged_at: float | None = None,
+                      cause: "DivergenceCause | None" = None, limits: "Limits | None" = None
+                      ) -> Metrics:
     """Metrics of one flight from the sums of the squared position errors over the counted
-    samples (``metric_arrays``, for one flight).
+    samples.
 
-    count, count_tail: samples counted (all, tail); sum_sq, sum_sq_tail: their sums of e^2
-    (m^2); max_error, last_error (m). cause: a DivergenceCause or None, described with
-    ``limits``."""
+    ``metric_arrays``, for one flight.
+
+    Parameters
+    ----------
+    count : float
+        Samples counted.
+    sum_sq : float
+        Their sum of e^2 (m^2).
+    max_error : float
+        Their largest e (m).
+    count_tail : float
+        Samples counted in the tail.
+    sum_sq_tail : float
+        Their sum of e^2 (m^2).
+    last_error : float
+        e at the last counted sample (m).
+    diverged_at : float, optional
+        Time of the first diverged sample (s), with ``cause``.
+    cause : DivergenceCause, optional
+        Why the run diverged; None when it did not.
+    limits : Limits, optional
+        The limits ``cause`` is described with.
+
+    Returns
+    -------
+    Metrics
+        RMS values are NaN when nothing was counted.
+    """
     m = metric_arrays([count], [sum_sq], [max_error], [count_tail], [sum_sq_tail],
                       [last_error], [cause is not None])
     return Metrics(
-        **{k: float(v[0]) for k, v in m.items()},
+        # the four float metrics by name (mypy matches a dict to every field)
+        **{k: float(v[0]) for k, v in m.items()},  # type: ignore[arg-type]
         diverged=cause is not None,
-        diverged_at=None if cause is None else float(diverged_at),
+        # diverged_at and limits come with a cause
+        diverged_at=None if cause is None else float(diverged_at),  # type: ignore[arg-type]
         diverged_cause=cause,
-        diverged_reason=None if cause is None else cause.describe(limits))
+        diverged_reason=(None if cause is None
+                         else cause.describe(limits)))  # type: ignore[arg-type]
 
 
-def position_errors(x, ref):
-    """|p - p_ref| (N,) (m) of states x (N, >= 3) and reference rows ref (N, >= 3); a
-    diverged sample may overflow to inf, quietly."""
+def position_errors(x: npt.NDArray[np.float64], ref: npt.NDArray[np.float64]
+                    ) -> npt.NDArray[np.float64]:
+    """The position errors |p - p_ref|.
+
+    Parameters
+    ----------
+    x : (N, >= 3) numpy.ndarray
+        States (position first, m).
+    ref : (N, >= 3) numpy.ndarray
+        Reference rows (position first, m).
+
+    Returns
+    -------
+    (N,) numpy.ndarray
+        |p - p_ref| (m); a diverged sample may overflow to inf, quietly.
+    """
     with np.errstate(over="ignore", invalid="ignore"):
         return np.linalg.norm(x[:, :3] - ref[:, :3], axis=1)
 
 
-def flight_metrics(e, tail, diverged_index=None, diverged_at=None, cause=None, limits=None):
-    """Metrics of position errors e (N,) (m) with the tail mask ``tail`` (N,): samples before
-    ``diverged_index`` (all when None) count."""
+def flight_metrics(e: npt.NDArray[np.float64], tail: npt.NDArray[Any],
+                   diverged_index: int | None = None, diverged_at: float | None = None,
+                   cause: "DivergenceCause | None" = None, limits: "Limits | None" = None
+                   ) -> Metrics:
+    """Metrics of the position errors of one flight.
+
+    Parameters
+    ----------
+    e : (N,) numpy.ndarray
+        Position errors (m).
+    tail : (N,) numpy.ndarray of bool or float
+        The tail mask (nonzero in the tail).
+    diverged_index : int, optional
+        Samples before it count (all when None).
+    diverged_at : float, optional
+        Time of the first diverged sample (s).
+    cause : DivergenceCause, optional
+        Why the run diverged.
+    limits : Limits, optional
+        The limits ``cause`` is described with.
+
+    Returns
+    -------
+    Metrics
+        See ``metrics_from_sums``.
+    """
     n = e.size if diverged_index is None else diverged_index
     e, tail = e[:n], np.asarray(tail[:n], dtype=bool)
     return metrics_from_sums(n, float(e @ e), float(e.max()) if n else float("nan"),
@@ -90,10 +218,31 @@ def flight_metrics(e, tail, diverged_index=None, diverged_at=None, cause=None, l
                              float(e[-1]) if n else float("nan"), diverged_at, cause, limits)
 
 
-def position_metrics(t, x, ref, duration, tail_fraction=None):
-    """Metrics (a dict) of the position error ||p - p_ref|| of x (N, 12) sampled at ``t``
-    (N,); the tail is the last ``tail_fraction`` of ``duration`` (default:
-    ``config.defaults["metrics.tail_fraction"]``)."""
+def position_metrics(t: npt.NDArray[np.float64], x: npt.NDArray[np.float64],
+                     ref: npt.NDArray[np.float64], duration: float,
+                     tail_fraction: float | None = None) -> dict[str, float]:
+    """Metrics of the position error ||p - p_ref|| of a sampled flight.
+
+    Parameters
+    ----------
+    t : (N,) numpy.ndarray
+        Sample times (s).
+    x : (N, 12) numpy.ndarray
+        States [m, rad, m/s, rad/s].
+    ref : (N, >= 3) numpy.ndarray
+        Reference rows.
+    duration : float
+        The run's duration (s).
+    tail_fraction : float, optional
+        The tail is the last ``tail_fraction`` of ``duration`` (default:
+        ``config.defaults["metrics.tail_fraction"]``).
+
+    Returns
+    -------
+    dict of str to float
+        rms_position_error, max_position_error, final_position_error and
+        rms_position_error_tail (m).
+    """
     tail_fraction = config.get("metrics.tail_fraction", tail_fraction)
     m = flight_metrics(position_errors(x, ref), t >= (1 - tail_fraction) * duration - 1e-12)
     return {k: getattr(m, k) for k in ("rms_position_error", "max_position_error",
@@ -102,9 +251,31 @@ def position_metrics(t, x, ref, duration, tail_fraction=None):
 
 @dataclass
 class SimulationResult:
-    """One flight. Arrays are sampled at the step times t (N,): state x (N, 12), applied input
-    U (N, 4) (held over each step; the last row repeats), reference ref (N, 11), the estimate
-    r_hat (N, 3) (zeros for controllers without one) and the true CoG r_G (N, 3)."""
+    """One flight, sampled at the step times.
+
+    Parameters
+    ----------
+    t : (N,) numpy.ndarray
+        Step times (s).
+    x : (N, 12) numpy.ndarray
+        State [m, rad, m/s, rad/s].
+    U : (N, 4) numpy.ndarray
+        Applied input [N, N m, N m, N m] (held over each step; the last row repeats).
+    ref : (N, 14) numpy.ndarray
+        Reference rows (``quadcog.trajectories.analytic``).
+    r_hat : (N, 3) numpy.ndarray
+        The CoG estimate (m; zeros for controllers without one).
+    r_G : (N, 3) numpy.ndarray
+        The true CoG (m, body frame).
+    metrics : Metrics
+        The flight's metrics.
+    controller : str
+        The controller's name.
+    path : str
+        'compiled' or 'python'.
+    info : dict
+        More about the run (e.g. "seconds", "scenario", "disturbances").
+    """
     t: np.ndarray
     x: np.ndarray
     U: np.ndarray
@@ -117,13 +288,30 @@ class SimulationResult:
     info: dict = field(default_factory=dict)
 
     @property
-    def diverged(self):
+    def diverged(self) -> bool:
         """True when the run stopped early (see metrics.diverged_at, diverged_cause)."""
         return self.metrics.diverged
 
-    def plot(self, path=None, title=None, **options):
-        """The flight figure (``quadcog.viz.plots.plot_flight``: position, position error,
-        attitude, inputs and, when it moves, the CoG); saved to ``path`` if given. Returns the
-        matplotlib Figure."""
+    def plot(self, path: str | Path | None = None, title: str | None = None,
+             **options: Any) -> "Figure":
+        """The flight figure; saved to ``path`` if given.
+
+        ``quadcog.viz.plots.plot_flight``: position, position error, attitude, inputs and,
+        when it moves, the CoG.
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            Where to save the figure (PNG); the figure is then closed.
+        title : str, optional
+            Replaces the title's first part.
+        **options
+            Further keywords of ``plot_flight`` (``name``, ``disturbances``).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+        """
         from quadcog.viz.plots import plot_flight
         return plot_flight(self, path, title=title, **options)

@@ -6,35 +6,82 @@ wrench, the step length (0 for padding steps, which change nothing) and whether 
 the tail of the metrics. The compiled steps take these as named inputs (``STEP_INPUTS``),
 never as columns of one table.
 """
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import config
 from quadcog.model.conventions import R_G
 from quadcog.sim.timeline import CogProfile, wrench_table
-from quadcog.trajectories.analytic import REF_SIZE
+from quadcog.trajectories.analytic import REF_SIZE, Trajectory
+
+__all__ = ["STEP_INPUTS", "tail_start", "cog_at", "truth_parameters", "Schedule"]
 
 # (name, rows) of the per-step inputs of the compiled steps, in their order
 STEP_INPUTS = (("t", 1), ("dt", 1), ("ref", REF_SIZE), ("cog", 3), ("cog_scale", 1),
                ("wrench", 6), ("tail", 1))
 
 
-def tail_start(duration):
-    """Time (s) from which the tail metrics count: the last ``metrics.tail_fraction``."""
+def tail_start(duration: float) -> float:
+    """Time from which the tail metrics count: the last ``metrics.tail_fraction``.
+
+    Parameters
+    ----------
+    duration : float
+        The run's duration (s).
+
+    Returns
+    -------
+    float
+        The start of the tail (s).
+    """
     return (1 - config.defaults["metrics.tail_fraction"]) * duration
 
 
-def cog_at(r_vehicle, cog_scale, cog):
-    """The CoG r_G (m) at a step: ``cog_scale * r_vehicle + cog``; numpy arrays (any leading
-    shape) or CasADi symbols. The one place where r_G(t) is formed."""
+def cog_at(r_vehicle: Any, cog_scale: Any, cog: Any) -> Any:
+    """The CoG r_G at a step: ``cog_scale * r_vehicle + cog``.
+
+    The one place where r_G(t) is formed. Numpy arrays (any leading shape, broadcast) or
+    CasADi symbols.
+
+    Parameters
+    ----------
+    r_vehicle : (..., 3) numpy.ndarray or casadi.SX
+        The vehicle's own CoG offset (m, body frame).
+    cog_scale : float, numpy.ndarray or casadi.SX
+        Its scale at the step (1 for single flights).
+    cog : (..., 3) numpy.ndarray or casadi.SX
+        The CoG profile's offset at the step (m).
+
+    Returns
+    -------
+    (..., 3) numpy.ndarray or casadi.SX
+        r_G (m, body frame).
+    """
     return cog_scale * r_vehicle + cog
 
 
-def truth_parameters(P, cog_scale, cog):
-    """The truth parameter vector at a step: P (14,) with r_G = ``cog_at(r_G(P), ...)``
-    (numpy or CasADi)."""
+def truth_parameters(P: Any, cog_scale: Any, cog: Any) -> Any:
+    """The truth parameter vector at a step: P with r_G = ``cog_at(r_G(P), ...)``.
+
+    Parameters
+    ----------
+    P : (14,) numpy.ndarray or casadi.SX
+        The vehicle's parameter vector.
+    cog_scale : float, numpy.ndarray or casadi.SX
+        The scale of the vehicle's own r_G at the step.
+    cog : (3,) numpy.ndarray or casadi.SX
+        The CoG profile's offset at the step (m).
+
+    Returns
+    -------
+    (14,) numpy.ndarray or casadi.SX
+        P with the step's r_G (a copy for numpy).
+    """
     r = cog_at(P[R_G], cog_scale, cog)
     if isinstance(P, np.ndarray):
         out = P.copy()
@@ -47,10 +94,25 @@ def truth_parameters(P, cog_scale, cog):
 class Schedule:
     """The per-step inputs of one run, sampled at t_0 .. t_n (N = n + 1 samples).
 
-    t (N,) s; dt (N,) s (the length of the step starting there; 0 for padding); ref (N, 14);
-    cog (N, 3) m (the CoG profile); cog_scale (N,) (1 for single flights); wrench (N, 6);
-    tail (N,) 1.0 where the sample counts for the tail metrics. Arrays are C-contiguous, so a
-    block of rows is one column-major CasADi matrix per input.
+    Arrays are C-contiguous, so a block of rows is one column-major CasADi matrix per input.
+    Build it with ``Schedule.build``.
+
+    Parameters
+    ----------
+    t : (N,) numpy.ndarray
+        Sample times (s).
+    dt : (N,) numpy.ndarray
+        The length of the step starting there (s; 0 for padding).
+    ref : (N, 14) numpy.ndarray
+        Reference rows (``quadcog.trajectories.analytic``).
+    cog : (N, 3) numpy.ndarray
+        The CoG profile (m, body frame).
+    cog_scale : (N,) numpy.ndarray
+        Scale of the vehicle's own r_G (1 for single flights).
+    wrench : (N, 6) numpy.ndarray
+        Disturbance force (N, ground axes) and moment (N m, body axes).
+    tail : (N,) numpy.ndarray
+        1.0 where the sample counts for the tail metrics.
     """
     t: np.ndarray
     dt: np.ndarray
@@ -61,10 +123,31 @@ class Schedule:
     tail: np.ndarray
 
     @classmethod
-    def build(cls, trajectory, duration, dt, cog=None, disturbances=(), cog_scale=None):
-        """Sample a run: ``trajectory`` (a Trajectory), ``duration`` and ``dt`` (s, checked by
-        the caller), ``cog`` (a CogProfile or None), ``disturbances`` (Disturbance pulses),
-        ``cog_scale`` (a function of t, or None for 1)."""
+    def build(cls, trajectory: Trajectory, duration: float, dt: float,
+              cog: CogProfile | None = None, disturbances: Iterable[Any] | None = (),
+              cog_scale: Callable[[float], float] | None = None) -> "Schedule":
+        """Sample a run.
+
+        Parameters
+        ----------
+        trajectory : Trajectory
+            The reference.
+        duration : float
+            The run's duration (s, checked by the caller).
+        dt : float
+            The step (s, checked by the caller).
+        cog : CogProfile, optional
+            The CoG changes (default none).
+        disturbances : sequence of Disturbance
+            Wrench pulses (or what ``as_disturbances`` accepts).
+        cog_scale : callable, optional
+            ``cog_scale(t)``, the scale of the vehicle's own r_G at time t (s); None for 1.
+
+        Returns
+        -------
+        Schedule
+            The per-step inputs at t_k = k dt, k = 0 .. round(duration / dt).
+        """
         n = int(round(duration / dt))
         t = np.arange(n + 1) * dt
         cog = cog if cog is not None else CogProfile()
@@ -77,17 +160,41 @@ class Schedule:
         return cls(**{k: np.ascontiguousarray(v, dtype=float) for k, v in arrays.items()})
 
     @property
-    def n_steps(self):
+    def n_steps(self) -> int:
         """Number of steps n (samples N = n + 1)."""
         return self.t.size - 1
 
-    def r_G(self, r_vehicle):
-        """(N, 3) r_G at every sample for a vehicle whose own offset is ``r_vehicle`` (3,)."""
+    def r_G(self, r_vehicle: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The CoG at every sample.
+
+        Parameters
+        ----------
+        r_vehicle : (3,) array_like
+            The vehicle's own CoG offset (m, body frame).
+
+        Returns
+        -------
+        (N, 3) numpy.ndarray
+            r_G (m) at every sample.
+        """
         return cog_at(np.asarray(r_vehicle, float)[None, :], self.cog_scale[:, None], self.cog)
 
-    def padded(self, multiple):
-        """A schedule whose step count is a multiple of ``multiple``: padding steps repeat the
-        last sample with dt = 0 and tail = 0, so they change neither state nor sums."""
+    def padded(self, multiple: int) -> "Schedule":
+        """A schedule whose step count is a multiple of ``multiple``.
+
+        Padding steps repeat the last sample with dt = 0 and tail = 0, so they change neither
+        state nor sums.
+
+        Parameters
+        ----------
+        multiple : int
+            The step count to pad to a multiple of (e.g. ``CHUNK``).
+
+        Returns
+        -------
+        Schedule
+            This schedule when no padding is needed, else a padded copy.
+        """
         n_pad = -(-self.n_steps // multiple) * multiple - self.n_steps
         if n_pad == 0:
             return self
@@ -99,21 +206,62 @@ class Schedule:
         out["tail"][self.t.size:] = 0.0
         return Schedule(**out)
 
-    def rows(self, start, stop, *extra):
-        """Steps start .. stop - 1 as one (stop - start, n_row) C-contiguous array: the
-        per-step inputs side by side in ``STEP_INPUTS`` order, then the ``extra`` arrays
-        (N, k) (the layout of ``quadcog.sim.closed_loop.packed``)."""
+    def rows(self, start: int, stop: int, *extra: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Steps start .. stop - 1 as one C-contiguous array of rows.
+
+        The layout of ``quadcog.sim.closed_loop.packed``.
+
+        Parameters
+        ----------
+        start : int
+            First step.
+        stop : int
+            One past the last step.
+        *extra : (N, k) array_like
+            Further per-step arrays, appended to each row.
+
+        Returns
+        -------
+        (stop - start, n_row) numpy.ndarray
+            The per-step inputs side by side in ``STEP_INPUTS`` order, then ``extra``.
+        """
         parts = [a.reshape(stop - start, -1) for a in self.block(start, stop)]
         parts += [np.asarray(a, dtype=float)[start:stop].reshape(stop - start, -1)
                   for a in extra]
         return np.ascontiguousarray(np.hstack(parts))
 
-    def matrices(self, start, stop):
-        """The per-step inputs of steps start .. stop - 1 as CasADi-shaped matrices (rows x
-        steps, one per input in ``STEP_INPUTS`` order), for the mapped CasADi functions."""
+    def matrices(self, start: int, stop: int) -> list[npt.NDArray[np.float64]]:
+        """The per-step inputs of steps start .. stop - 1 as CasADi-shaped matrices.
+
+        For the mapped CasADi functions.
+
+        Parameters
+        ----------
+        start : int
+            First step.
+        stop : int
+            One past the last step.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            One (rows, stop - start) matrix per input, in ``STEP_INPUTS`` order.
+        """
         return [a.T if a.ndim == 2 else a[None, :] for a in self.block(start, stop)]
 
-    def block(self, start, stop):
-        """The per-step inputs of steps start .. stop - 1 as a list of C-contiguous arrays in
-        ``STEP_INPUTS`` order (views, no copies)."""
+    def block(self, start: int, stop: int) -> list[npt.NDArray[np.float64]]:
+        """The per-step inputs of steps start .. stop - 1 (views, no copies).
+
+        Parameters
+        ----------
+        start : int
+            First step.
+        stop : int
+            One past the last step.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            C-contiguous (stop - start, ...) arrays in ``STEP_INPUTS`` order.
+        """
         return [getattr(self, name)[start:stop] for name, _ in STEP_INPUTS]

@@ -34,9 +34,13 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
+from quadcog.vehicles.vehicle import Vehicle
+
+__all__ = ["DEG", "GYRO_NOISE_DENSITY", "Sensing", "gaussian", "Sensed"]
 
 DEG = np.pi / 180.0
 GYRO_NOISE_DENSITY = 0.005 * DEG          # rad/s/sqrt(Hz), MPU-6000
@@ -46,13 +50,26 @@ GYRO_NOISE_DENSITY = 0.005 * DEG          # rad/s/sqrt(Hz), MPU-6000
 class Sensing:
     """What the controller's measurements suffer (SI units; see the module docstring).
 
-    noise : add the Gaussian noise below to the state the controller sees.
-    delay : apply each computed input one control period later.
-    seed : integer seed of the noise and of the gyroscope bias.
-    position, velocity, attitude : standard deviations (m, m/s, rad).
-    gyro_density : rate-noise spectral density (rad/s/sqrt(Hz)); the per-sample standard
-        deviation is gyro_density * sqrt(1 / (2 dt)).
-    gyro_bias : standard deviation of the constant gyroscope bias per axis (rad/s).
+    Parameters
+    ----------
+    noise : bool
+        Add the Gaussian noise below to the state the controller sees.
+    delay : bool
+        Apply each computed input one control period later.
+    seed : int
+        Seed of the noise and of the gyroscope bias.
+    position, velocity, attitude : float
+        Standard deviations (m, m/s in body axes, rad), >= 0.
+    gyro_density : float
+        Rate-noise spectral density (rad/s/sqrt(Hz)); the per-sample standard deviation is
+        gyro_density * sqrt(1 / (2 dt)).
+    gyro_bias : float
+        Standard deviation of the constant gyroscope bias per axis (rad/s).
+
+    Raises
+    ------
+    quadcog.InputError
+        A field of the wrong kind or a negative accuracy.
     """
     noise: bool = True
     delay: bool = True
@@ -63,7 +80,7 @@ class Sensing:
     gyro_density: float = GYRO_NOISE_DENSITY
     gyro_bias: float = 0.1 * DEG
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("noise", "delay"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InputError(f"Sensing.{name} must be True or False, got "
@@ -76,17 +93,34 @@ class Sensing:
                     or v < 0:
                 raise InputError(f"Sensing.{name} must be a number >= 0, got {v!r}")
 
-    def sigmas(self, dt):
-        """Per-sample standard deviations of the 12 state entries."""
+    def sigmas(self, dt: float) -> npt.NDArray[np.float64]:
+        """Per-sample standard deviations of the 12 state entries.
+
+        Parameters
+        ----------
+        dt : float
+            The sample (control) period (s).
+
+        Returns
+        -------
+        (12,) numpy.ndarray
+            In the state's order [m, rad, m/s, rad/s].
+        """
         gyro = self.gyro_density * np.sqrt(1.0 / (2.0 * dt))
         return np.repeat([self.position, self.attitude, self.velocity, gyro], 3)
 
-    def bias(self):
-        """The constant gyroscope bias (3,) of this seed (rad/s)."""
+    def bias(self) -> npt.NDArray[np.float64]:
+        """The constant gyroscope bias of this seed.
+
+        Returns
+        -------
+        (3,) numpy.ndarray
+            The bias of the body rates (rad/s).
+        """
         return np.random.default_rng(self.seed).normal(scale=self.gyro_bias, size=3)
 
 
-def _uniform(t, channel, seed):
+def _uniform(t: ca.SX, channel: int, seed: int) -> ca.SX:
     """A pseudo-random number in (0, 1) from t (SX): fract(sin(a t + b) * 43758.5453)."""
     a = 12989.8 + 78.233 * channel + 0.618 * seed
     b = 1.7 * channel + 3.1 * seed
@@ -94,19 +128,49 @@ def _uniform(t, channel, seed):
     return ca.fmin(ca.fmax(v - ca.floor(v), 1e-12), 1 - 1e-12)
 
 
-def gaussian(t, channel, seed):
-    """A standard normal sample per (t, channel, seed) (SX), by Box-Muller."""
+def gaussian(t: ca.SX, channel: int, seed: int) -> ca.SX:
+    """A standard normal sample per (t, channel, seed), by Box-Muller.
+
+    Parameters
+    ----------
+    t : casadi.SX
+        The time (s).
+    channel : int
+        Which noise channel (one per state entry).
+    seed : int
+        The seed.
+
+    Returns
+    -------
+    casadi.SX
+        The sample.
+    """
     u1, u2 = _uniform(t, 2 * channel, seed), _uniform(t, 2 * channel + 1, seed)
     return ca.sqrt(-2 * ca.log(u1)) * ca.cos(2 * np.pi * u2)
 
 
 class Sensed(Controller):
-    """``controller`` flown with ``sensing`` (a Sensing) at control period ``dt`` (s).
+    """``controller`` flown with ``sensing`` at control period ``dt``.
 
     The state is the inner controller's state followed, with ``delay``, by the input computed
-    in the previous period (4). ``estimates_cog`` and the projection pass through."""
+    in the previous period (4). ``estimates_cog`` and the projection pass through.
 
-    def __init__(self, controller, sensing, dt):
+    Parameters
+    ----------
+    controller : Controller
+        The controller that sees the measurements.
+    sensing : Sensing
+        What the measurements suffer.
+    dt : float
+        The control period (s), > 0.
+
+    Raises
+    ------
+    quadcog.InputError
+        An argument of the wrong kind, or dt not a positive number.
+    """
+
+    def __init__(self, controller: Controller, sensing: Sensing, dt: float) -> None:
         if not isinstance(controller, Controller):
             raise InputError(f"controller must be a quadcog Controller, got {controller!r}")
         if not isinstance(sensing, Sensing):
@@ -123,25 +187,77 @@ class Sensed(Controller):
         self._sigma = sensing.sigmas(dt)
         self._bias = np.r_[np.zeros(9), sensing.bias()]
 
-    def for_vehicle(self, vehicle):
+    def for_vehicle(self, vehicle: Vehicle) -> "Sensed":
+        """This sensed controller with its inner controller designed for ``vehicle``.
+
+        Parameters
+        ----------
+        vehicle : Vehicle
+            The controller's model.
+
+        Returns
+        -------
+        Sensed
+            ``self`` when that is already its model.
+        """
         if vehicle == self.vehicle:
             return self
         return Sensed(self.inner.for_vehicle(vehicle), self.sensing, self.dt)
 
-    def initial_state(self):
+    def initial_state(self) -> npt.NDArray[np.float64]:
+        """The state at t = 0: the inner controller's, then (``delay``) the hover input.
+
+        Returns
+        -------
+        (n_state,) numpy.ndarray
+            The controller state.
+        """
         c = self.inner.initial_state()
         if self.sensing.delay:
             c = np.r_[c, self.vehicle.hover_input()]
         return c
 
-    def measured(self, t, x):
-        """The state the controller sees (SX)."""
+    def measured(self, t: ca.SX, x: ca.SX) -> ca.SX:
+        """The state the controller sees.
+
+        Parameters
+        ----------
+        t : casadi.SX
+            The time (s).
+        x : (12,) casadi.SX
+            The true state [m, rad, m/s, rad/s].
+
+        Returns
+        -------
+        (12,) casadi.SX
+            x with the noise and the gyroscope bias (x itself without ``noise``).
+        """
         if not self.sensing.noise:
             return x
         noise = ca.vertcat(*[gaussian(t, i, self.sensing.seed) for i in range(12)])
         return x + ca.DM(self._sigma) * noise + ca.DM(self._bias)
 
-    def expression(self, t, x, ref, c):
+    def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The law: the inner law on the measured state, its input held one period.
+
+        Parameters
+        ----------
+        t : casadi.SX
+            The time (s).
+        x : (12,) casadi.SX
+            The true state [m, rad, m/s, rad/s].
+        ref : (14,) casadi.SX
+            The reference row.
+        c : (n_state,) casadi.SX
+            The controller state.
+
+        Returns
+        -------
+        U : (4,) casadi.SX
+            The input [N, N m, N m, N m].
+        c_dot : (n_state,) casadi.SX
+            The controller state's derivative.
+        """
         inner_c = c[:self.n_inner]
         U, c_dot = self.inner.function()(t, self.measured(t, x), ref, inner_c)
         if not self.sensing.delay:
@@ -150,9 +266,33 @@ class Sensed(Controller):
         # the Euler update c + dt c_dot stores exactly the new input for the next period
         return held, ca.vertcat(c_dot, (U - held) / self.dt)
 
-    def project(self, c):
+    def project(self, c: ca.SX) -> ca.SX:
+        """The inner controller's projection of its part of the state.
+
+        Parameters
+        ----------
+        c : (n_state,) casadi.SX
+            The controller state after an update step.
+
+        Returns
+        -------
+        (n_state,) casadi.SX
+            The projected state.
+        """
         return ca.vertcat(self.inner.project(c[:self.n_inner]), c[self.n_inner:])
 
-    def project_numpy(self, c):
+    def project_numpy(self, c: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """``project`` for numpy arrays, in place.
+
+        Parameters
+        ----------
+        c : (n_state,) numpy.ndarray
+            The controller state after an update step.
+
+        Returns
+        -------
+        (n_state,) numpy.ndarray
+            ``c``, projected in place.
+        """
         self.inner.project_numpy(c[:self.n_inner])
         return c

@@ -1,16 +1,31 @@
 """What happens to the vehicle over time: the CoG profile r_G(t) and disturbance pulses."""
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.errors import InputError
 from quadcog.model.parameters import LARGEST
 
+__all__ = ["CogChange", "CogProfile", "Disturbance", "wrench_table", "as_disturbances"]
+
 
 @dataclass(frozen=True)
 class CogChange:
-    """From time ``t`` (s) the CoG moves to ``r`` (m, body frame) over ``ramp`` s (0: a step)."""
+    """From time ``t`` the CoG moves to ``r`` over ``ramp`` (0: a step).
+
+    Parameters
+    ----------
+    t : float
+        Start of the change (s).
+    r : tuple of 3 float
+        The CoG offset it moves to (m, body frame).
+    ramp : float
+        Duration of the linear ramp (s; 0: a step).
+    """
     t: float
     r: tuple
     ramp: float = 0.0
@@ -18,10 +33,22 @@ class CogChange:
 
 @dataclass
 class CogProfile:
-    """r_G(t): zero before the first change, then each change in turn (linear ramps)."""
+    """r_G(t): zero before the first change, then each change in turn (linear ramps).
+
+    Parameters
+    ----------
+    changes : sequence of CogChange
+        The changes in time order; also tuples (t, r[, ramp]) or dicts with keys t, r and
+        ramp, checked and turned into CogChanges.
+
+    Raises
+    ------
+    quadcog.InputError
+        A change that is not one of those, or changes out of time order.
+    """
     changes: list = field(default_factory=list)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         clean, last = [], -np.inf
         if isinstance(self.changes, (str, bytes, dict)) or not hasattr(self.changes, "__iter__"):
             validate.fail("cog", "a CogProfile or a list of changes (t, r[, ramp])", self.changes)
@@ -48,12 +75,36 @@ class CogProfile:
         self.changes = clean
 
     @classmethod
-    def step(cls, t, r):
-        """A single step to ``r`` (m) at time ``t`` (s)."""
+    def step(cls, t: float, r: Sequence[float]) -> "CogProfile":
+        """A single step of the CoG.
+
+        Parameters
+        ----------
+        t : float
+            When (s).
+        r : (3,) sequence of float
+            The CoG offset it steps to (m, body frame).
+
+        Returns
+        -------
+        CogProfile
+            One change, without a ramp.
+        """
         return cls([CogChange(t, tuple(r), 0.0)])
 
-    def sample(self, t):
-        """(N, 3) r_G at the times ``t`` (s)."""
+    def sample(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The CoG offset at given times.
+
+        Parameters
+        ----------
+        t : (N,) array_like
+            Times (s).
+
+        Returns
+        -------
+        (N, 3) numpy.ndarray
+            r_G (m, body frame).
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         r = np.zeros((t.size, 3))
         prev = np.zeros(3)
@@ -71,14 +122,30 @@ class CogProfile:
 
 @dataclass(frozen=True)
 class Disturbance:
-    """A wrench pulse from ``t`` for ``duration`` s: ``force`` (N, ground axes, at O) and
-    ``moment`` (N m, body axes)."""
+    """A wrench pulse from ``t`` for ``duration``.
+
+    Parameters
+    ----------
+    t : float
+        Start (s), >= 0.
+    duration : float
+        Length (s), > 0.
+    force : (3,) tuple of float
+        Force (N, ground axes, at O).
+    moment : (3,) tuple of float
+        Moment (N m, body axes).
+
+    Raises
+    ------
+    quadcog.InputError
+        A field that is not a number in its range.
+    """
     t: float
     duration: float
     force: tuple = (0.0, 0.0, 0.0)
     moment: tuple = (0.0, 0.0, 0.0)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("force", "moment"):
             v = validate.array(getattr(self, name), f"disturbance {name}", (3,),
                                what=f"3 finite numbers ({'N' if name == 'force' else 'N m'})")
@@ -91,8 +158,21 @@ class Disturbance:
         object.__setattr__(self, "t", validate.nonnegative(self.t, "disturbance t", "s"))
 
 
-def wrench_table(disturbances, t):
-    """(N, 6) summed wrench of all pulses active at the times ``t`` (s)."""
+def wrench_table(disturbances: Any, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """The summed wrench of all pulses active at given times.
+
+    Parameters
+    ----------
+    disturbances : sequence of Disturbance or None
+        The pulses (or what ``as_disturbances`` accepts).
+    t : (N,) array_like
+        Times (s).
+
+    Returns
+    -------
+    (N, 6) numpy.ndarray
+        Force (N, ground axes) and moment (N m, body axes).
+    """
     t = np.atleast_1d(np.asarray(t, dtype=float))
     w = np.zeros((t.size, 6))
     for d in as_disturbances(disturbances):
@@ -101,9 +181,25 @@ def wrench_table(disturbances, t):
     return w
 
 
-def as_disturbances(disturbances):
-    """A list of Disturbance from Disturbance objects, dicts of their fields or tuples
-    (t, duration[, force[, moment]]); InputError naming the entry otherwise."""
+def as_disturbances(disturbances: Any) -> list[Disturbance]:
+    """A list of Disturbance from what a user may write.
+
+    Parameters
+    ----------
+    disturbances : sequence or None
+        Disturbance objects, dicts of their fields or tuples (t, duration[, force[,
+        moment]]); None for none.
+
+    Returns
+    -------
+    list of Disturbance
+        The checked pulses.
+
+    Raises
+    ------
+    quadcog.InputError
+        Naming the entry that is none of those.
+    """
     if disturbances is None:
         return []
     if isinstance(disturbances, (Disturbance, dict, str, bytes)) or not hasattr(

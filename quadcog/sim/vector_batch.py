@@ -3,34 +3,59 @@ of their CoG changes (not in their times): the engine of sweeps.
 
 Flight b's CoG is ``r_G(t) = r_G(P[b]) + sum_j s_j(t) D[b, 3j:3j+3]``, where s_j is the shape
 (0 -> 1, step or ramp) of CoG change j, shared by all flights. The closed-loop step is the
-monitored step of ``quadcog.sim.closed_loop`` (the same divergence rule and metric accumulators as
-``simulate_batch``); this module feeds it the per-flight CoG and runs it either through the
-vectorized C kernel of ``quadcog.codegen.vector_kernel`` (flights in the vector lanes) or, without a C
-compiler, through CasADi's map.
+monitored step of ``quadcog.sim.closed_loop`` (the same divergence rule and metric
+accumulators as ``simulate_batch``); this module feeds it the per-flight CoG and runs it
+either through the vectorized C kernel of ``quadcog.codegen.vector_kernel`` (flights in the
+vector lanes) or, without a C compiler, through CasADi's map.
 """
+from collections.abc import Sequence
 import time
+from typing import Any
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
 from quadcog import config
+from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
-from quadcog.sim.batch import batch_metrics, run_kernel, run_map
+from quadcog.sim.batch import BatchResult, batch_metrics, run_kernel, run_map
 from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
-from quadcog.sim.plant import Actuation
+from quadcog.sim.divergence import Limits
+from quadcog.sim.plant import Actuation, TruthOptions
 from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference
 from quadcog.sim.schedule import STEP_INPUTS, Schedule, cog_at
 from quadcog.sim.timeline import CogChange, CogProfile
 from quadcog.trajectories.registry import as_trajectory
+from quadcog.vehicles.vehicle import Vehicle
+
+__all__ = ["sweep_step", "cog_shapes", "fly_batch"]
 
 
-def sweep_step(controller, actuation, limits, n_changes):
-    """SX Function (Z, Q, per-step inputs (``STEP_INPUTS``), shapes) -> Z_next: the monitored
-    step with the flight's CoG.
+def sweep_step(controller: Controller, actuation: Actuation, limits: Limits, n_changes: int
+               ) -> ca.Function:
+    """The monitored step with the flight's CoG, as an SX Function.
 
-    Q = [P (14); D (3 n_changes)] per flight; shapes = [s_1 .. s_J] at the step. Padding steps
-    have dt = 0 and change nothing (the monitored step counts only dt > 0)."""
+    Padding steps have dt = 0 and change nothing (the monitored step counts only dt > 0).
+
+    Parameters
+    ----------
+    controller : Controller
+        The law (designed for its model already).
+    actuation : Actuation
+        The truth's rotors.
+    limits : Limits
+        The divergence limits.
+    n_changes : int
+        J, the number of CoG changes.
+
+    Returns
+    -------
+    casadi.Function
+        ``sweep_step(Z, Q, per-step inputs (STEP_INPUTS), shapes) -> Z_next``, with
+        Q = [P (14); D (3 J)] per flight and shapes = [s_1 .. s_J] at the step.
+    """
     step = monitored_step(controller, actuation, limits)
     nZ = step.size1_in(0)
     Z, Q = ca.SX.sym("Z", nZ), ca.SX.sym("Q", N_PARAM + 3 * n_changes)
@@ -41,52 +66,85 @@ def sweep_step(controller, actuation, limits, n_changes):
     cog = ca.SX.zeros(3)
     for j in range(n_changes):
         cog = cog + shapes[j] * Q[N_PARAM + 3 * j:N_PARAM + 3 * j + 3]
-    inputs = dict(per_step, cog=cog, cog_scale=1.0)
+    inputs: dict[str, Any] = dict(per_step, cog=cog, cog_scale=1.0)
     Z_next = step(Z, Q[:N_PARAM], *[inputs[name] for name, _ in STEP_INPUTS])
     names = [name for name, _ in STEP_INPUTS]
     return ca.Function("sweep_step", [Z, Q] + [per_step[n] for n in names] + [shapes],
                        [Z_next], ["Z", "Q"] + names + ["shapes"], ["Z_next"])
 
 
-def cog_shapes(times, cog_times):
-    """(N, J) shapes s_j (0 -> 1, a step or a ramp) of the CoG changes (t, ramp) at ``times``."""
+def cog_shapes(times: npt.NDArray[np.float64], cog_times: Sequence[tuple[float, float]]
+               ) -> npt.NDArray[np.float64]:
+    """The shapes s_j (0 -> 1, a step or a ramp) of the CoG changes.
+
+    Parameters
+    ----------
+    times : (N,) numpy.ndarray
+        Sample times (s).
+    cog_times : sequence of (t, ramp)
+        Start and ramp (s) of each of the J changes.
+
+    Returns
+    -------
+    (N, J) numpy.ndarray
+        s_j at each time.
+    """
     shapes = [CogProfile([CogChange(t, (1.0, 0.0, 0.0), ramp)]).sample(times)[:, 0]
               for t, ramp in cog_times]
     return np.ascontiguousarray(np.column_stack(shapes) if shapes else
                                 np.zeros((len(times), 0)))
 
 
-def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=None,
-              cog_times=(), disturbances=(), truth=None, limits=None, x0=None, threads=1,
-              kernel="auto", precision="float64"):
+def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayLike,
+              trajectory: Any = "hover", duration: float = 10.0, dt: float | None = None,
+              cog_times: Sequence[tuple[float, float]] = (), disturbances: Any = (),
+              truth: TruthOptions | None = None, limits: Limits | None = None,
+              x0: npt.ArrayLike | None = None, threads: int = 1, kernel: str = "auto",
+              precision: str = "float64") -> BatchResult:
     """Fly ``controller`` (designed for its model already) with each truth vehicle and CoG
     increments D (B, 3 J).
 
     Parameters
     ----------
-    controller : quadcog Controller
+    controller : Controller
+        The law, designed for its model already.
     vehicles : sequence of B Vehicles
         The truth vehicles; they may differ in their 14 parameters, not in their rotors (the
         caller checks that).
-    D : (B, 3 J) array
+    D : (B, 3 J) array_like
         Size of each of the J CoG changes per flight (m), see the module docstring.
-    trajectory, duration, dt, disturbances, truth, limits
+    trajectory : Trajectory, str or callable
         As for ``quadcog.simulate``.
+    duration, dt : float
+        Seconds, as for ``quadcog.simulate`` (dt default
+        ``quadcog.config.defaults["simulate.dt"]``).
     cog_times : sequence of (t, ramp)
         Start (s) and ramp (s, 0 for a step) of each CoG change, shared by all flights.
-    x0 : (12,) array or None
-        Initial state (default: at the reference).
+    disturbances : sequence of Disturbance
+        As for ``quadcog.simulate``.
+    truth : TruthOptions, optional
+        As for ``quadcog.simulate``.
+    limits : Limits, optional
+        As for ``quadcog.simulate``.
+    x0 : (12,) array_like or None
+        Initial state [m, rad, m/s, rad/s] (default: at the reference).
     threads : int
         Threads that share the flights.
-    kernel : "auto", "vector" or "casadi"
+    kernel : {"auto", "vector", "casadi"}
         The vectorized C kernel ("auto" when a C compiler is there) or CasADi's map.
-    precision : "float64" or "float32"
+    precision : {"float64", "float32"}
         The vector kernel's precision. float32 is for measuring only (bench/precision.py):
         its metrics are not within 1e-4 of float64's (docs/performance.md).
 
     Returns
     -------
     quadcog.BatchResult
+        One entry per flight.
+
+    Raises
+    ------
+    quadcog.InputError
+        A precision other than float64 with kernel='casadi'.
     """
     if precision != "float64" and kernel == "casadi":
         raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
@@ -106,7 +164,8 @@ def fly_batch(controller, vehicles, D, trajectory="hover", duration=10.0, dt=Non
         x0 = start_at_reference(schedule.ref[0])
     P0 = P.copy()
     if J:           # each flight's CoG at t = 0
-        P0[:, R_G] = cog_at(P[:, R_G], 1.0, np.einsum("j,bjk->bk", shapes[0], D.reshape(B, J, 3)))
+        P0[:, R_G] = cog_at(P[:, R_G], 1.0,
+                            np.einsum("j,bjk->bk", shapes[0], D.reshape(B, J, 3)))
     Z = batch_start(controller, actuation, P0, x0)
     Q = np.hstack([P, D])
     t0 = time.perf_counter()

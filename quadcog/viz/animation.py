@@ -8,18 +8,47 @@ drawn with the same factor, so it is to scale with the body.
 """
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from quadcog.errors import InputError
 from quadcog.model import columns as col
 from quadcog.model.conventions import rotation_matrix
 
+if TYPE_CHECKING:
+    from quadcog.vehicles.vehicle import Vehicle
+
+__all__ = ["ROTOR_RADIUS", "read_run", "frame_times", "animate_run"]
+
 ROTOR_RADIUS = 0.3         # rotor disc radius as a fraction of the arm length (drawing only)
 
 
-def read_run(run_dir):
-    """(table (N, 37), metrics dict, Vehicle) of a folder written by `quadcog run`."""
+def read_run(run_dir: str | Path
+             ) -> tuple[npt.NDArray[np.float64], dict, "Vehicle"]:
+    """What a folder written by `quadcog run` holds.
+
+    Parameters
+    ----------
+    run_dir : str or Path
+        The run folder (trajectory.csv or trajectory.parquet; metrics.json and vehicle.json
+        when present).
+
+    Returns
+    -------
+    table : (N, 37) numpy.ndarray
+        The trajectory, columns ``quadcog.model.columns.trajectory_columns()``.
+    metrics : dict
+        metrics.json ({} without it).
+    vehicle : Vehicle
+        vehicle.json (the Hummingbird without it).
+
+    Raises
+    ------
+    quadcog.InputError
+        No such folder, no trajectory file, or unexpected columns.
+    """
     from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
@@ -31,7 +60,8 @@ def read_run(run_dir):
         header = csv_path.open().readline().strip().split(",")
         if tuple(header) != names:
             raise InputError(f"{csv_path}: unexpected columns (expected those of "
-                             f"quadcog.model.columns.trajectory_columns(), starting {names[:3]})")
+                             "quadcog.model.columns.trajectory_columns(), starting "
+                             f"{names[:3]})")
         table = np.loadtxt(csv_path, delimiter=",", skiprows=1, ndmin=2)
     elif pq_path.is_file():
         import pyarrow.parquet as pq
@@ -42,16 +72,37 @@ def read_run(run_dir):
     metrics_path = run_dir / "metrics.json"
     metrics = json.loads(metrics_path.read_text()) if metrics_path.is_file() else {}
     vehicle_path = run_dir / "vehicle.json"
-    vehicle = (Vehicle(**{k: (tuple(map(tuple, v)) if k == "rotor_positions" else
+    # vehicle.json holds Vehicle's own keywords (mypy cannot match a dict to them)
+    vehicle = (Vehicle(**{k: (tuple(map(tuple, v)) if k == "rotor_positions" else  # type: ignore[arg-type]
                               tuple(v) if isinstance(v, list) else v)
                           for k, v in json.loads(vehicle_path.read_text()).items()})
                if vehicle_path.is_file() else HUMMINGBIRD)
     return table, metrics, vehicle
 
 
-def frame_times(t, fps, speed, max_frames):
-    """Sample times of the frames: ``speed`` simulated seconds per second at ``fps``, raised so
-    that there are at most ``max_frames``; always includes the last sample."""
+def frame_times(t: npt.NDArray[np.float64], fps: float, speed: float, max_frames: int
+                ) -> npt.NDArray[np.float64]:
+    """Sample times of the frames.
+
+    ``speed`` simulated seconds per second at ``fps``, raised so that there are at most
+    ``max_frames``; always includes the last sample.
+
+    Parameters
+    ----------
+    t : (N,) numpy.ndarray
+        The run's sample times (s), increasing.
+    fps : float
+        Frames per second of the GIF.
+    speed : float
+        Simulated seconds per second of GIF.
+    max_frames : int
+        At most this many frames.
+
+    Returns
+    -------
+    (F,) numpy.ndarray
+        The frames' times (s).
+    """
     step = speed / fps
     span = t[-1] - t[0]
     if span / step + 1 > max_frames:
@@ -60,7 +111,8 @@ def frame_times(t, fps, speed, max_frames):
     return np.append(times, t[-1]) if times[-1] < t[-1] else times
 
 
-def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
+def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int = 15,
+                speed: float = 1.0, max_frames: int = 120) -> Path:
     """Write the GIF of a run folder; returns its path.
 
     Parameters
@@ -76,6 +128,16 @@ def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
         Simulated seconds per second of GIF (1 = real time).
     max_frames : int
         At most this many frames (the speed is raised to fit).
+
+    Returns
+    -------
+    Path
+        The GIF written.
+
+    Raises
+    ------
+    quadcog.InputError
+        A speed that is not positive, or a run folder ``read_run`` refuses.
     """
     import matplotlib
     matplotlib.use("Agg", force=False)
@@ -126,10 +188,12 @@ def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
                        label="CoG estimate" if estimating else None)
     clock = ax.text2D(0.02, 0.95, "", transform=ax.transAxes, fontsize=11)
     name = metrics.get("name")
+    # metrics.get("controller") may be None, which mypy refuses as a key (the lookup then gives
+    # the default) and then takes ctl for str | None; it is a str of metrics.json
     ctl = {"pd": "cascade_pd", "fl": "feedback_linearization",
-           "adaptive": "adaptive_feedback_linearization"}.get(metrics.get("controller"),
+           "adaptive": "adaptive_feedback_linearization"}.get(metrics.get("controller"),  # type: ignore[arg-type]
                                                                metrics.get("controller", ""))
-    ax.set_title(f"{flight_title(ctl, name)}\nvehicle and CoG offset drawn {scale:.1f}x",
+    ax.set_title(f"{flight_title(ctl, name)}\nvehicle and CoG offset drawn {scale:.1f}x",  # type: ignore[arg-type]
                  fontsize=10)
     fig.legend(loc="lower center", ncol=4, fontsize=8, frameon=False)
 

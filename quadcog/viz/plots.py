@@ -4,54 +4,113 @@ Every panel says its unit; legends sit above their panel, outside the data; dist
 are shaded on every panel. ``flight_title`` is the one naming scheme for runs, used by
 ``SimulationResult.plot``, ``quadcog run`` and ``quadcog paper``.
 """
+from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from quadcog.files import plot_text
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["CONTROLLER_LABELS", "COG_STILL", "controller_label", "flight_title", "status_text",
+           "cog_moves", "plot_flight"]
+
 # how a controller (its ``name`` attribute) is called in titles
-CONTROLLER_LABELS = {"cascade_pd": "cascade PD", "feedback_linearization": "feedback linearization",
+CONTROLLER_LABELS = {"cascade_pd": "cascade PD",
+                     "feedback_linearization": "feedback linearization",
                      "adaptive_feedback_linearization": "adaptive FL"}
 # a CoG (or estimate) that changes by less than this over the run is "not moving": no panel
 COG_STILL = 1e-6           # m
 
 
-def controller_label(name):
-    """'adaptive_feedback_linearization' -> 'adaptive FL'; unknown names with spaces."""
+def controller_label(name: str) -> str:
+    """How a controller is called in titles.
+
+    Parameters
+    ----------
+    name : str
+        The controller's ``name``, e.g. 'adaptive_feedback_linearization'.
+
+    Returns
+    -------
+    str
+        Its label, e.g. 'adaptive FL' (``CONTROLLER_LABELS``); unknown names with spaces.
+    """
     return CONTROLLER_LABELS.get(name, str(name).replace("_", " "))
 
 
-def flight_title(controller, name=None):
-    """The title of a run: '<scenario name>: <controller>' ('fig6: adaptive FL'), or only the
-    controller when the run has no scenario name."""
+def flight_title(controller: str, name: str | None = None) -> str:
+    """The title of a run.
+
+    Parameters
+    ----------
+    controller : str
+        The controller's ``name``.
+    name : str, optional
+        The scenario's name.
+
+    Returns
+    -------
+    str
+        '<scenario name>: <controller>' ('fig6: adaptive FL'), or only the controller when
+        the run has no scenario name.
+    """
     label = controller_label(controller)
     return f"{name}: {label}" if name else label
 
 
-def status_text(metrics):
-    """'tail RMS error 3.78 cm' or 'diverged at 1.350 s (tilt)'."""
+def status_text(metrics: Any) -> str:
+    """How a run ended, in a few words.
+
+    Parameters
+    ----------
+    metrics : quadcog.Metrics
+        The run's metrics.
+
+    Returns
+    -------
+    str
+        'tail RMS error 3.78 cm' or 'diverged at 1.350 s (tilt)'.
+    """
     if metrics.diverged:
         return f"diverged at {metrics.diverged_at:.3f} s ({metrics.diverged_reason})"
     return f"tail RMS error {100 * metrics.rms_position_error_tail:.2f} cm"
 
 
-def cog_moves(result):
-    """True when the true CoG r_G or the estimate r_hat changes during the run."""
+def cog_moves(result: Any) -> bool:
+    """Whether the CoG or its estimate moves during a run.
+
+    Parameters
+    ----------
+    result : quadcog.SimulationResult
+        The run (``r_G`` and ``r_hat``, (N, 3), m).
+
+    Returns
+    -------
+    bool
+        True when the true CoG r_G or the estimate r_hat changes by more than ``COG_STILL``.
+    """
     return any(np.ptp(a, axis=0).max() > COG_STILL for a in (result.r_G, result.r_hat)
                if len(a))
 
 
-def _intervals(disturbances):
+def _intervals(disturbances: Iterable[Any] | None) -> list[tuple[float, float]]:
     return [(float(d.t), float(d.t) + float(d.duration)) for d in disturbances or ()]
 
 
-def plot_flight(result, path=None, name=None, title=None, disturbances=None):
+def plot_flight(result: Any, path: str | Path | None = None, name: str | None = None,
+                title: str | None = None, disturbances: Iterable[Any] | None = None
+                ) -> "Figure":
     """The flight figure of a SimulationResult; saved to ``path`` (PNG) if given.
 
     Parameters
     ----------
-    result : SimulationResult
+    result : quadcog.SimulationResult
+        The run: t (N,) s, x (N, 12), U (N, 4), ref (N, 14), r_G and r_hat (N, 3) m,
+        metrics, controller and info.
     path : str or Path, optional
         Where to save the figure (dpi 100); the figure is then closed.
     name : str, optional
@@ -65,6 +124,7 @@ def plot_flight(result, path=None, name=None, title=None, disturbances=None):
     Returns
     -------
     matplotlib.figure.Figure
+        The figure (closed when saved).
     """
     import matplotlib
     if path is not None:
@@ -77,7 +137,9 @@ def plot_flight(result, path=None, name=None, title=None, disturbances=None):
     show_cog = cog_moves(result)
     layout = [["P", "A"], ["E", "C" if show_cog else "E"], ["T", "M"]]
     with plt.rc_context({"font.size": 11, "legend.fontsize": 9}):
-        fig, ax = plt.subplot_mosaic(layout, figsize=(12, 9), sharex=True)
+        # matplotlib's stub asks for list[HashableList[str]]; a list of lists of str is one
+        fig, ax = plt.subplot_mosaic(layout, figsize=(12, 9),  # type: ignore[arg-type]
+                                     sharex=True)
         for i, (axis, col) in enumerate(zip("xyz", ("C0", "C1", "C2"))):
             ax["P"].plot(t, x[:, i], color=col, label=axis)
             ax["P"].plot(t, ref[:, i], color=col, ls="--", lw=1)
@@ -99,8 +161,9 @@ def plot_flight(result, path=None, name=None, title=None, disturbances=None):
         if show_cog:
             for i, (axis, col) in enumerate(zip(("x_G", "y_G", "z_G"), ("C0", "C1", "C2"))):
                 estimating = np.any(result.r_hat)
-                ax["C"].plot(t, 100 * result.r_G[:, i], color=col, ls="--" if estimating else "-",
-                             lw=1.2, label=None if estimating else axis)
+                ax["C"].plot(t, 100 * result.r_G[:, i], color=col,
+                             ls="--" if estimating else "-", lw=1.2,
+                             label=None if estimating else axis)
                 if estimating:
                     ax["C"].plot(t, 100 * result.r_hat[:, i], color=col,
                                  label=f"{axis} estimate")

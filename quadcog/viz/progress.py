@@ -1,13 +1,28 @@
 """A minimal progress bar on stderr for long runs."""
 import sys
 import time
+from typing import TextIO
+
+__all__ = ["ProgressBar"]
 
 
 class ProgressBar:
-    """Call with a fraction in [0, 1]; prints at most every 0.2 s, finishes on close().
-    On a stream that is not a terminal (a log, CI) it prints only the final line."""
+    """A progress bar: call it with a fraction in [0, 1].
 
-    def __init__(self, label, stream=None, width=30):
+    It prints at most every 0.2 s and finishes on close(). On a stream that is not a terminal
+    (a log, CI) it prints only the final line.
+
+    Parameters
+    ----------
+    label : str
+        Printed before the bar.
+    stream : file-like, optional
+        Where to print (default ``sys.stderr``).
+    width : int
+        Characters of the bar.
+    """
+
+    def __init__(self, label: str, stream: TextIO | None = None, width: int = 30) -> None:
         self.label, self.stream, self.width = label, stream or sys.stderr, width
         self._last = 0.0
         self._t0 = time.perf_counter()
@@ -15,7 +30,7 @@ class ProgressBar:
         self._fraction = 0.0
         self._called = False
 
-    def __call__(self, fraction):
+    def __call__(self, fraction: float) -> None:
         self._fraction, self._called = fraction, True
         if not self._live:
             return
@@ -28,7 +43,7 @@ class ProgressBar:
                           f"{100 * fraction:5.1f}% {now - self._t0:6.1f} s")
         self.stream.flush()
 
-    def close(self):
+    def close(self) -> None:
         """Print the final state of the bar and end the line (nothing if never called)."""
         if not self._called:
             return
