@@ -31,32 +31,7 @@ def _modules():
     return ["quadcog"] + sorted(out)
 
 
-# The modules held to this so far (a module, or a package and everything below it); the rest of
-# the package joins as its docstrings are written.
-CHECKED = ("quadcog.kinds", "quadcog.controllers.registry", "quadcog.trajectories.registry",
-           "quadcog.scenarios.lookup", "quadcog.scenarios.keys", "quadcog.scenarios.schema",
-           "quadcog.vehicles",
-           "quadcog.trajectories",
-           "quadcog.controllers",
-           "quadcog.scenarios",
-           "quadcog.sweeps",
-           "quadcog.embedded",
-           "quadcog.studies",
-           "quadcog.cli",
-           "quadcog.errors",
-           "quadcog.config",
-           "quadcog.validate",
-           "quadcog.paths",
-           "quadcog.files",
-           "quadcog.codegen",
-           "quadcog.model",
-           "quadcog.logs",
-           "quadcog.sim",
-           "quadcog.viz",
-           "quadcog.identification",
-           )
-MODULES = [m for m in _modules()
-           if any(m == c or m.startswith(c + ".") for c in CHECKED)]
+MODULES = _modules()
 
 
 def _public(module):
