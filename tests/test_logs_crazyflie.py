@@ -11,10 +11,10 @@ import zlib
 import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
-from scipy.signal import butter, filtfilt
 
 from quadcog.errors import LogCRCError, LogFormatError, LogSignalError
 from quadcog.logs import FlightLog, read_log, write_log
+from quadcog.logs.checks import airborne_segments, bandpass, fit_gain, lowpass
 
 DATA = Path(__file__).resolve().parent / "data" / "crazypad"
 G = 9.81
@@ -275,34 +275,7 @@ def test_writer_refuses_what_the_format_cannot_hold(tmp_path):
 
 # -- the real flights ----------------------------------------------------------------------
 FILES = sorted(p for p in DATA.glob("*/*/E*_log*"))
-_B, _A = butter(2, 2.0 / 50)                            # 2 Hz low-pass at 100 Hz
-_BB, _AB = butter(2, [0.2 / 50, 2.0 / 50], btype="band")
-
-
-def lowpass(y):
-    return filtfilt(_B, _A, y, axis=0)
-
-
-def bandpass(y):
-    return filtfilt(_BB, _AB, y, axis=0)
-
-
-def flights(log, zmin=0.4, trim=0.5):
-    """Masks of the airborne stretches (z > zmin), without trim s at either end."""
-    up = log.signal("position")[:, 2] > zmin
-    edges = np.r_[0, np.flatnonzero(np.diff(up.astype(int))) + 1, up.size]
-    out = []
-    for s, e in zip(edges[:-1], edges[1:]):
-        keep = up[s] & (log.t >= log.t[s] + trim) & (log.t <= log.t[e - 1] - trim)
-        if keep.sum() > 200:
-            out.append(keep)
-    return out
-
-
-def fit(x, y):
-    """(least-squares gain of y on x, correlation), means removed."""
-    x, y = x - x.mean(), y - y.mean()
-    return (x @ y) / (x @ x), np.corrcoef(x, y)[0, 1]
+flights, fit = airborne_segments, fit_gain
 
 
 @pytest.fixture(scope="module")
