@@ -87,6 +87,6 @@ def fit_gain(x: npt.ArrayLike, y: npt.ArrayLike) -> tuple[float, float]:
     tuple of (float, float)
         (gain, correlation coefficient).
     """
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    x, y = x - x.mean(), y - y.mean()
-    return float((x @ y) / (x @ x)), float(np.corrcoef(x, y)[0, 1])
+    a, b = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    a, b = a - a.mean(), b - b.mean()
+    return float((a @ b) / (a @ a)), float(np.corrcoef(a, b)[0, 1])
