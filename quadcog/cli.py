@@ -197,7 +197,8 @@ def add_sweep(sub):
 
 def cmd_sweep(args):
     from quadcog.sweeps.runner import run_cli
-    run_cli(args.sweep, _out_dir(args.out), workers=args.workers, scheduler=args.scheduler)
+    # the folder is made by the sweep once the file validates: a rejected file leaves none
+    run_cli(args.sweep, args.out, workers=args.workers, scheduler=args.scheduler)
 
 
 def add_identify(sub):
@@ -271,11 +272,28 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 
 
 def main(argv=None):
-    args = parser().parse_args(argv)
+    from quadcog.errors import Interrupted
+    from quadcog.interrupts import install_handlers, restore_handlers
+    previous = install_handlers()   # first: SIGINT/SIGTERM -> Interrupted, cleaned up on the way
     try:
+        return _main(argv)
+    except Interrupted as e:        # during parsing, or after a command's own handling
+        print("quadcog: interrupted", file=sys.stderr)
+        return e.status
+    finally:
+        restore_handlers(previous)
+
+
+def _main(argv):
+    from quadcog.errors import Interrupted
+    try:
+        args = parser().parse_args(argv)
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning      # one line, no source location
             args.func(args)
+    except Interrupted as e:        # files being written were not committed
+        print("quadcog: interrupted", file=sys.stderr)
+        return e.status             # 128 + the signal, as shells report it: 130, 143
     except QuadcogError as e:
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2

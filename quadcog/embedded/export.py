@@ -10,6 +10,7 @@ provides the public interface of ``quadcog.controllers.base.Controller``:
 - ``n_state``, ``initial_state()`` (numbers) and ``project(c)`` (SX -> SX);
 - ``nominal`` (14,): the vehicle parameters the law was built for.
 """
+import os
 from pathlib import Path
 
 import casadi as ca
@@ -18,6 +19,7 @@ import numpy as np
 from quadcog import config
 from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import CONTROLLERS, make_controller
+from quadcog.embedded.c_text import c_identifier, comment_text
 from quadcog.embedded.emit import C_TYPE, PRECISIONS, body, literal
 from quadcog.errors import ExportError
 from quadcog.model.conventions import PARAM_NAMES, STATE_NAMES
@@ -220,11 +222,10 @@ def render(controller, precision="float32", name=None, command=None):
     if not isinstance(controller, Controller):
         raise ExportError(f"controller must be a quadcog Controller or one of "
                           f"{tuple(CONTROLLERS)}, got {controller!r}")
-    name = name or short_name(controller)
-    if not name.isidentifier():
-        raise ExportError(f"name {name!r} is not a C identifier")
-    command = command or (f"quadcog.embedded.export_controller({type(controller).__name__}"
-                          f"(...), precision={precision!r})")
+    name = c_identifier(short_name(controller) if name is None else name, "name")
+    command = comment_text(command, "command") if command is not None else (
+        f"quadcog.embedded.export_controller({type(controller).__name__}(...), "
+        f"precision={precision!r})")
     fn = step_function(controller)
     return {f"quadcog_{name}.h": _header(name, controller, precision, command,
                                          int(controller.n_state)),
@@ -253,11 +254,19 @@ def export_controller(controller, precision="float32", out=".", name=None, comma
     list of Path
         The header and the source.
     """
+    if not isinstance(out, (str, os.PathLike)):
+        raise ExportError(f"out: expected a folder path (str or os.PathLike), got {out!r} "
+                          f"({type(out).__name__})")
+    if name is not None:
+        c_identifier(name, "name")
     if isinstance(controller, str):
+        if controller not in CONTROLLERS:
+            raise ExportError(f"controller {controller!r}: expected one of "
+                              f"{tuple(CONTROLLERS)} or a quadcog Controller")
         if command is None:
             command = (f"quadcog export --controller {controller} --precision {precision} "
                        "--out DIR")
-        name = name or controller
+        name = name if name is not None else c_identifier(controller, "controller")
         controller = make_controller(controller)
     files = render(controller, precision, name, command)
     out = Path(out)

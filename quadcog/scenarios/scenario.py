@@ -329,11 +329,13 @@ def output_files(fmt="csv", plot=True):
                                                                       else ())
 
 
-def write_outputs(result, scenario, out, plot=True, every=1, fmt="csv"):
+def write_outputs(result, scenario, out, plot=True, every=1, fmt="csv", animate=False):
     """metrics.json, vehicle.json, trajectory.csv (or .parquet: ``fmt``; every ``every``-th
-    sample) and, with ``plot``, flight.png of one run into folder ``out``: all of them or
-    none (``quadcog.files.RunFiles``), so an error or Ctrl-C while writing leaves the
-    folder's previous files as they were. metrics.json and vehicle.json are strict JSON."""
+    sample), with ``plot`` flight.png and with ``animate`` flight.gif of one run into folder
+    ``out``: all of them or none (``quadcog.files.RunFiles``), so an error or Ctrl-C while
+    writing leaves the folder's previous files as they were, and the files of an earlier run
+    that this one does not write are removed. metrics.json and vehicle.json are strict
+    JSON."""
     metrics = result.metrics.as_dict()
     metrics.update(name=scenario.name, controller=scenario.controller,
                    duration=scenario.duration, dt=scenario.dt,
@@ -346,6 +348,10 @@ def write_outputs(result, scenario, out, plot=True, every=1, fmt="csv"):
                         disturbances=scenario.disturbances)
         files.path("vehicle.json").write_text(strict_json(scenario.vehicle.as_dict()))
         files.path("metrics.json").write_text(strict_json(metrics))
+        if animate:         # from the table as written, as `quadcog animate` would read it
+            from quadcog.viz.animation import animate_table, read_table
+            animate_table(read_table(files.path(f"trajectory.{fmt}")), metrics,
+                          scenario.vehicle, files.path("flight.gif"))
     return metrics
 
 
@@ -371,12 +377,10 @@ def run_file(path, out=None, progress=True, overrides=(), plot=True, every=1, fm
         raise
     except InputError as e:                 # e.g. dt too large for the closed loop
         raise ScenarioError(f"{scenario.source}: {e}") from None
-    metrics = write_outputs(result, scenario, out, plot=plot, every=every, fmt=fmt)
-    written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else [])
-    if animate:
-        from quadcog.viz.animation import animate_run
-        animate_run(out, out / "flight.gif")
-        written.append("flight.gif")
+    metrics = write_outputs(result, scenario, out, plot=plot, every=every, fmt=fmt,
+                            animate=animate)
+    written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else []) + (
+        ["flight.gif"] if animate else [])
     status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']})"
               if metrics["diverged"] else
               f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from quadcog.errors import ParameterError, SweepError
+from quadcog.errors import ParameterError, SizeError, SweepError
 from quadcog.model.parameters import admissible_radius
 from quadcog.scenarios.files import find_file, read_toml, scenario_path, shipped_names
 from quadcog.scenarios.keys import KEY_EXAMPLE, parse_key, set_key
@@ -31,6 +31,8 @@ TOP = {"name", "description", "scenario", "mode", "samples", "seed", "chunk", "t
 SOURCES = ("values", "range", "uniform", "normal", "ball")
 DEFAULT_CHUNK = 64          # flights per chunk: the unit of scheduling, retry and resume
 DEFAULT_THRESHOLD = 0.5     # m: tail RMS above this (or a diverged run) counts as failed
+MAX_FLIGHTS = 1_000_000     # flights of one sweep (and values of one dimension): each is
+                            # validated before any flies, so more would not even start
 
 
 def _plain(v):
@@ -153,9 +155,47 @@ def _count(spec, where, source, mode):
     if "n" not in spec:
         raise _field_err(source, where, "missing 'n' (the number of samples in the grid)")
     n = spec["n"]
-    if not isinstance(n, int) or n < 1:
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
         raise _field_err(source, where, f"n: expected a whole number >= 1, got {n!r}")
+    _size(source, where, n, "samples")
     return n
+
+
+def _size(source, where, n, what):
+    """Refuse a count above MAX_FLIGHTS before anything of that size is allocated."""
+    if not n <= MAX_FLIGHTS:
+        raise SizeError(f"{source}: key {where[0]!r}: {where[1]}: {n:.6g} {what} is too large "
+                        f"(at most {MAX_FLIGHTS} flights per sweep)")
+
+
+def _check_values(source, key, values):
+    """A dimension's ``values``: all numbers, all strings, all booleans or all vectors (lists
+    of numbers) of one length; a table or a mixture would fail only after the flights, when
+    the table is written."""
+    def kind(v):
+        if isinstance(v, bool):
+            return "boolean"
+        if isinstance(v, (int, float)):
+            return "number"
+        if isinstance(v, str):
+            return "string"
+        if isinstance(v, list) and v and all(_number(x) for x in v):
+            return f"vector of {len(v)}"
+        return None
+    if len(values) > MAX_FLIGHTS:
+        _size(source, (key, "values"), len(values), "values")
+    kinds = [kind(v) for v in values]
+    for v, k in zip(values, kinds):
+        if k is None:
+            raise _err(source, key, f"values: {v!r} is not a number, a string, a boolean or "
+                       f"a vector of finite numbers")
+        if k != kinds[0]:
+            raise _err(source, key, f"values: {v!r} is a {k}, the first value "
+                       f"{values[0]!r} a {kinds[0]}: all values of a dimension must be of one "
+                       f"kind")
+    if kinds[0] == "number" and not all(math.isfinite(v) for v in values):
+        bad = next(v for v in values if not math.isfinite(v))
+        raise _err(source, key, f"values: {bad!r} is not a finite number")
 
 
 def _range_values(spec, where, source):
@@ -173,12 +213,17 @@ def _range_values(spec, where, source):
         if not isinstance(num, int) or num < 1:
             raise _field_err(source, where, f"empty range: num must be a whole number >= 1, "
                              f"got {num!r}")
+        _size(source, where, num, "points")
         return np.linspace(start, stop, num).tolist()
     step = float(spec["step"])
     if step == 0 or (stop - start) / step < 0:
         raise _field_err(source, where, f"empty range: from {start} to {stop} in steps of "
                          f"{step}")
-    count = int(math.floor((stop - start) / step + 1e-9)) + 1
+    ratio = (stop - start) / step
+    if not ratio < MAX_FLIGHTS:
+        _size(source, where, ratio, "points")
+    count = int(math.floor(ratio + 1e-9)) + 1
+    _size(source, where, count, "points")
     return [start + i * step for i in range(count)]
 
 
@@ -207,6 +252,7 @@ def _dimension(i, spec, source, mode):
     if kind == "values":
         if not isinstance(value, list) or not value:
             raise _err(source, key, f"'values' must be a non-empty array, got {value!r}")
+        _check_values(source, key, value)
         width = len(value[0]) if isinstance(value[0], list) else 1
         return Dimension(key, kind, values=list(value), width=width)
     if kind == "range":
@@ -343,6 +389,13 @@ def from_dict(data, source="<sweep>", folder=None):
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
         raise _err(source, dup, "appears in two dimensions")
+    _check_overlaps(source, keys, list(fixed))
+    count = ints["samples"] if mode == "monte-carlo" else math.prod(
+        len(d.values) if d.values is not None else d.n for d in dims)
+    if count > MAX_FLIGHTS:
+        raise SizeError(f"{source}: the sweep has {count:.6g} flights "
+                        f"({' x '.join(str(len(d.values) if d.values is not None else d.n) for d in dims) if mode == 'grid' else 'samples'}): "
+                        f"at most {MAX_FLIGHTS} are accepted; split it into several sweeps")
     sweep = Sweep(name=data.get("name", Path(source).stem), description=data.get("description", ""),
                   source=source, base=base, base_source=base_source, mode=mode,
                   seed=ints["seed"], chunk=ints["chunk"], threshold=float(threshold),
@@ -382,6 +435,22 @@ def _validate_flights(sweep, combos, skip):
                 raise _err(sweep.source, key, f"flight {index} ({_describe(values)}) has an "
                            f"inadmissible CoG: {reason}; {hint}")
         sweep.flights.append(Flight(index, values, admissible))
+
+
+def _check_overlaps(source, keys, fixed):
+    """Refuse two keys of which one contains the other (``cog[0].r`` and ``cog[0].r[0]``,
+    ``vehicle`` and ``vehicle.m``): one would silently replace the other's values."""
+    parsed = [(k, parse_key(k), "dimension") for k in keys] + \
+             [(k, parse_key(k), "set") for k in fixed]
+    for i, (a, pa_, wa) in enumerate(parsed):
+        for b, pb, wb in parsed[i + 1:]:
+            if pa_ is None or pb is None or (wa == wb == "set"):
+                continue
+            short, long_ = (pa_, pb) if len(pa_) <= len(pb) else (pb, pa_)
+            if long_[:len(short)] == short:
+                raise _err(source, a, f"overlaps {wb} key {b!r} (one contains the other, so "
+                           f"one would replace the other's values); vary or set each value "
+                           f"once")
 
 
 def _culprit(error, values):

@@ -23,7 +23,7 @@ import numpy as np
 from quadcog.errors import InputError, ParameterError
 from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
 from quadcog.model.parameters import check_parameters
-from quadcog.validate import real
+from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 N_ROTORS = 4
@@ -31,15 +31,35 @@ N_ROTORS = 4
 
 def plus_layout(arm):
     """Rotor positions (m) of a "+" frame with arm length ``arm``: rotor 1 on +x (front),
-    2 on +y (left), 3 on -x, 4 on -y."""
-    a = float(arm)
+    2 on +y (left), 3 on -x, 4 on -y.
+
+    Parameters
+    ----------
+    arm : float
+        Arm length (m), finite and > 0.
+
+    Returns
+    -------
+    tuple of four (x, y) pairs (m)
+    """
+    a = real(arm, "arm", lo=0, lo_open=True, unit="m")
     return ((a, 0.0), (0.0, a), (-a, 0.0), (0.0, -a))
 
 
 def x_layout(arm):
     """Rotor positions (m) of an "X" frame with arm length ``arm`` (centre to rotor): rotor 1
-    front-right (+x, -y), 2 back-right, 3 back-left, 4 front-left."""
-    h = float(arm) / np.sqrt(2.0)
+    front-right (+x, -y), 2 back-right, 3 back-left, 4 front-left.
+
+    Parameters
+    ----------
+    arm : float
+        Arm length (m), finite and > 0.
+
+    Returns
+    -------
+    tuple of four (x, y) pairs (m)
+    """
+    h = real(arm, "arm", lo=0, lo_open=True, unit="m") / np.sqrt(2.0)
     return ((h, -h), (-h, -h), (-h, h), (h, h))     # the Crazyflie firmware's M1..M4
 
 
@@ -108,13 +128,21 @@ class Vehicle:
                 continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise InputError(where(f"{f.name} must be a number, got {v!r}"))
-            if not np.isfinite(v):
+                raise InputError(where(f"{f.name} must be a number, got {plain(v)}"))
+            try:
+                x = float(v)
+            except OverflowError:       # an int beyond the float range
+                raise ParameterError(where(f"{f.name} = {plain(v)} is beyond the range of "
+                                           f"a float")) from None
+            if not np.isfinite(x):
                 raise ParameterError(where(f"{f.name} = {v} is not finite"))
-            object.__setattr__(self, f.name, float(v))
+            object.__setattr__(self, f.name, x)
+        if not isinstance(self.name, str):
+            raise InputError(where(f"name must be a string, got {plain(self.name)}"))
         try:
-            pos = np.asarray(self.rotor_positions, dtype=float)
-        except (TypeError, ValueError):
+            pos = (None if isinstance(self.rotor_positions, (str, bytes)) else
+                   np.asarray(self.rotor_positions, dtype=float))
+        except (TypeError, ValueError, OverflowError):
             pos = None
         if pos is None or pos.shape != (N_ROTORS, 2) or not np.isfinite(pos).all():
             raise InputError(where(f"rotor_positions must be {N_ROTORS} pairs (x, y) of finite "
@@ -151,6 +179,7 @@ class Vehicle:
                 f"{self.rotor_directions} is singular (condition number {cond:.3g}): the rotors "
                 "cannot produce every [U1, U2, U3, U4]"))
         check_parameters(self.parameters(), where("parameters"))
+        _check_rigid_body(self, where)
 
     # -- what the generated functions and the plant need --------------------------------
     def parameters(self):
@@ -178,7 +207,7 @@ class Vehicle:
     def rotor_thrusts(self, U):
         """The rotor thrusts f (4,) (N) that produce ``U`` (4,) = [U1, U2, U3, U4]: the inverse
         of the mixer. Limits are not applied (see ``min_rotor_thrust``, ``max_rotor_thrust``)."""
-        U = np.asarray(U, dtype=float)
+        U = array(U, "U", what="4 rows [U1 (N), U2, U3, U4 (N m)] of finite numbers")
         if U.shape[:1] != (4,):
             raise InputError(f"U must have 4 rows [U1, U2, U3, U4], got shape {U.shape}")
         return np.linalg.solve(self.mixer(), U)
@@ -203,9 +232,7 @@ class Vehicle:
 
     def with_cog(self, r_G):
         """A copy with the CoG offset ``r_G`` (3,) (m)."""
-        r = np.asarray(r_G, dtype=float).reshape(-1)
-        if r.shape != (3,):
-            raise InputError(f"r_G must be 3 numbers (m), got {r_G!r}")
+        r = vector(r_G, "r_G", 3)
         return replace(self, x_G=float(r[0]), y_G=float(r[1]), z_G=float(r[2]))
 
     def with_parameters(self, p):
@@ -223,6 +250,17 @@ class Vehicle:
 
 
 FIELD_NAMES = tuple(f.name for f in fields(Vehicle))
+
+
+def _check_rigid_body(vehicle, where):
+    """PhysicalConsistencyError unless some rigid body has this mass, CoG and inertia about
+    O: the pseudo-inertia of its ten inertial parameters is positive definite, which is the
+    strict triangle inequality of the principal inertias about the CoG (docs/model.md 7.2;
+    ``quadcog.model.inertial.check_physically_consistent`` gives the reason in those
+    terms)."""
+    from quadcog.model.inertial import check_physically_consistent, inertial_arguments
+    pi, _, _ = inertial_arguments(vehicle.parameters(), where("parameters"))
+    check_physically_consistent(pi, where("mass, CoG and inertia (m, m r_G, I_O)"))
 
 # AscTec Hummingbird as modelled in the ETH RotorS simulator (rotors_description/urdf/
 # hummingbird.xacro: mass, inertia, arm, motor_constant, moment_constant, max_rot_velocity,
