@@ -339,8 +339,9 @@ def from_dict(data, source="<sweep>", folder=None):
     ints = {"seed": 0, "chunk": DEFAULT_CHUNK, "samples": None}
     for k, default in ints.items():
         v = data.get(k, default)
-        if v is not None and (not isinstance(v, int) or isinstance(v, bool) or v < 0
-                              or (k != "seed" and v < 1)):
+        if (v is not None or k != "samples") and (
+                not isinstance(v, int) or isinstance(v, bool) or v < 0
+                or (k != "seed" and v < 1)):
             raise _err(source, k, f"expected a whole number{' >= 1' if k != 'seed' else ''}, "
                        f"got {v!r}")
         ints[k] = v
@@ -389,7 +390,7 @@ def from_dict(data, source="<sweep>", folder=None):
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
         raise _err(source, dup, "appears in two dimensions")
-    _check_overlaps(source, keys, list(fixed))
+    _check_overlaps(source, keys)
     count = ints["samples"] if mode == "monte-carlo" else math.prod(
         len(d.values) if d.values is not None else d.n for d in dims)
     if count > MAX_FLIGHTS:
@@ -437,20 +438,19 @@ def _validate_flights(sweep, combos, skip):
         sweep.flights.append(Flight(index, values, admissible))
 
 
-def _check_overlaps(source, keys, fixed):
-    """Refuse two keys of which one contains the other (``cog[0].r`` and ``cog[0].r[0]``,
-    ``vehicle`` and ``vehicle.m``): one would silently replace the other's values."""
-    parsed = [(k, parse_key(k), "dimension") for k in keys] + \
-             [(k, parse_key(k), "set") for k in fixed]
-    for i, (a, pa_, wa) in enumerate(parsed):
-        for b, pb, wb in parsed[i + 1:]:
-            if pa_ is None or pb is None or (wa == wb == "set"):
-                continue
+def _check_overlaps(source, keys):
+    """Refuse two dimensions of which one key contains the other (``cog[0].r`` and
+    ``cog[0].r[0]``, ``vehicle`` and ``vehicle.m``): one would silently replace the other's
+    values. (A ``set`` key may contain a dimension's: it gives the structure, such as a CoG
+    change, whose values the dimension varies.)"""
+    parsed = [(k, parse_key(k)) for k in keys]
+    for i, (a, pa_) in enumerate(parsed):
+        for b, pb in parsed[i + 1:]:
             short, long_ = (pa_, pb) if len(pa_) <= len(pb) else (pb, pa_)
             if long_[:len(short)] == short:
-                raise _err(source, a, f"overlaps {wb} key {b!r} (one contains the other, so "
-                           f"one would replace the other's values); vary or set each value "
-                           f"once")
+                raise _err(source, a, f"overlaps the dimension key {b!r} (one contains the "
+                           f"other, so one would replace the other's values); vary each value "
+                           f"in one dimension")
 
 
 def _culprit(error, values):
