@@ -4,8 +4,10 @@
 ``coriolis``, ``damping``, ``gravity``, ``regressor``, ``decoupling``, ``drift``,
 ``linearization``) as fast numpy callables. This package never imports SymPy.
 """
-from quadcog import _startup  # noqa: F401  (first: Ctrl-C during the command's imports)
-from quadcog import config
+from quadcog import (
+                                 _startup,  # noqa: F401  (first: Ctrl-C during the command's imports)
+                                 config,
+)
 from quadcog.controllers import (
                                  AdaptiveFeedbackLinearization,
                                  CascadePD,

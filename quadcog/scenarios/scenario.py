@@ -303,6 +303,7 @@ def write_table(result, path, every=1, fmt="csv"):
         raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
     columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G]
     n = len(result.t)
+    every = min(every, max(n, 1))       # a step beyond the run: first and last sample only
     if every > 1:
         rows = np.unique(np.r_[np.arange(0, n, every), n - 1])
         columns, n = [c[rows] for c in columns], len(rows)

@@ -391,12 +391,12 @@ def from_dict(data, source="<sweep>", folder=None):
         dup = next(k for k in keys if keys.count(k) > 1)
         raise _err(source, dup, "appears in two dimensions")
     _check_overlaps(source, keys)
-    count = ints["samples"] if mode == "monte-carlo" else math.prod(
-        len(d.values) if d.values is not None else d.n for d in dims)
+    sizes = [len(d.values) if d.values is not None else d.n for d in dims]
+    count = ints["samples"] if mode == "monte-carlo" else math.prod(sizes)
     if count > MAX_FLIGHTS:
-        raise SizeError(f"{source}: the sweep has {count:.6g} flights "
-                        f"({' x '.join(str(len(d.values) if d.values is not None else d.n) for d in dims) if mode == 'grid' else 'samples'}): "
-                        f"at most {MAX_FLIGHTS} are accepted; split it into several sweeps")
+        shape = " x ".join(map(str, sizes)) if mode == "grid" else "samples"
+        raise SizeError(f"{source}: the sweep has {count:.6g} flights ({shape}): at most "
+                        f"{MAX_FLIGHTS} are accepted; split it into several sweeps")
     sweep = Sweep(name=data.get("name", Path(source).stem), description=data.get("description", ""),
                   source=source, base=base, base_source=base_source, mode=mode,
                   seed=ints["seed"], chunk=ints["chunk"], threshold=float(threshold),

@@ -57,6 +57,7 @@ def write_outputs(sweep, columns, summary, out, plots=True):
     """results.parquet, results.csv, summary.json, summary.md and the plots into ``out``."""
     pa = require_pyarrow()
     import pyarrow.csv  # noqa: F401
+
     from quadcog.files import RunFiles
     table = to_arrow(columns)
     with RunFiles(out, owned=()) as files:       # all four or none, no .tmp left behind
