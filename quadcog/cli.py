@@ -7,6 +7,7 @@ for the list, a ``description`` for its own --help, its arguments) and sets ``fu
 exit status 2 by ``main``.
 """
 import argparse
+import os
 from pathlib import Path
 import sys
 import warnings
@@ -226,7 +227,7 @@ def add_identify(sub):
 
 
 def cmd_identify(args):
-    from quadcog.files import strict_json
+    from quadcog.files import RunFiles, atomic_write, strict_json
     from quadcog.identification import identify
     from quadcog.identification.figure import plot_identification
     for path in list(args.logs) + list(args.baseline or []):
@@ -239,10 +240,11 @@ def cmd_identify(args):
         path = _out_dir(args.out) / "identify.png"
         title = f"quadcog identify: {len(args.logs)} log(s) of {args.vehicle}" + (
             f" against {len(args.baseline)} baseline log(s)" if args.baseline else "")
-        plot_identification(result, path, title=title)
+        with RunFiles(path.parent, owned=()) as files:      # whole or absent, even on Ctrl-C
+            plot_identification(result, files.path(path.name), title=title)
         print(f"wrote {path}")
     if args.json is not None:
-        args.json.write_text(strict_json(result.as_json()))
+        atomic_write(args.json, strict_json(result.as_json()))
         print(f"wrote {args.json}")
 
 
@@ -303,6 +305,16 @@ def _main(argv):
     except KeyboardInterrupt:       # Ctrl-C: files being written were not committed
         print("quadcog: interrupted", file=sys.stderr)
         return 130                  # 128 + SIGINT, as shells report it
+    except (MemoryError, RecursionError) as e:
+        print(f"quadcog: error: out of resources ({type(e).__name__}); the input is too large "
+              f"for this machine", file=sys.stderr)
+        return 2
+    except Exception as e:          # a bug: one line for users, the traceback on request
+        if os.environ.get("QUADCOG_TRACEBACK"):
+            raise
+        print(f"quadcog: internal error: {type(e).__name__}: {e} (a bug in quadcog; "
+              f"QUADCOG_TRACEBACK=1 shows where)", file=sys.stderr)
+        return 3
     return 0
 
 

@@ -19,8 +19,14 @@ from quadcog.controllers.registry import make_controller
 from quadcog.embedded import export_controller
 from quadcog.embedded.c_text import comment_text
 from quadcog.embedded.export import render
-from quadcog.errors import (ExportError, GeneratedFilesError, InputError, ParameterError,
-                            PhysicalConsistencyError, QuadcogError)
+from quadcog.errors import (
+    ExportError,
+    GeneratedFilesError,
+    InputError,
+    ParameterError,
+    PhysicalConsistencyError,
+    QuadcogError,
+)
 from quadcog.vehicles.vehicle import HUMMINGBIRD, plus_layout, x_layout
 
 set_hypothesis_home_dir(tempfile.mkdtemp(prefix="quadcog-hypothesis-"))

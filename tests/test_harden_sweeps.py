@@ -360,3 +360,26 @@ def test_a_real_dask_scheduler_passes_the_probe():
             return await asyncio.get_running_loop().run_in_executor(
                 None, probe_scheduler, s.address, 5.0)
     assert asyncio.run(run()).startswith("tcp://127.0.0.1:")
+
+
+SENSED = TINY.replace('controller = "fl"', 'controller = "fl"\nsensing = {{noise = true, '
+                                             'seed = 3}}')
+
+
+def test_sensing_on_results_do_not_depend_on_workers_or_interruption(tmp_path, monkeypatch):
+    path = tmp_path / "sensed.toml"
+    path.write_text(SENSED.format(values=json.dumps([0.0, 0.01, 0.02, 0.03])))
+    pooled = sweep(path, tmp_path / "pooled", progress=False, plots=False)   # 2 processes
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)                          # this process
+    alone = sweep(path, None, progress=False, plots=False)
+    out = tmp_path / "pooled"
+    (out / "chunks" / "chunk-00000.parquet").unlink()                        # "interrupted"
+    _damage_cell(out / "chunks")
+    resumed = sweep(path, out, progress=False, plots=False)
+    assert resumed.flown == 4
+    for name, a in alone.columns.items():
+        for other in (pooled, resumed):
+            b = other.columns[name]
+            assert a.dtype == b.dtype and (a.tobytes() == b.tobytes() if a.dtype.kind in "fib"
+                                           else a.tolist() == b.tolist()), name
+    assert np.isfinite(alone.columns["rms_position_error"]).all()
