@@ -198,3 +198,27 @@ def test_a_quadcog_error_is_not_swallowed_by_interrupted():
     from quadcog.errors import Interrupted
     assert not issubclass(Interrupted, QuadcogError) and issubclass(Interrupted,
                                                                     KeyboardInterrupt)
+
+
+@pytest.mark.parametrize("at_frame", [0, 3])
+def test_interrupt_while_drawing_is_an_interrupt_and_leaves_no_gif(run_dir, tmp_path,
+                                                                   monkeypatch, at_frame):
+    """matplotlib finishes a GIF in a `finally`; with no frame yet that raised IndexError in
+    place of the interrupt (the issue's traceback)."""
+    import signal
+
+    from quadcog.errors import Interrupted
+    from quadcog.viz import animation
+    calls = []
+    real = animation.rotation_matrix
+
+    def interrupting(*a):
+        calls.append(1)
+        if len(calls) > at_frame:
+            raise Interrupted(signal.SIGINT)
+        return real(*a)
+    monkeypatch.setattr(animation, "rotation_matrix", interrupting)
+    out = tmp_path / "anim.gif"
+    with pytest.raises(Interrupted):
+        animation.animate_run(run_dir, out, max_frames=10)
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if "partial" in p.name]

@@ -348,6 +348,12 @@ def animate_table(table, metrics, vehicle, output, fps=15, speed=1.0, max_frames
     anim = FuncAnimation(fig, draw, frames=len(idx), blit=False)
     try:
         anim.save(output, writer=PillowWriter(fps=fps))
+    except Exception as e:
+        # matplotlib finishes the file in a `finally`; after Ctrl-C with no frame yet that
+        # fails (IndexError) and hides the interrupt: report the interrupt
+        if isinstance(e.__context__, KeyboardInterrupt):
+            raise e.__context__ from None
+        raise
     finally:
         plt.close(fig)
     return output
