@@ -383,3 +383,13 @@ def test_sensing_on_results_do_not_depend_on_workers_or_interruption(tmp_path, m
             assert a.dtype == b.dtype and (a.tobytes() == b.tobytes() if a.dtype.kind in "fib"
                                            else a.tolist() == b.tolist()), name
     assert np.isfinite(alone.columns["rms_position_error"]).all()
+
+
+def test_a_controller_that_cannot_be_designed_is_refused_before_any_flight(tmp_path):
+    dims = [{"key": "controller_params.poles_psi", "values": [[-1.0, -2.0], [0.5, 0.5]]}]
+    spec = _spec(dimension=dims)
+    spec["set"]["controller"] = "adaptive"
+    out = tmp_path / "never"
+    with pytest.raises(SweepError, match=r"poles_psi.*cannot be designed"):
+        sweep(spec, out, progress=False, plots=False)
+    assert not out.exists()

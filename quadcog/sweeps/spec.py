@@ -411,7 +411,9 @@ def from_dict(data, source="<sweep>", folder=None):
 def _validate_flights(sweep, combos, skip):
     """Parse every flight as a scenario (errors name the sweep file and the varied key) and
     check its CoG; fills ``sweep.flights``."""
+    from quadcog.sweeps.flights import _controllers, _group_key
     by_key = {d.key: d for d in sweep.dimensions}
+    designed = {}
     for index, values in enumerate(combos):
         values = {k: _plain(v) for k, v in values.items()}
         data = copy.deepcopy(sweep.base)
@@ -422,6 +424,14 @@ def _validate_flights(sweep, combos, skip):
         except ScenarioError as e:
             raise _err(sweep.source, _culprit(e, values), f"flight {index} "
                        f"({_describe(values)}) is not a valid scenario: {e}") from None
+        key = _group_key(data)
+        if key not in designed:         # each controller design once, before any flight
+            try:
+                designed[key] = _controllers[key] = scenario.make_controller()
+            except ScenarioError as e:
+                raise _err(sweep.source, _culprit(e, values), f"flight {index} "
+                           f"({_describe(values)}): the controller cannot be designed: "
+                           f"{e}") from None
         reason = cog_admissible(scenario)
         admissible = reason is None
         if not admissible:
