@@ -393,3 +393,46 @@ def test_a_controller_that_cannot_be_designed_is_refused_before_any_flight(tmp_p
     with pytest.raises(SweepError, match=r"poles_psi.*cannot be designed"):
         sweep(spec, out, progress=False, plots=False)
     assert not out.exists()
+
+
+# -- property: any hostile sweep dict is a typed error or a valid sweep, never a traceback --
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from quadcog.errors import QuadcogError  # noqa: E402
+from quadcog.sweeps.spec import MAX_FLIGHTS, from_dict  # noqa: E402
+
+HOSTILE = st.one_of(st.none(), st.booleans(), st.integers(-3, 3), st.just(10 ** 13),
+                    st.just(10 ** 400), st.floats(), st.text(max_size=4),
+                    st.lists(st.one_of(st.floats(), st.integers(), st.just(10 ** 400),
+                                       st.text(max_size=2)), max_size=3),
+                    st.dictionaries(st.sampled_from(["start", "stop", "num", "step", "low",
+                                                     "high", "n", "radius", "plane", "x"]),
+                                    st.one_of(st.floats(), st.integers(-2, 10 ** 13),
+                                              st.text(max_size=2)), max_size=4))
+
+
+@settings(derandomize=True, database=None, deadline=None, max_examples=120,
+          suppress_health_check=list(HealthCheck))
+@given(where=st.sampled_from(["chunk", "seed", "samples", "mode", "threshold", "inadmissible",
+                              "name", "key", "values", "range", "uniform", "ball", "set"]),
+       value=HOSTILE)
+def test_property_hostile_sweep_fields(where, value):
+    spec = _spec()
+    dim = spec["dimension"][0]
+    if where in ("key",):
+        dim["key"] = value
+    elif where in ("values", "range", "uniform", "ball"):
+        del dim["values"]
+        dim[where] = value
+    elif where == "set":
+        spec["set"] = value
+    else:
+        spec[where] = value
+    t0 = time.perf_counter()
+    try:
+        s = from_dict(spec)
+    except QuadcogError:
+        assert time.perf_counter() - t0 < 5
+        return
+    assert 1 <= len(s.flights) <= MAX_FLIGHTS

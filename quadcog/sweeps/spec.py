@@ -120,7 +120,12 @@ def _err(source, key, message):
 
 
 def _number(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:           # an integer beyond the float range
+        return False
 
 
 def _field_err(source, where, message):
@@ -193,8 +198,8 @@ def _check_values(source, key, values):
             raise _err(source, key, f"values: {v!r} is a {k}, the first value "
                        f"{values[0]!r} a {kinds[0]}: all values of a dimension must be of one "
                        f"kind")
-    if kinds[0] == "number" and not all(math.isfinite(v) for v in values):
-        bad = next(v for v in values if not math.isfinite(v))
+    if kinds[0] == "number" and not all(_number(v) for v in values):
+        bad = next(v for v in values if not _number(v))
         raise _err(source, key, f"values: {bad!r} is not a finite number")
 
 
