@@ -122,7 +122,8 @@ class RunFiles:
     RunFiles
     """
 
-    def __init__(self, out, owned=RUN_FILES):
+    def __init__(self, out: "str | os.PathLike",
+                 owned: "tuple[str, ...]" = RUN_FILES) -> None:
         self.out = Path(out)
         self.owned = tuple(owned)
         self._pending = {}

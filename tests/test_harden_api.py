@@ -208,3 +208,44 @@ def test_export_arguments_are_typed_errors(kwargs, text, tmp_path):
     with pytest.raises(ExportError, match=text):
         export_controller("pd", **kwargs)
     assert not list(tmp_path.glob("quadcog_*"))
+
+
+# -- --set and scheduler addresses: any text is a typed error or a valid value ---------
+SET_KEYS = ["controller", "duration", "dt", "vehicle.m", "vehicle.Izz", "sensing",
+            "sensing.seed", "cog[0].r", "cog[0].t", "controller_params.gamma", "trajectory",
+            "trajectory.max_speed", "initial_offset"]
+SET_VALUES = ["-1", "1e-300", "1e300", "nan", "[1, 2]", '["pd"]', "{seed=-1}", "{}", "[]",
+              "true", "'x'", "[0, 1e-300]", "1" + "0" * 400, "{kind='waypoints', "
+              "waypoints=[[0,0,1],[1,0,1]], times=[0, 1e-300]}", "{kind='waypoints', "
+              "waypoints=[[0,0,1],[1,0,1]], max_speed=1e-300}"]
+
+
+@settings(**dict(SETTINGS, max_examples=80))
+@given(key=st.sampled_from(SET_KEYS), value=st.sampled_from(SET_VALUES))
+def test_property_set_is_refused_up_front_or_flies(key, value):
+    from quadcog.scenarios.scenario import load_scenario
+    try:
+        s = load_scenario("fig3a", [f"{key}={value}", "duration=0.05"])
+        s.make_controller()
+        s.trajectory(0.0)
+    except QuadcogError:
+        return
+
+
+def test_sensing_seed_out_of_range_named_up_front():
+    from quadcog.scenarios.scenario import load_scenario
+    with pytest.raises(QuadcogError, match="seed"):
+        load_scenario("fig3a", ["sensing={seed=-1}"])
+
+
+@settings(**SETTINGS)
+@given(text=st.text(alphabet=st.sampled_from(list("tcp:/[]0123456789.ahl-") + [" "]),
+                    max_size=24))
+def test_property_scheduler_address_parses_or_is_refused(text):
+    from quadcog.errors import SchedulerError
+    from quadcog.sweeps.scheduler import parse_address
+    try:
+        host, port = parse_address(text)
+    except SchedulerError:
+        return
+    assert host and 1 <= port <= 65535

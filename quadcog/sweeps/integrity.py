@@ -12,6 +12,7 @@ missing or twice, an edited cell, a damaged file) is flown again, and the sweep 
 process start time: a second sweep into the same folder refuses while the first runs; a lock
 whose process is gone (killed) is stale and taken over, with a message.
 """
+from collections.abc import Callable
 import contextlib
 import hashlib
 import json
@@ -190,7 +191,8 @@ class SweepLock:
         Another live process holds the lock; the message names its pid.
     """
 
-    def __init__(self, out, say=None):
+    def __init__(self, out: "str | os.PathLike",
+                 say: "Callable[[str], None] | None" = None) -> None:
         self.path = Path(out) / LOCK_NAME
         self._say = say or (lambda text: None)
         self._held = False

@@ -247,7 +247,7 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
         return _run(s, out, workers, scheduler, progress, plots, say, t0)
 
 
-def check_backend(workers, scheduler, out=None):
+def check_backend(workers: object, scheduler: object, out: object = None) -> None:
     """Refuse a wrong ``workers``, ``scheduler`` or ``out`` before any work.
 
     Parameters

@@ -39,7 +39,7 @@ def _json_table(path):
     return value
 
 
-def read_table(path):
+def read_table(path: Path) -> np.ndarray:
     """The (N, 37) trajectory table of ``trajectory.csv`` or ``trajectory.parquet``.
 
     Parameters
@@ -116,7 +116,7 @@ def _is_float(text):
     return True
 
 
-def read_run(run_dir):
+def read_run(run_dir: "str | Path") -> tuple:
     """(table (N, 37), metrics dict, Vehicle) of a folder written by `quadcog run`.
 
     Parameters
@@ -171,7 +171,7 @@ def read_run(run_dir):
     return table, metrics, vehicle
 
 
-def check_output(output):
+def check_output(output: "str | Path") -> Path:
     """The GIF path ``output`` when it can be written, else an InputError naming it.
 
     Parameters
@@ -204,7 +204,8 @@ def frame_times(t, fps, speed, max_frames):
     return np.append(times, t[-1]) if times[-1] < t[-1] else times
 
 
-def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
+def animate_run(run_dir: "str | Path", output: "str | Path | None" = None, fps: int = 15,
+                speed: float = 1.0, max_frames: int = 120) -> Path:
     """Write the GIF of a run folder; returns its path.
 
     Parameters
@@ -247,7 +248,8 @@ def _check_settings(fps, speed, max_frames):
                          f"got {speed!r}")
 
 
-def animate_table(table, metrics, vehicle, output, fps=15, speed=1.0, max_frames=120):
+def animate_table(table: np.ndarray, metrics: dict, vehicle: object, output: Path,
+                  fps: int = 15, speed: float = 1.0, max_frames: int = 120) -> Path:
     """Draw the GIF of a trajectory table (as ``read_run`` returns it) into ``output``.
 
     Parameters
