@@ -412,7 +412,7 @@ HOSTILE = st.one_of(st.none(), st.booleans(), st.integers(-3, 3), st.just(10 ** 
                                               st.text(max_size=2)), max_size=4))
 
 
-@settings(derandomize=True, database=None, deadline=None, max_examples=120,
+@settings(derandomize=True, database=None, deadline=None, max_examples=50,
           suppress_health_check=list(HealthCheck))
 @given(where=st.sampled_from(["chunk", "seed", "samples", "mode", "threshold", "inadmissible",
                               "name", "key", "values", "range", "uniform", "ball", "set"]),
