@@ -158,9 +158,8 @@ def _dask(jobs, workers, scheduler, fingerprint, on_done):
     cluster = None
     try:
         if scheduler:
-            address = probe_scheduler(scheduler)
             try:
-                client = Client(address, timeout="20s")
+                client = Client(scheduler, timeout="20s")
             except (OSError, TimeoutError) as e:
                 raise SchedulerError(f"--scheduler {scheduler}: cannot connect ({e})") from None
         else:
@@ -235,6 +234,8 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
         s = load_sweep(spec, **settings)
     say = (lambda text: print(f"sweep {s.name}: {text}", file=sys.stderr)) if progress \
         else (lambda text: None)
+    if scheduler is not None:           # before any folder is made: it answers, or an error
+        scheduler = probe_scheduler(scheduler)
     if out is None:
         return _run(s, None, workers, scheduler, progress, plots, say, t0)
     out = Path(out)
