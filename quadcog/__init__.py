@@ -4,10 +4,8 @@
 ``coriolis``, ``damping``, ``gravity``, ``regressor``, ``decoupling``, ``drift``,
 ``linearization``) as fast numpy callables. This package never imports SymPy.
 """
-from quadcog import (
-                                 _startup,  # noqa: F401  (first: Ctrl-C during the command's imports)
-                                 config,
-)
+from quadcog import config
+import quadcog._startup  # noqa: F401  (before the heavy imports: Ctrl-C while starting)
 from quadcog.controllers import (
                                  AdaptiveFeedbackLinearization,
                                  CascadePD,
