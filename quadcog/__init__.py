@@ -5,6 +5,7 @@
 ``linearization``) as fast numpy callables. This package never imports SymPy.
 """
 from quadcog import config
+import quadcog._startup  # noqa: F401  (before the heavy imports: Ctrl-C while starting)
 from quadcog.controllers import (
                                  AdaptiveFeedbackLinearization,
                                  CascadePD,

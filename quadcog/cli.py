@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable, Sequence
+import os
 from pathlib import Path
 import sys
 import warnings
@@ -325,7 +326,8 @@ def cmd_sweep(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.sweeps.runner import run_cli
-    run_cli(args.sweep, _out_dir(args.out), workers=args.workers, scheduler=args.scheduler)
+    # the folder is made by the sweep once the file validates: a rejected file leaves none
+    run_cli(args.sweep, args.out, workers=args.workers, scheduler=args.scheduler)
 
 
 def add_identify(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -368,7 +370,7 @@ def cmd_identify(args: argparse.Namespace) -> None:
     args : argparse.Namespace
         The parsed command line.
     """
-    from quadcog.files import strict_json
+    from quadcog.files import RunFiles, atomic_write, strict_json
     from quadcog.identification import identify
     from quadcog.identification.figure import plot_identification
     for path in list(args.logs) + list(args.baseline or []):
@@ -381,10 +383,11 @@ def cmd_identify(args: argparse.Namespace) -> None:
         path = _out_dir(args.out) / "identify.png"
         title = f"quadcog identify: {len(args.logs)} log(s) of {args.vehicle}" + (
             f" against {len(args.baseline)} baseline log(s)" if args.baseline else "")
-        plot_identification(result, path, title=title)
+        with RunFiles(path.parent, owned=()) as files:      # whole or absent, even on Ctrl-C
+            plot_identification(result, files.path(path.name), title=title)
         print(f"wrote {path}")
     if args.json is not None:
-        args.json.write_text(strict_json(result.as_json()))
+        atomic_write(args.json, strict_json(result.as_json()))
         print(f"wrote {args.json}")
 
 
@@ -432,14 +435,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        The exit status: 0; 2 for an error (QuadcogError, OSError: one line on stderr); 130
-        when interrupted (Ctrl-C).
+        The exit status: 0; 2 for an error (QuadcogError, OSError: one line on stderr); 3
+        for an unexpected one (one line; QUADCOG_TRACEBACK=1 shows it); 130 when interrupted
+        (Ctrl-C), 143 when terminated (SIGTERM).
     """
-    args = parser().parse_args(argv)
+    from quadcog.errors import Interrupted
+    from quadcog.interrupts import install_handlers, restore_handlers
+    previous = install_handlers()   # first: SIGINT/SIGTERM -> Interrupted, cleaned up on the way
     try:
+        return _main(argv)
+    except Interrupted as e:        # during parsing, or after a command's own handling
+        print("quadcog: interrupted", file=sys.stderr)
+        return e.status
+    finally:
+        restore_handlers(previous)
+
+
+def _main(argv):
+    from quadcog.errors import Interrupted
+    try:
+        args = parser().parse_args(argv)
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning      # one line, no source location
             args.func(args)
+    except Interrupted as e:        # files being written were not committed
+        print("quadcog: interrupted", file=sys.stderr)
+        return e.status             # 128 + the signal, as shells report it: 130, 143
     except QuadcogError as e:
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2
@@ -449,6 +470,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:       # Ctrl-C: files being written were not committed
         print("quadcog: interrupted", file=sys.stderr)
         return 130                  # 128 + SIGINT, as shells report it
+    except (MemoryError, RecursionError) as e:
+        print(f"quadcog: error: out of resources ({type(e).__name__}); the input is too large "
+              f"for this machine", file=sys.stderr)
+        return 2
+    except Exception as e:          # a bug: one line for users, the traceback on request
+        if os.environ.get("QUADCOG_TRACEBACK"):
+            raise
+        print(f"quadcog: internal error: {type(e).__name__}: {e} (a bug in quadcog; "
+              f"QUADCOG_TRACEBACK=1 shows where)", file=sys.stderr)
+        return 3
     return 0
 
 

@@ -132,3 +132,31 @@ class LogSignalError(LogError):
 class IdentificationError(InputError):
     """A CoG/mass identification cannot run on the logs given (quadcog.identification): a
     missing signal, too few hover samples, no rotor model; the message names the log."""
+
+
+class SweepLockedError(SweepError):
+    """Another live sweep is writing into the same results folder (its lock file
+    ``.sweep.lock`` names the pid)."""
+
+
+class SizeError(InputError):
+    """A size or count (flights, samples, grid points, workers, rows) too large to allocate
+    or to finish: refused before any work, naming the size and the limit."""
+
+
+class SchedulerError(QuadcogError):
+    """A Dask scheduler address of the wrong form, or a scheduler that does not answer within
+    the stated time."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived; ``signum`` is the signal and ``status`` the exit status a
+    shell reports for it (128 + signum: 130, 143). A KeyboardInterrupt, not a QuadcogError,
+    so that no ``except Exception`` (nor ``except QuadcogError``) swallows it and every
+    ``finally`` clean-up runs on the way out."""
+
+    def __init__(self, signum):
+        import signal
+        self.signum = int(signum)
+        self.status = 128 + self.signum
+        super().__init__(f"interrupted by {signal.Signals(self.signum).name}")

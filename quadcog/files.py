@@ -134,10 +134,10 @@ def write_csv(fh: TextIO, header: Sequence[str], columns: Sequence[npt.NDArray[A
 
 @contextlib.contextmanager
 def _no_interrupt() -> Iterator[None]:
-    """Hold off SIGINT (Ctrl-C) for the block; it is delivered right after."""
+    """Hold off SIGINT (Ctrl-C) and SIGTERM for the block; they are delivered right after."""
     main = threading.current_thread() is threading.main_thread()
     if main and hasattr(signal, "pthread_sigmask"):
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
         try:
             yield
         finally:
@@ -164,22 +164,40 @@ def plot_text(text: object) -> str:
     return str(text).replace("$", r"\$")
 
 
+RUN_FILES = ("metrics.json", "vehicle.json", "trajectory.csv", "trajectory.parquet",
+             "flight.png", "flight.gif")
+"""Every file `quadcog run` may write into its folder: a run owns them all, so a new run
+removes those of an earlier run that it does not write itself."""
+COMPLETE_MARKER = "metrics.json"
+"""The file whose presence says a run folder is complete: removed first and renamed into
+place last, so a folder caught half-way (even by SIGKILL) never looks complete."""
+
+
 class RunFiles:
     """The files of one run in folder ``out``, committed together.
 
     Use as a context manager: ``path(name)`` gives the temporary path to write ``name`` to;
-    when the block ends without an exception, every file is renamed to its final name; on any
-    exception (Ctrl-C included) the temporary files are removed and the folder keeps what it
-    had.
+    when the block ends without an exception, the files of ``owned`` that this run did not
+    write are removed (they belong to an earlier run) and every file is renamed to its final
+    name, ``COMPLETE_MARKER`` last; on any exception (Ctrl-C and SIGTERM included) the
+    temporary files are removed and the folder keeps what it had.
 
     Parameters
     ----------
     out : str or os.PathLike
-        The output folder (created on entering the block).
+        The run folder (created when missing).
+    owned : tuple of str
+        Names of the files that belong to a run (default ``RUN_FILES``); ``()`` to add
+        files without removing any.
+
+    Returns
+    -------
+    RunFiles
     """
 
-    def __init__(self, out: str | os.PathLike[str]) -> None:
+    def __init__(self, out: str | os.PathLike[str], owned: tuple[str, ...] = RUN_FILES) -> None:
         self.out = Path(out)
+        self.owned = tuple(owned)
         self._pending: dict[str, Path] = {}
 
     def __enter__(self) -> "RunFiles":
@@ -188,6 +206,8 @@ class RunFiles:
         except OSError as e:
             raise QuadcogError(f"{self.out}: cannot create the output folder ({e.strerror})") \
                 from None
+        if not self.out.is_dir():
+            raise QuadcogError(f"{self.out}: not a folder")
         return self
 
     def path(self, name: str | os.PathLike[str]) -> Path:
@@ -212,14 +232,37 @@ class RunFiles:
     def __exit__(self, kind: type[BaseException] | None, value: BaseException | None,
                  tb: TracebackType | None) -> Literal[False]:
         if kind is None:
-            with _no_interrupt():
-                for name, tmp in self._pending.items():
-                    os.replace(tmp, self.out / name)
+            try:
+                with _no_interrupt():
+                    self._commit()
+            except BaseException:
+                self._discard()
+                raise
         else:
-            for tmp in self._pending.values():
-                with contextlib.suppress(OSError):
-                    tmp.unlink()
+            self._discard()
         return False
+
+    def _commit(self):
+        for name, tmp in self._pending.items():
+            if not tmp.is_file():
+                raise QuadcogError(f"{self.out / name}: was not written (internal error)")
+        names = list(self._pending)
+        marked = self.owned and COMPLETE_MARKER in self.owned
+        if marked:
+            with contextlib.suppress(FileNotFoundError):
+                (self.out / COMPLETE_MARKER).unlink()
+        for stale in self.owned:
+            if stale not in self._pending:
+                with contextlib.suppress(FileNotFoundError, IsADirectoryError):
+                    (self.out / stale).unlink()
+        last = [n for n in names if n == COMPLETE_MARKER] if marked else []
+        for name in [n for n in names if n not in last] + last:
+            os.replace(self._pending[name], self.out / name)
+
+    def _discard(self):
+        for tmp in self._pending.values():
+            with contextlib.suppress(OSError):
+                tmp.unlink()
 
 
 def atomic_write(path: str | os.PathLike[str], text: str) -> None:
@@ -238,5 +281,9 @@ def atomic_write(path: str | os.PathLike[str], text: str) -> None:
         ``path`` holds ``text`` after the rename.
     """
     tmp = Path(str(path) + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()

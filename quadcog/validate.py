@@ -392,7 +392,10 @@ def array(value: npt.ArrayLike, where: str, shape: Sequence[int | None] | None =
         _walk(value, where, (), error, what)
     elif not _is_real_scalar(value):
         fail(where, what, value, error)
-    a = np.array(value, dtype=float)
+    try:
+        a = np.array(value, dtype=float)
+    except OverflowError:           # an integer beyond the float range
+        fail(where, f"{what} of numbers within the float range", value, error)
     if shape is not None and (a.ndim != len(shape) or any(
             d is not None and d != n for d, n in zip(shape, a.shape))):
         raise error(f"{where}: expected {what}, got shape {a.shape}"

@@ -17,7 +17,7 @@ PACKAGES = ("quadcog", "derive", "report", "bench")
 # Bottom to top. A module may import from its own layer and from the layers before it.
 LAYERS = (
     ("floor", ("quadcog.errors", "quadcog.config", "quadcog.validate", "quadcog.paths",
-               "quadcog.files", "quadcog.kinds")),
+               "quadcog.files", "quadcog.kinds", "quadcog.interrupts")),
     ("codegen", ("quadcog.codegen",)),
     ("model", ("quadcog.model",)),
     ("vehicles", ("quadcog.vehicles",)),

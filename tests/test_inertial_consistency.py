@@ -210,15 +210,21 @@ def test_default_vehicle_rim_along_z():
     rim = np.sqrt((2 * Ixx - Izz) / (2 * m))
     assert round(rim, 4) == 0.0383
     for z, ok in ((0.99 * rim, True), (1.01 * rim, False)):
-        pi, _, _ = inertial_arguments(quadcog.default_parameters(z_G=z))
+        # parameter-level with_cog: a Vehicle itself now refuses the inconsistent side
+        pi, _, _ = inertial_arguments(quadcog.with_cog(p, [0.0, 0.0, z]))
         assert is_physically_consistent(pi) == ok
     # along x: I_G = diag(Ixx, Iyy - m x^2, Izz - m x^2), Ixx < Iyy + Izz - 2 m x^2
     rim_x = np.sqrt((p[3] + p[4] - p[2]) / (2 * m))
     assert round(rim_x, 4) == 0.0939
     for x_G, ok in ((0.99 * rim_x, True), (1.01 * rim_x, False)):
         for key in ("x_G", "y_G"):
-            pi, _, _ = inertial_arguments(quadcog.default_parameters(**{key: x_G}))
+            r = [x_G, 0.0, 0.0] if key == "x_G" else [0.0, x_G, 0.0]
+            pi, _, _ = inertial_arguments(quadcog.with_cog(p, r))
             assert is_physically_consistent(pi) == ok
+    # the Vehicle applies the same test (issue 21): inside the rim accepted, outside refused
+    quadcog.default_parameters(z_G=0.99 * rim)
+    with pytest.raises(quadcog.PhysicalConsistencyError, match="triangle inequality"):
+        quadcog.default_parameters(z_G=1.01 * rim)
 
 
 def test_model_refuses_inconsistent_pi(model):

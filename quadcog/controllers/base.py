@@ -26,6 +26,7 @@ from quadcog.errors import InputError
 from quadcog.model.functions import Model, load
 from quadcog.model.parameters import with_cog
 from quadcog.trajectories.analytic import REF_SIZE
+from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
 __all__ = ["Controller"]
@@ -225,18 +226,24 @@ class Controller:
         Raises
         ------
         InputError
-            When an argument has the wrong shape or non-finite entries.
+            A wrong type, shape or non-finite entry (strings, complex numbers, sets and
+            ragged lists included), or a state at which the law is not finite (such as a
+            1e200 m/s velocity: U would be NaN).
         """
-        x = np.asarray(x, dtype=float)
-        ref = np.asarray(ref, dtype=float)
-        c = self.initial_state() if c is None else np.asarray(c, dtype=float)
-        for name, a, n in (("x", x, 12), ("ref", ref, REF_SIZE), ("c", c, self.n_state)):
-            if a.shape != (n,):
-                raise InputError(f"{name} must have shape ({n},), got shape {a.shape}")
-            if not np.isfinite(a).all():
-                raise InputError(f"{name} has non-finite entries: {a}")
-        U, c_dot = self.function()(float(t), x, ref, c)
-        return np.array(U).ravel(), np.array(c_dot).ravel()
+        t = real(t, "t", unit="s")
+        x = vector(x, "x", 12)
+        ref = vector(ref, "ref", REF_SIZE)
+        c = self.initial_state() if c is None else (
+            vector(c, "c", self.n_state) if self.n_state else array(c, "c", (0,)))
+        U_dm, c_dot_dm = self.function()(t, x, ref, c)
+        U, c_dot = np.array(U_dm).ravel(), np.array(c_dot_dm).ravel()
+        if not (np.isfinite(U).all() and np.isfinite(c_dot).all()):
+            k = int(np.argmax(np.abs(x)))
+            raise InputError(f"controller {self.name!r}: the law is not finite at t = {t} "
+                             f"(U = {plain(U.tolist())}); the largest state entry is "
+                             f"x[{k}] = {plain(float(x[k]))}: expected a state within the "
+                             f"range in which the law can be evaluated in floating point")
+        return U, c_dot
 
     def for_vehicle(self, vehicle: Vehicle) -> "Controller":
         """This controller, with the same settings, designed for another model.

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from quadcog import config
 from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import CONTROLLERS, make_controller
+from quadcog.embedded.c_text import c_identifier, comment_text
 from quadcog.embedded.emit import C_TYPE, PRECISIONS, body, literal
 from quadcog.errors import ExportError
 from quadcog.model.conventions import PARAM_NAMES, STATE_NAMES
@@ -291,11 +292,10 @@ def render(controller: Controller, precision: str = "float32", name: str | None 
     if not isinstance(controller, Controller):
         raise ExportError(f"controller must be a quadcog Controller or one of "
                           f"{tuple(CONTROLLERS)}, got {controller!r}")
-    name = name or short_name(controller)
-    if not name.isidentifier():
-        raise ExportError(f"name {name!r} is not a C identifier")
-    command = command or (f"quadcog.embedded.export_controller({type(controller).__name__}"
-                          f"(...), precision={precision!r})")
+    name = c_identifier(short_name(controller) if name is None else name, "name")
+    command = comment_text(command, "command") if command is not None else (
+        f"quadcog.embedded.export_controller({type(controller).__name__}(...), "
+        f"precision={precision!r})")
     fn = step_function(controller)
     return {f"quadcog_{name}.h": _header(name, controller, precision, command,
                                          int(controller.n_state)),
@@ -334,11 +334,19 @@ def export_controller(controller: str | Controller, precision: str = "float32",
     quadcog.errors.InputError
         For an unknown controller name.
     """
+    if not isinstance(out, (str, os.PathLike)):
+        raise ExportError(f"out: expected a folder path (str or os.PathLike), got {out!r} "
+                          f"({type(out).__name__})")
+    if name is not None:
+        c_identifier(name, "name")
     if isinstance(controller, str):
+        if controller not in CONTROLLERS:
+            raise ExportError(f"controller {controller!r}: expected one of "
+                              f"{tuple(CONTROLLERS)} or a quadcog Controller")
         if command is None:
             command = (f"quadcog export --controller {controller} --precision {precision} "
                        "--out DIR")
-        name = name or controller
+        name = name if name is not None else c_identifier(controller, "controller")
         controller = make_controller(controller)
     files = render(controller, precision, name, command)
     out = Path(out)

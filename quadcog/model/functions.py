@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike
 from quadcog.codegen.compiled import external
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.fastcall import FastCall
-from quadcog.errors import InputError, ParameterError, QuadcogWarning
+from quadcog.errors import GeneratedFilesError, InputError, ParameterError, QuadcogWarning
 from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
 from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import check_parameters
@@ -166,7 +166,13 @@ class Model:
         return FastCall(self._library.functions()[name])
 
     def _call(self, name: str, args: tuple[Any, ...], out: Any) -> Any:
-        spec_in, spec_out = self._library.contract[name]
+        spec = self._library.contract.get(name)
+        if spec is None:        # a method of Model whose function the manifest does not list
+            raise GeneratedFilesError(
+                f"{self.folder / 'manifest.json'}: lists no function {name!r} (it lists "
+                f"{', '.join(self._library.contract) or 'none'}): the manifest is damaged or "
+                f"from another version; run `make derive` in a checkout, or reinstall quadcog")
+        spec_in, spec_out = spec
         call = self._calls.get(name)
         if call is None:
             call = self._calls[name] = self.fast(name)

@@ -223,7 +223,9 @@ def apply_overrides(data: dict[str, Any], assignments: Sequence[str]
         set_key(data, key, value, append=True, where=f"--set {text!r}")
     controller = data.get("controller")
     schema = controller_params()
-    if any(k == ["controller"] for k in set_keys) and controller in schema:
+    # a list or table given as the controller is reported by the scenario validation
+    if any(k == ["controller"] for k in set_keys) and isinstance(controller, str) \
+            and controller in schema:
         params = data.get("controller_params", {})
         explicit = {k[1] for k in set_keys if k and k[0] == "controller_params" and len(k) > 1}
         dropped = [k for k in params if k not in schema[controller] and k not in explicit]

@@ -443,6 +443,7 @@ def write_table(result: SimulationResult, path: str | os.PathLike[str], every: i
         raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
     columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G]
     n = len(result.t)
+    every = min(every, max(n, 1))       # a step beyond the run: first and last sample only
     if every > 1:
         rows = np.unique(np.r_[np.arange(0, n, every), n - 1])
         columns, n = [c[rows] for c in columns], len(rows)
@@ -483,12 +484,15 @@ def output_files(fmt: str = "csv", plot: bool = True) -> tuple[str, ...]:
 
 
 def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.PathLike[str],
-                  plot: bool = True, every: int = 1, fmt: str = "csv") -> dict[str, Any]:
+                  plot: bool = True, every: int = 1, fmt: str = "csv",
+                  animate: bool = False) -> dict[str, Any]:
     """The files of one run, into a folder: all of them or none.
 
-    metrics.json, vehicle.json, trajectory.csv (or .parquet) and, with ``plot``, flight.png,
-    written through ``quadcog.files.RunFiles``, so an error or Ctrl-C while writing leaves
-    the folder's previous files as they were. metrics.json and vehicle.json are strict JSON.
+    metrics.json, vehicle.json, trajectory.csv (or .parquet), with ``plot`` flight.png and
+    with ``animate`` flight.gif, written through ``quadcog.files.RunFiles``, so an error or
+    Ctrl-C while writing leaves the folder's previous files as they were, and the files of an
+    earlier run that this one does not write are removed. metrics.json and vehicle.json are
+    strict JSON.
 
     Parameters
     ----------
@@ -504,6 +508,8 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
         Write every ``every``-th sample (and the last) into the table.
     fmt : str
         'csv' or 'parquet'.
+    animate : bool
+        Also write flight.gif (``quadcog.viz.animation``), in the same all-or-nothing commit.
 
     Returns
     -------
@@ -522,6 +528,10 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
                         disturbances=scenario.disturbances)
         files.path("vehicle.json").write_text(strict_json(scenario.vehicle.as_dict()))
         files.path("metrics.json").write_text(strict_json(metrics))
+        if animate:         # from the table as written, as `quadcog animate` would read it
+            from quadcog.viz.animation import animate_table, read_table
+            animate_table(read_table(files.path(f"trajectory.{fmt}")), metrics,
+                          scenario.vehicle, files.path("flight.gif"))
     return metrics
 
 
@@ -594,12 +604,10 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
         raise
     except InputError as e:                 # e.g. dt too large for the closed loop
         raise ScenarioError(f"{scenario.source}: {e}") from None
-    metrics = write_outputs(result, scenario, out, plot=plot, every=every, fmt=fmt)
-    written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else [])
-    if animate:
-        from quadcog.viz.animation import animate_run
-        animate_run(out, out / "flight.gif")
-        written.append("flight.gif")
+    metrics = write_outputs(result, scenario, out, plot=plot, every=every, fmt=fmt,
+                            animate=animate)
+    written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else []) + (
+        ["flight.gif"] if animate else [])
     status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']})"
               if metrics["diverged"] else
               f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")

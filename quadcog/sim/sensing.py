@@ -44,6 +44,7 @@ __all__ = ["DEG", "GYRO_NOISE_DENSITY", "Sensing", "gaussian", "Sensed"]
 
 DEG = np.pi / 180.0
 GYRO_NOISE_DENSITY = 0.005 * DEG          # rad/s/sqrt(Hz), MPU-6000
+MAX_SEED = 2**32 - 1                       # seeds: 0 .. 2^32 - 1
 
 
 @dataclass(frozen=True)
@@ -87,6 +88,9 @@ class Sensing:
                                  f"{getattr(self, name)!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
             raise InputError(f"Sensing.seed must be an integer, got {self.seed!r}")
+        if not 0 <= self.seed <= MAX_SEED:      # numpy's seeding refuses < 0; the noise
+            raise InputError(f"Sensing.seed must be a whole number 0..{MAX_SEED}, got "
+                             f"{self.seed!r}")  # hash needs 0.618 seed well inside floats
         for name in ("position", "velocity", "attitude", "gyro_density", "gyro_bias"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) \

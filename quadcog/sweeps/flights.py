@@ -7,7 +7,6 @@ or loads the compiled code itself (from the disk cache, keyed by its source).
 """
 from collections.abc import Sequence
 import copy
-import json
 from typing import Any
 
 import numpy as np
@@ -16,13 +15,13 @@ from numpy.typing import NDArray
 from quadcog.scenarios.keys import set_key
 from quadcog.scenarios.scenario import Scenario, parse
 from quadcog.sim.flight import start_at_reference
+from quadcog.sweeps.groups import CONTROLLERS_BY_GROUP, group_key
 from quadcog.sweeps.spec import Flight, Sweep
 
 __all__ = ["METRICS", "make_job", "run_chunk", "cog_steps", "fly_group"]
 
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
            "final_position_error", "diverged", "diverged_at")
-_controllers: dict[str, Any] = {}       # group key -> controller, per process
 
 
 def make_job(sweep: Sweep, chunk_index: int, flights: Sequence[Flight]) -> dict[str, Any]:
@@ -47,17 +46,6 @@ def make_job(sweep: Sweep, chunk_index: int, flights: Sequence[Flight]) -> dict[
             "threshold": sweep.threshold,
             "dimensions": [(d.key, d.width) for d in sweep.dimensions],
             "flights": [(f.index, f.values, f.admissible) for f in flights]}
-
-
-def _group_key(data):
-    """What flights must share to fly in one batch: all but the truth CoG (the vehicle's
-    x_G, y_G, z_G and the ``r`` of each CoG change)."""
-    d = copy.deepcopy(data)
-    for k in ("x_G", "y_G", "z_G"):
-        d.get("vehicle", {}).pop(k, None)
-    for change in d.get("cog", []):
-        change.pop("r", None)
-    return json.dumps(d, sort_keys=True)
 
 
 def run_chunk(job: dict[str, Any], threads: int = 1) -> dict[str, NDArray[Any]]:
@@ -90,7 +78,7 @@ def run_chunk(job: dict[str, Any], threads: int = 1) -> dict[str, NDArray[Any]]:
             set_key(data, key, value)
         scenarios[row] = parse(data, f"{job['source']} (flight {index})")
         if admissible:
-            groups.setdefault(_group_key(data), []).append(row)
+            groups.setdefault(group_key(data), []).append(row)
     for key, rows in groups.items():
         result = fly_group(key, [scenarios[r] for r in rows], threads)
         for name in METRICS:
@@ -158,9 +146,9 @@ def fly_group(key: str, scenarios: Sequence[Scenario], threads: int = 1,
     """
     from quadcog.sim.vector_batch import fly_batch
     s0 = scenarios[0]
-    ctl = _controllers.get(key)
+    ctl = CONTROLLERS_BY_GROUP.get(key)
     if ctl is None:
-        ctl = _controllers[key] = s0.make_controller()
+        ctl = CONTROLLERS_BY_GROUP[key] = s0.make_controller()
     D = np.array([cog_steps(s).ravel() for s in scenarios]).reshape(len(scenarios), -1)
     x0 = start_at_reference(s0.trajectory(0.0))
     x0[:3] += np.asarray(s0.initial_offset)

@@ -6,7 +6,7 @@ The result of a chunk depends on the chunk alone (fixed flights, seeded values, 
 lanes), never on where or when it ran: every backend and every resumed run gives the same
 bits.
 """
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 import json
 import multiprocessing
@@ -19,10 +19,13 @@ from typing import Any, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
-from quadcog.errors import QuadcogError
+from quadcog.errors import QuadcogError, SchedulerError, SizeError
 from quadcog.files import atomic_write
+from quadcog.interrupts import die_with_parent
 from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.flights import make_job, run_chunk
+from quadcog.sweeps.integrity import SweepLock, chunk_metadata, columns_of_table, verify_chunk
+from quadcog.sweeps.scheduler import probe_scheduler
 from quadcog.sweeps.spec import Sweep, SweepError, from_dict, load_sweep
 
 __all__ = ["CHUNK_FOLDER", "MANIFEST", "Progress", "ChunkStore", "SweepResult", "sweep",
@@ -30,6 +33,7 @@ __all__ = ["CHUNK_FOLDER", "MANIFEST", "Progress", "ChunkStore", "SweepResult", 
 
 CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"
+MAX_WORKERS = 256           # processes: more than any machine this runs on gives a benefit
 
 
 class Progress:
@@ -77,7 +81,9 @@ class Progress:
 
 class ChunkStore:
     """``out/sweep.json`` (the sweep's fingerprint) and ``out/chunks/chunk-NNNNN.parquet``,
-    each written to a temporary name and renamed, so a chunk file is complete or absent.
+    each written to a temporary name and renamed, so a chunk file is complete or absent; each
+    chunk records which sweep, chunk and flights it holds, its row count and a checksum
+    (``quadcog.sweeps.integrity``), checked before a resumed sweep uses it.
 
     Parameters
     ----------
@@ -100,13 +106,15 @@ class ChunkStore:
         if manifest.is_file():
             try:
                 old = json.loads(manifest.read_text()).get("fingerprint")
-            except (ValueError, OSError):
+            except (ValueError, OSError, AttributeError):
                 old = None
             if old != self.fingerprint:
                 raise SweepError(f"{self.out}: holds the results of a different sweep (or of "
-                                 f"this file before an edit); choose another --out folder or "
-                                 f"delete {self.out}")
+                                 f"this file before an edit, or a damaged {MANIFEST}); choose "
+                                 f"another --out folder or delete {self.out}")
         self.folder.mkdir(parents=True, exist_ok=True)
+        for stale in self.folder.glob(".chunk-*.partial-*"):    # of a killed writer (the
+            stale.unlink(missing_ok=True)                       # lock is ours: none live)
         atomic_write(manifest, json.dumps(
             {"fingerprint": self.fingerprint, "name": sweep.name, "source": sweep.source,
              "flights": len(sweep.flights), "chunks": len(sweep.chunks())}, indent=2) + "\n")
@@ -141,38 +149,49 @@ class ChunkStore:
         """
         return self.path(c).is_file()
 
-    def write(self, c: int, columns: dict[str, NDArray[Any]]) -> None:
-        """Store the result of chunk ``c`` (to a temporary name, then renamed).
+    def write(self, c: int, table: Any, flights: Sequence[int]) -> None:
+        """Store chunk ``c`` (to a temporary name, then renamed), with its record.
 
         Parameters
         ----------
         c : int
             The chunk index.
-        columns : dict of str to numpy.ndarray
-            {column: (n,) array}, one row per flight of the chunk.
+        table : pyarrow.Table
+            One row per flight of the chunk.
+        flights : sequence of int
+            The flight indices of its rows (part of the record a resume verifies).
         """
         pa = require_pyarrow()
-        tmp = self.path(c).with_suffix(".tmp")
-        pa.parquet.write_table(to_arrow(columns), tmp)
-        os.replace(tmp, self.path(c))
+        meta = dict(table.schema.metadata or {})
+        meta.update(chunk_metadata(table, self.fingerprint, c, flights))
+        tmp = self.path(c).with_name(f".{self.path(c).name}.partial-{os.getpid()}")
+        try:
+            pa.parquet.write_table(table.replace_schema_metadata(meta), tmp)
+            os.replace(tmp, self.path(c))
+        finally:
+            if tmp.exists():
+                tmp.unlink()
 
-    def read(self, c: int) -> dict[str, NDArray[Any]]:
-        """The stored result of chunk ``c``.
+    def verified(self, c: int, flights: Sequence[int]
+                 ) -> tuple[dict[str, NDArray[Any]] | None, str | None]:
+        """The stored result of chunk ``c``, when it verifies for these flights.
 
         Parameters
         ----------
         c : int
             The chunk index.
+        flights : sequence of int
+            The flight indices the chunk must hold.
 
         Returns
         -------
-        dict of str to numpy.ndarray
-            {column: (n,) array}, one row per flight of the chunk.
+        tuple of (dict or None, str or None)
+            ({column: (n,) array}, None) when the file is this sweep's chunk ``c`` with these
+            flights, row count and checksum (``quadcog.sweeps.integrity``), else (None, the
+            reason).
         """
-        pa = require_pyarrow()
-        table = pa.parquet.read_table(self.path(c))
-        return {name: table.column(name).to_numpy(zero_copy_only=False)
-                for name in table.column_names}
+        table, reason = verify_chunk(self.path(c), self.fingerprint, c, flights)
+        return (None, reason) if table is None else (columns_of_table(table), None)
 
 
 def _concat(parts):
@@ -193,10 +212,20 @@ def _local(jobs, workers, on_done):
     methods = multiprocessing.get_all_start_methods()
     ctx = multiprocessing.get_context("fork" if sys.platform.startswith("linux")
                                       and "fork" in methods else "spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                               initializer=die_with_parent)
+    try:
         futures = {pool.submit(run_chunk, job): job["chunk"] for job in jobs}
         for fut in as_completed(futures):
             on_done(futures[fut], fut.result())
+    except BaseException:
+        # Ctrl-C, SIGTERM or a failed chunk: end the workers now, not after their chunks
+        for proc in list(getattr(pool, "_processes", {}).values()):
+            if proc.is_alive():
+                proc.kill()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
 
 
 def _dask(jobs, workers, scheduler, fingerprint, on_done):
@@ -215,7 +244,7 @@ def _dask(jobs, workers, scheduler, fingerprint, on_done):
             try:
                 client = Client(scheduler, timeout="20s")
             except (OSError, TimeoutError) as e:
-                raise QuadcogError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+                raise SchedulerError(f"--scheduler {scheduler}: cannot connect ({e})") from None
         else:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                    dashboard_address=None, silence_logs=logging.ERROR)
@@ -248,12 +277,17 @@ class SweepResult:
         Wall time of the call [s].
     flown : int
         Flights simulated by this call: not those of resumed chunks, nor inadmissible ones.
+    rejected : sequence of (int, str)
+        (chunk index, reason) of the chunk files found in ``out`` that did not verify and
+        were flown again.
     """
 
     def __init__(self, sweep: Sweep, columns: dict[str, NDArray[Any]], summary: dict[str, Any],
-                 out: str | os.PathLike[str] | None, seconds: float, flown: int) -> None:
+                 out: str | os.PathLike[str] | None, seconds: float, flown: int,
+                 rejected: Sequence[tuple[int, str]] = ()) -> None:
         self.sweep, self.columns, self.summary = sweep, columns, summary
         self.out, self.seconds, self.flown = out, seconds, flown
+        self.rejected = list(rejected)
 
     def table(self) -> Any:
         """The results as a pyarrow Table.
@@ -307,6 +341,7 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
         When Dask or pyarrow is needed and missing, or the scheduler cannot be reached.
     """
     t0 = time.perf_counter()
+    check_backend(workers, scheduler, out)
     if isinstance(spec, Sweep):
         s = spec
     elif isinstance(spec, dict):
@@ -314,19 +349,75 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
         s = from_dict(dict(spec, **settings), source)
     else:
         s = load_sweep(spec, **settings)
+    say = (lambda text: print(f"sweep {s.name}: {text}", file=sys.stderr)) if progress \
+        else (lambda text: None)
+    if scheduler is not None:           # before any folder is made: it answers, or an error
+        scheduler = probe_scheduler(scheduler)
+    if out is None:
+        return _run(s, None, workers, scheduler, progress, plots, say, t0)
+    out = Path(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise QuadcogError(f"out = {str(out)!r}: cannot create the folder ({e.strerror})") \
+            from None
+    with SweepLock(out, say):
+        return _run(s, out, workers, scheduler, progress, plots, say, t0)
+
+
+def check_backend(workers: object, scheduler: object, out: object = None) -> None:
+    """Refuse a wrong ``workers``, ``scheduler`` or ``out`` before any work.
+
+    Parameters
+    ----------
+    workers : int or None
+        Whole number 1..MAX_WORKERS (not a bool).
+    scheduler : str or None
+        A Dask scheduler address (``quadcog.sweeps.scheduler.parse_address``).
+    out : str, os.PathLike or None
+        The results folder.
+
+    Returns
+    -------
+    None
+    """
+    import numbers
+
+    from quadcog.sweeps.scheduler import parse_address
     if workers is not None and scheduler is not None:
         raise SweepError("give --workers or --scheduler, not both")
-    if workers is not None and (not isinstance(workers, int) or workers < 1):
-        raise SweepError(f"workers must be a whole number >= 1, got {workers!r}")
+    if workers is not None:
+        if isinstance(workers, bool) or not isinstance(workers, numbers.Integral) \
+                or int(workers) < 1:
+            raise SweepError(f"workers: expected a whole number >= 1, got {workers!r}")
+        if int(workers) > MAX_WORKERS:
+            raise SizeError(f"workers = {workers}: more than {MAX_WORKERS} worker processes "
+                            f"is refused (each is a Python process with its own compiled "
+                            f"code); use a Dask cluster (--scheduler) for more")
+    if scheduler is not None:
+        parse_address(scheduler, "scheduler")
+    if out is not None and not isinstance(out, (str, os.PathLike)):
+        raise SweepError(f"out: expected a folder path (str or os.PathLike) or None, got "
+                         f"{out!r} ({type(out).__name__})")
+
+
+def _run(s, out, workers, scheduler, progress, plots, say, t0):
+    """Fly (or resume) sweep ``s`` into ``out`` (None: in memory); the lock is held."""
     chunks = s.chunks()
     store = ChunkStore(out, s) if out is not None else None
     results: dict[int, dict[str, NDArray[Any]] | None] = {}
     pending = []
+    rejected = []
     for c, flights in chunks:
+        indices = [f.index for f in flights]
         if store is not None and store.done(c):
-            results[c] = None                      # read at the end
-        else:
-            pending.append(make_job(s, c, flights))
+            columns, reason = store.verified(c, indices)
+            if columns is not None:
+                results[c] = columns
+                continue
+            rejected.append((c, reason))
+            say(f"{store.path(c).name} does not verify ({reason}): flying it again")
+        pending.append(make_job(s, c, flights))
     done_flights = len(s.flights) - sum(len(j["flights"]) for j in pending)
     if callable(progress):
         report = progress
@@ -334,14 +425,16 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
         report = Progress(f"sweep {s.name}", len(s.flights), done_flights)
         if done_flights:
             print(f"sweep {s.name}: resuming, {len(chunks) - len(pending)} of {len(chunks)} "
-                  f"chunks already in {out}", file=sys.stderr)
+                  f"chunks already in {out} (verified)", file=sys.stderr)
     else:
         report = None
 
     def on_done(c, columns):
+        # through Arrow and back, as a resumed chunk is read: the same arrays either way
+        table = to_arrow(columns)
         if store is not None:
-            store.write(c, columns)
-        results[c] = columns if store is None else None
+            store.write(c, table, [f.index for f in chunks[c][1]])
+        results[c] = columns_of_table(table)
         if report:
             report(len(columns["flight"]))
 
@@ -351,13 +444,13 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
                   on_done)
         else:
             _local(pending, os.cpu_count() or 1, on_done)
-    columns = _concat([results[c] if store is None else store.read(c) for c, _ in chunks])
+    columns = _concat([results[c] for c, _ in chunks])
     from quadcog.sweeps.summary import summarize, write_outputs
     summary = summarize(s, columns)
     if out is not None:
         write_outputs(s, columns, summary, Path(out), plots=plots)
     flown = sum(f[2] for j in pending for f in j["flights"])     # admissible ones only
-    return SweepResult(s, columns, summary, out, time.perf_counter() - t0, flown)
+    return SweepResult(s, columns, summary, out, time.perf_counter() - t0, flown, rejected)
 
 
 def run_cli(spec: str | os.PathLike[str], out: str | os.PathLike[str],

@@ -21,12 +21,13 @@ from typing import Any
 
 import numpy as np
 
-from quadcog.errors import ParameterError, SweepError
+from quadcog.errors import ParameterError, SizeError, SweepError
 from quadcog.model.parameters import admissible_radius
 from quadcog.scenarios.keys import KEY_EXAMPLE, parse_key, set_key
 from quadcog.scenarios.lookup import find_file, read_toml, scenario_path, shipped_names
 from quadcog.scenarios.scenario import Scenario, ScenarioError, parse
 from quadcog.sim.flight import check_cog_changes
+from quadcog.sweeps.groups import CONTROLLERS_BY_GROUP, group_key
 
 __all__ = ["MODES", "TOP", "SOURCES", "DEFAULT_CHUNK", "DEFAULT_THRESHOLD", "Dimension",
            "Flight", "Sweep", "cog_admissible", "from_dict", "sweep_names", "sweep_path",
@@ -38,6 +39,8 @@ TOP = {"name", "description", "scenario", "mode", "samples", "seed", "chunk", "t
 SOURCES = ("values", "range", "uniform", "normal", "ball")
 DEFAULT_CHUNK = 64          # flights per chunk: the unit of scheduling, retry and resume
 DEFAULT_THRESHOLD = 0.5     # m: tail RMS above this (or a diverged run) counts as failed
+MAX_FLIGHTS = 1_000_000     # flights of one sweep (and values of one dimension): each is
+                            # validated before any flies, so more would not even start
 
 
 def _plain(v):
@@ -208,7 +211,12 @@ def _err(source, key, message):
 
 
 def _number(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:           # an integer beyond the float range
+        return False
 
 
 def _field_err(source, where, message):
@@ -243,9 +251,47 @@ def _count(spec, where, source, mode):
     if "n" not in spec:
         raise _field_err(source, where, "missing 'n' (the number of samples in the grid)")
     n = spec["n"]
-    if not isinstance(n, int) or n < 1:
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
         raise _field_err(source, where, f"n: expected a whole number >= 1, got {n!r}")
+    _size(source, where, n, "samples")
     return n
+
+
+def _size(source, where, n, what):
+    """Refuse a count above MAX_FLIGHTS before anything of that size is allocated."""
+    if not n <= MAX_FLIGHTS:
+        raise SizeError(f"{source}: key {where[0]!r}: {where[1]}: {n:.6g} {what} is too large "
+                        f"(at most {MAX_FLIGHTS} flights per sweep)")
+
+
+def _check_values(source, key, values):
+    """A dimension's ``values``: all numbers, all strings, all booleans or all vectors (lists
+    of numbers) of one length; a table or a mixture would fail only after the flights, when
+    the table is written."""
+    def kind(v):
+        if isinstance(v, bool):
+            return "boolean"
+        if isinstance(v, (int, float)):
+            return "number"
+        if isinstance(v, str):
+            return "string"
+        if isinstance(v, list) and v and all(_number(x) for x in v):
+            return f"vector of {len(v)}"
+        return None
+    if len(values) > MAX_FLIGHTS:
+        _size(source, (key, "values"), len(values), "values")
+    kinds = [kind(v) for v in values]
+    for v, k in zip(values, kinds):
+        if k is None:
+            raise _err(source, key, f"values: {v!r} is not a number, a string, a boolean or "
+                       f"a vector of finite numbers")
+        if k != kinds[0]:
+            raise _err(source, key, f"values: {v!r} is a {k}, the first value "
+                       f"{values[0]!r} a {kinds[0]}: all values of a dimension must be of one "
+                       f"kind")
+    if kinds[0] == "number" and not all(_number(v) for v in values):
+        bad = next(v for v in values if not _number(v))
+        raise _err(source, key, f"values: {bad!r} is not a finite number")
 
 
 def _range_values(spec, where, source):
@@ -263,12 +309,17 @@ def _range_values(spec, where, source):
         if not isinstance(num, int) or num < 1:
             raise _field_err(source, where, f"empty range: num must be a whole number >= 1, "
                              f"got {num!r}")
+        _size(source, where, num, "points")
         return np.linspace(start, stop, num).tolist()
     step = float(spec["step"])
     if step == 0 or (stop - start) / step < 0:
         raise _field_err(source, where, f"empty range: from {start} to {stop} in steps of "
                          f"{step}")
-    count = int(math.floor((stop - start) / step + 1e-9)) + 1
+    ratio = (stop - start) / step
+    if not ratio < MAX_FLIGHTS:
+        _size(source, where, ratio, "points")
+    count = int(math.floor(ratio + 1e-9)) + 1
+    _size(source, where, count, "points")
     return [start + i * step for i in range(count)]
 
 
@@ -297,6 +348,7 @@ def _dimension(i, spec, source, mode):
     if kind == "values":
         if not isinstance(value, list) or not value:
             raise _err(source, key, f"'values' must be a non-empty array, got {value!r}")
+        _check_values(source, key, value)
         width = len(value[0]) if isinstance(value[0], list) else 1
         return Dimension(key, kind, values=list(value), width=width)
     if kind == "range":
@@ -415,8 +467,9 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     ints: dict[str, Any] = {"seed": 0, "chunk": DEFAULT_CHUNK, "samples": None}
     for k, default in ints.items():
         v = data.get(k, default)
-        if v is not None and (not isinstance(v, int) or isinstance(v, bool) or v < 0
-                              or (k != "seed" and v < 1)):
+        if (v is not None or k != "samples") and (
+                not isinstance(v, int) or isinstance(v, bool) or v < 0
+                or (k != "seed" and v < 1)):
             raise _err(source, k, f"expected a whole number{' >= 1' if k != 'seed' else ''}, "
                        f"got {v!r}")
         ints[k] = v
@@ -465,8 +518,14 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
         raise _err(source, dup, "appears in two dimensions")
-    sweep = Sweep(name=data.get("name", Path(source).stem),
-                  description=data.get("description", ""),
+    _check_overlaps(source, keys)
+    sizes = [len(d.values) if d.values is not None else d.n for d in dims]
+    count = ints["samples"] if mode == "monte-carlo" else math.prod(sizes)
+    if count > MAX_FLIGHTS:
+        shape = " x ".join(map(str, sizes)) if mode == "grid" else "samples"
+        raise SizeError(f"{source}: the sweep has {count:.6g} flights ({shape}): at most "
+                        f"{MAX_FLIGHTS} are accepted; split it into several sweeps")
+    sweep = Sweep(name=data.get("name", Path(source).stem), description=data.get("description", ""),
                   source=source, base=base, base_source=base_source, mode=mode,
                   seed=ints["seed"], chunk=ints["chunk"], threshold=float(threshold),
                   dimensions=dims)
@@ -481,6 +540,7 @@ def _validate_flights(sweep, combos, skip):
     """Parse every flight as a scenario (errors name the sweep file and the varied key) and
     check its CoG; fills ``sweep.flights``."""
     by_key = {d.key: d for d in sweep.dimensions}
+    designed = {}
     for index, values in enumerate(combos):
         values = {k: _plain(v) for k, v in values.items()}
         data = copy.deepcopy(sweep.base)
@@ -491,6 +551,14 @@ def _validate_flights(sweep, combos, skip):
         except ScenarioError as e:
             raise _err(sweep.source, _culprit(e, values), f"flight {index} "
                        f"({_describe(values)}) is not a valid scenario: {e}") from None
+        key = group_key(data)
+        if key not in designed:         # each controller design once, before any flight
+            try:
+                designed[key] = CONTROLLERS_BY_GROUP[key] = scenario.make_controller()
+            except ScenarioError as e:
+                raise _err(sweep.source, _culprit(e, values), f"flight {index} "
+                           f"({_describe(values)}): the controller cannot be designed: "
+                           f"{e}") from None
         reason = cog_admissible(scenario)
         admissible = reason is None
         if not admissible:
@@ -505,6 +573,21 @@ def _validate_flights(sweep, combos, skip):
                 raise _err(sweep.source, key, f"flight {index} ({_describe(values)}) has an "
                            f"inadmissible CoG: {reason}; {hint}")
         sweep.flights.append(Flight(index, values, admissible))
+
+
+def _check_overlaps(source, keys):
+    """Refuse two dimensions of which one key contains the other (``cog[0].r`` and
+    ``cog[0].r[0]``, ``vehicle`` and ``vehicle.m``): one would silently replace the other's
+    values. (A ``set`` key may contain a dimension's: it gives the structure, such as a CoG
+    change, whose values the dimension varies.)"""
+    parsed = [(k, parse_key(k)) for k in keys]
+    for i, (a, pa_) in enumerate(parsed):
+        for b, pb in parsed[i + 1:]:
+            short, long_ = (pa_, pb) if len(pa_) <= len(pb) else (pb, pa_)
+            if long_[:len(short)] == short:
+                raise _err(source, a, f"overlaps the dimension key {b!r} (one contains the "
+                           f"other, so one would replace the other's values); vary each value "
+                           f"in one dimension")
 
 
 def _culprit(error, values):

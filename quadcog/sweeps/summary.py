@@ -1,7 +1,6 @@
 """What a sweep writes: the table (Parquet and CSV), a summary (survival per controller,
 quantiles of the tail error) and plots chosen from the dimensions."""
 import json
-import os
 from pathlib import Path
 import re
 from typing import Any
@@ -9,7 +8,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from quadcog.files import atomic_write
 from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.spec import Sweep
 
@@ -111,14 +109,14 @@ def write_outputs(sweep: Sweep, columns: dict[str, NDArray[Any]], summary: dict[
     """
     pa = require_pyarrow()
     import pyarrow.csv  # noqa: F401
+
+    from quadcog.files import RunFiles
     table = to_arrow(columns)
-    for name, write in (("results.parquet", pa.parquet.write_table),
-                        ("results.csv", pa.csv.write_csv)):
-        tmp = out / (name + ".tmp")
-        write(table, tmp)
-        os.replace(tmp, out / name)
-    atomic_write(out / "summary.json", json.dumps(summary, indent=2) + "\n")
-    atomic_write(out / "summary.md", summary_markdown(summary))
+    with RunFiles(out, owned=()) as files:       # all four or none, no .tmp left behind
+        pa.parquet.write_table(table, files.path("results.parquet"))
+        pa.csv.write_csv(table, files.path("results.csv"))
+        files.path("summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        files.path("summary.md").write_text(summary_markdown(summary))
     if plots:
         try:
             import matplotlib  # noqa: F401

@@ -28,6 +28,10 @@ __all__ = ["MinimumSnap", "allocate_times", "DEGREE"]
 
 DEGREE = 7                   # minimum snap: 2 r - 1 with r = 4
 N_COEF = DEGREE + 1
+# Segment durations (s) the degree-7 system can be solved for in floating point: T^7 must
+# neither underflow (1e-300 s gives a singular matrix) nor make the flight absurdly long.
+MIN_SEGMENT_TIME = 1e-3
+MAX_SEGMENT_TIME = 1e6
 
 
 def _derivative_row(tau, order):
@@ -106,12 +110,24 @@ class MinimumSnap(Trajectory):
             if not (np.isfinite(value) and value > 0):
                 raise InputError(f"{name}: expected a positive number, got {value!r}")
         if times is None:
-            times = np.r_[0.0, np.cumsum(allocate_times(pts, max_speed, max_acceleration))]
+            T = allocate_times(pts, max_speed, max_acceleration)
+            if not (np.isfinite(T).all() and T.max() <= MAX_SEGMENT_TIME):
+                raise InputError(f"max_speed = {max_speed!r} m/s, max_acceleration = "
+                                 f"{max_acceleration!r} m/s^2: a segment would take "
+                                 f"{float(T.max()):.3g} s; expected speeds and accelerations "
+                                 f"that give segments of at most {MAX_SEGMENT_TIME:g} s")
+            times = np.r_[0.0, np.cumsum(T)]
         times = np.asarray(times, dtype=float)
         if times.shape != (len(pts),) or not np.isfinite(times).all() or np.any(
                 np.diff(times) <= 0):
             raise InputError(f"times: expected {len(pts)} increasing finite numbers (s), one "
                              f"per waypoint, got {np.asarray(times).tolist()!r}")
+        T = np.diff(times)
+        if T.min() < MIN_SEGMENT_TIME or T.max() > MAX_SEGMENT_TIME:
+            k = int(np.argmin(T)) if T.min() < MIN_SEGMENT_TIME else int(np.argmax(T))
+            raise InputError(f"times: segment {k} lasts {T[k]:.3g} s (from {float(times[k])!r} to "
+                             f"{float(times[k + 1])!r}); expected every segment between "
+                             f"{MIN_SEGMENT_TIME:g} s and {MAX_SEGMENT_TIME:g} s")
         self.waypoints, self.times, self.yaw = pts, times, float(yaw)
         self.coefficients = self._solve()          # (n, 8, 3), in tau = t - t_i
 

@@ -25,7 +25,7 @@ import numpy.typing as npt
 from quadcog.errors import InputError, ParameterError
 from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
 from quadcog.model.parameters import check_parameters
-from quadcog.validate import real
+from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "PRESETS", "FIELD_NAMES", "N_ROTORS",
@@ -42,14 +42,14 @@ def plus_layout(arm: float) -> Layout:
     Parameters
     ----------
     arm : float
-        Arm length, centre to rotor (m).
+        Arm length, centre to rotor (m), finite and > 0.
 
     Returns
     -------
     tuple of 4 (x, y) pairs of float
         Rotor positions (m) in the body frame, for ``Vehicle.rotor_positions``.
     """
-    a = float(arm)
+    a = real(arm, "arm", lo=0, lo_open=True, unit="m")
     return ((a, 0.0), (0.0, a), (-a, 0.0), (0.0, -a))
 
 
@@ -60,14 +60,14 @@ def x_layout(arm: float) -> Layout:
     Parameters
     ----------
     arm : float
-        Arm length, centre to rotor (m).
+        Arm length, centre to rotor (m), finite and > 0.
 
     Returns
     -------
     tuple of 4 (x, y) pairs of float
         Rotor positions (m) in the body frame, for ``Vehicle.rotor_positions``.
     """
-    h = float(arm) / np.sqrt(2.0)
+    h = real(arm, "arm", lo=0, lo_open=True, unit="m") / np.sqrt(2.0)
     return ((h, -h), (-h, -h), (-h, h), (h, h))     # the Crazyflie firmware's M1..M4
 
 
@@ -157,13 +157,21 @@ class Vehicle:
                 continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise InputError(where(f"{f.name} must be a number, got {v!r}"))
-            if not np.isfinite(v):
+                raise InputError(where(f"{f.name} must be a number, got {plain(v)}"))
+            try:
+                x = float(v)
+            except OverflowError:       # an int beyond the float range
+                raise ParameterError(where(f"{f.name} = {plain(v)} is beyond the range of "
+                                           f"a float")) from None
+            if not np.isfinite(x):
                 raise ParameterError(where(f"{f.name} = {v} is not finite"))
-            object.__setattr__(self, f.name, float(v))
+            object.__setattr__(self, f.name, x)
+        if not isinstance(self.name, str):
+            raise InputError(where(f"name must be a string, got {plain(self.name)}"))
         try:
-            pos = np.asarray(self.rotor_positions, dtype=float)
-        except (TypeError, ValueError):
+            pos = (None if isinstance(self.rotor_positions, (str, bytes)) else
+                   np.asarray(self.rotor_positions, dtype=float))
+        except (TypeError, ValueError, OverflowError):
             pos = None
         if pos is None or pos.shape != (N_ROTORS, 2) or not np.isfinite(pos).all():
             raise InputError(where(f"rotor_positions must be {N_ROTORS} pairs (x, y) of finite "
@@ -200,6 +208,7 @@ class Vehicle:
                 f"{self.rotor_directions} is singular (condition number {cond:.3g}): the rotors "
                 "cannot produce every [U1, U2, U3, U4]"))
         check_parameters(self.parameters(), where("parameters"))
+        _check_rigid_body(self, where)
 
     # -- what the generated functions and the plant need --------------------------------
     def parameters(self) -> npt.NDArray[np.float64]:
@@ -254,12 +263,12 @@ class Vehicle:
         Raises
         ------
         InputError
-            When ``U`` does not have 4 rows.
+            When ``U`` does not have 4 rows of finite numbers.
         """
-        U = np.asarray(U, dtype=float)
+        U = array(U, "U", what="4 rows [U1 (N), U2, U3, U4 (N m)] of finite numbers")
         if U.shape[:1] != (4,):
             raise InputError(f"U must have 4 rows [U1, U2, U3, U4], got shape {U.shape}")
-        return np.linalg.solve(self.mixer(), U)
+        return np.asarray(np.linalg.solve(self.mixer(), U), dtype=np.float64)
 
     def rotor_speeds(self, f: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Rotor speeds of rotor thrusts: sqrt(f / thrust_constant).
@@ -332,9 +341,7 @@ class Vehicle:
         InputError
             When ``r_G`` is not 3 numbers.
         """
-        r = np.asarray(r_G, dtype=float).reshape(-1)
-        if r.shape != (3,):
-            raise InputError(f"r_G must be 3 numbers (m), got {r_G!r}")
+        r = vector(r_G, "r_G", 3)
         return replace(self, x_G=float(r[0]), y_G=float(r[1]), z_G=float(r[2]))
 
     def with_parameters(self, p: npt.ArrayLike) -> "Vehicle":
@@ -375,6 +382,17 @@ class Vehicle:
 
 
 FIELD_NAMES = tuple(f.name for f in fields(Vehicle))
+
+
+def _check_rigid_body(vehicle, where):
+    """PhysicalConsistencyError unless some rigid body has this mass, CoG and inertia about
+    O: the pseudo-inertia of its ten inertial parameters is positive definite, which is the
+    strict triangle inequality of the principal inertias about the CoG (docs/model.md 7.2;
+    ``quadcog.model.inertial_parameters.check_physically_consistent`` gives the reason in those
+    terms)."""
+    from quadcog.model.inertial_parameters import check_physically_consistent, inertial_arguments
+    pi, _, _ = inertial_arguments(vehicle.parameters(), where("parameters"))
+    check_physically_consistent(pi, where("mass, CoG and inertia (m, m r_G, I_O)"))
 
 # AscTec Hummingbird as modelled in the ETH RotorS simulator (rotors_description/urdf/
 # hummingbird.xacro: mass, inertia, arm, motor_constant, moment_constant, max_rot_velocity,

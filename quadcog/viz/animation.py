@@ -8,7 +8,7 @@ drawn with the same factor, so it is to scale with the body.
 """
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -18,66 +18,187 @@ from quadcog.model import columns as col
 from quadcog.model.conventions import rotation_matrix
 
 if TYPE_CHECKING:
-    from quadcog.vehicles.vehicle import Vehicle
+    pass
 
 __all__ = ["ROTOR_RADIUS", "read_run", "frame_times", "animate_run"]
 
 ROTOR_RADIUS = 0.3         # rotor disc radius as a fraction of the arm length (drawing only)
 
 
-def read_run(run_dir: str | Path
-             ) -> tuple[npt.NDArray[np.float64], dict, "Vehicle"]:
-    """What a folder written by `quadcog run` holds.
+def _text(path):
+    """The UTF-8 text of a run file, or an InputError naming it."""
+    try:
+        return path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise InputError(f"{path}: not UTF-8 text (byte {e.start}): a damaged run file; "
+                         f"write the folder again with `quadcog run`") from None
+
+
+def _json_table(path):
+    """The JSON object (dict) of a run file, or an InputError naming it."""
+    try:
+        value = json.loads(_text(path))
+    except ValueError as e:
+        raise InputError(f"{path}: not valid JSON ({e}); write the folder again with "
+                         f"`quadcog run`") from None
+    if not isinstance(value, dict):
+        raise InputError(f"{path}: expected a JSON object, got {type(value).__name__}")
+    return value
+
+
+def read_table(path: Path) -> np.ndarray:
+    """The (N, 37) trajectory table of ``trajectory.csv`` or ``trajectory.parquet``.
 
     Parameters
     ----------
-    run_dir : str or Path
-        The run folder (trajectory.csv or trajectory.parquet; metrics.json and vehicle.json
-        when present).
+    path : pathlib.Path
+        The file; its suffix says the format.
 
     Returns
     -------
-    table : (N, 37) numpy.ndarray
-        The trajectory, columns ``quadcog.model.columns.trajectory_columns()``.
-    metrics : dict
-        metrics.json ({} without it).
-    vehicle : Vehicle
-        vehicle.json (the Hummingbird without it).
+    numpy.ndarray, shape (N, len(trajectory_columns())), N >= 1
+        Finite values, time (column 0) non-decreasing.
 
     Raises
     ------
-    quadcog.InputError
-        No such folder, no trajectory file, or unexpected columns.
+    InputError
+        A damaged, truncated, foreign or non-numeric table, naming the file.
     """
-    from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
+    names = col.trajectory_columns()
+    if path.suffix == ".parquet":
+        try:
+            import pyarrow.parquet as pq
+            t = pq.read_table(path)
+        except ImportError:
+            raise InputError(f"{path}: reading Parquet needs pyarrow: pip install pyarrow") \
+                from None
+        except Exception as e:      # noqa: BLE001 - pyarrow raises many kinds on damage
+            raise InputError(f"{path}: not a readable Parquet file ({type(e).__name__})") \
+                from None
+        missing = [n for n in names if n not in t.column_names]
+        if missing:
+            raise InputError(f"{path}: lacks the columns {missing[:3]}... of "
+                             f"quadcog.model.columns.trajectory_columns()")
+        try:
+            table = np.column_stack([np.asarray(t.column(n).to_numpy(), dtype=float)
+                                     for n in names])
+        except (TypeError, ValueError):
+            raise InputError(f"{path}: a column is not numeric") from None
+    else:
+        lines = _text(path).splitlines()
+        header = lines[0].strip().split(",") if lines else []
+        if tuple(header) != names:
+            raise InputError(f"{path}: unexpected columns (expected those of "
+                             f"quadcog.model.columns.trajectory_columns(), starting {names[:3]})")
+        rows = []
+        for k, line in enumerate(lines[1:], start=2):
+            cells = line.split(",")
+            if len(cells) != len(names):
+                raise InputError(f"{path}: line {k} has {len(cells)} values, expected "
+                                 f"{len(names)} (a truncated or damaged file)")
+            try:
+                rows.append([float(c) for c in cells])
+            except ValueError:
+                bad = next(c for c in cells if not _is_float(c))
+                raise InputError(f"{path}: line {k}: {bad!r} is not a number") from None
+        if not rows:
+            raise InputError(f"{path}: no samples (header only)")
+        table = np.array(rows, dtype=float)
+    if table.shape[0] == 0:
+        raise InputError(f"{path}: no samples")
+    if not np.isfinite(table).all():
+        r, c = np.argwhere(~np.isfinite(table))[0]
+        raise InputError(f"{path}: sample {r}, column {names[c]!r} is {table[r, c]} (expected "
+                         f"a finite number)")
+    if np.any(np.diff(table[:, 0]) < 0):
+        raise InputError(f"{path}: the time column {names[0]!r} decreases")
+    return table
+
+
+def _is_float(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def read_run(run_dir: "str | Path") -> tuple:
+    """(table (N, 37), metrics dict, Vehicle) of a folder written by `quadcog run`.
+
+    Parameters
+    ----------
+    run_dir : str or pathlib.Path
+        The folder.
+
+    Returns
+    -------
+    (numpy.ndarray, dict, Vehicle)
+        The trajectory table (``read_table``), metrics.json (``{}`` when absent) and the
+        vehicle of vehicle.json (``HUMMINGBIRD`` when absent).
+
+    Raises
+    ------
+    InputError
+        A missing folder or a damaged file, naming it.
+    """
+    from quadcog.vehicles.vehicle import FIELD_NAMES, HUMMINGBIRD, Vehicle
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise InputError(f"run folder {run_dir}: no such folder (write one with "
                          f"`quadcog run SCENARIO --out {run_dir}`)")
     csv_path, pq_path = run_dir / "trajectory.csv", run_dir / "trajectory.parquet"
-    names = col.trajectory_columns()
     if csv_path.is_file():
-        header = csv_path.open().readline().strip().split(",")
-        if tuple(header) != names:
-            raise InputError(f"{csv_path}: unexpected columns (expected those of "
-                             "quadcog.model.columns.trajectory_columns(), starting "
-                             f"{names[:3]})")
-        table = np.loadtxt(csv_path, delimiter=",", skiprows=1, ndmin=2)
+        table = read_table(csv_path)
     elif pq_path.is_file():
-        import pyarrow.parquet as pq
-        t = pq.read_table(pq_path)
-        table = np.column_stack([t.column(n).to_numpy() for n in names])
+        table = read_table(pq_path)
     else:
         raise InputError(f"run folder {run_dir}: no trajectory.csv or trajectory.parquet")
     metrics_path = run_dir / "metrics.json"
-    metrics = json.loads(metrics_path.read_text()) if metrics_path.is_file() else {}
+    metrics = _json_table(metrics_path) if metrics_path.is_file() else {}
+    for key in ("name", "controller"):
+        if key in metrics and not isinstance(metrics[key], str):
+            raise InputError(f"{metrics_path}: {key!r}: expected a string, got "
+                             f"{metrics[key]!r}")
     vehicle_path = run_dir / "vehicle.json"
-    # vehicle.json holds Vehicle's own keywords (mypy cannot match a dict to them)
-    vehicle = (Vehicle(**{k: (tuple(map(tuple, v)) if k == "rotor_positions" else  # type: ignore[arg-type]
-                              tuple(v) if isinstance(v, list) else v)
-                          for k, v in json.loads(vehicle_path.read_text()).items()})
-               if vehicle_path.is_file() else HUMMINGBIRD)
+    if vehicle_path.is_file():
+        data = _json_table(vehicle_path)
+        unknown = sorted(set(data) - set(FIELD_NAMES))
+        if unknown:
+            raise InputError(f"{vehicle_path}: unknown vehicle field(s) {unknown} (expected "
+                             f"some of {FIELD_NAMES})")
+        try:
+            fields: dict[str, Any] = {k: (tuple(map(tuple, v)) if k == "rotor_positions" else
+                                          tuple(v) if isinstance(v, list) else v)
+                                      for k, v in data.items()}
+            vehicle = Vehicle(**fields)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"{vehicle_path}: not a valid vehicle: {e}") from None
+    else:
+        vehicle = HUMMINGBIRD
     return table, metrics, vehicle
+
+
+def check_output(output: "str | Path") -> Path:
+    """The GIF path ``output`` when it can be written, else an InputError naming it.
+
+    Parameters
+    ----------
+    output : str or pathlib.Path
+        Must end in ``.gif`` and not be a folder.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    output = Path(output)
+    if output.suffix.lower() != ".gif":
+        raise InputError(f"output {str(output)!r}: expected a file name ending in .gif (the "
+                         f"animation is written as a GIF), got suffix "
+                         f"{output.suffix or 'none'!r}")
+    if output.is_dir():
+        raise InputError(f"output {str(output)!r}: is a folder; give a file name ending in .gif")
+    return output
 
 
 def frame_times(t: npt.NDArray[np.float64], fps: float, speed: float, max_frames: int
@@ -131,13 +252,51 @@ def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int 
 
     Returns
     -------
-    Path
-        The GIF written.
+    pathlib.Path
+        The GIF written (renamed into place only once complete).
+    """
+    output = check_output(output if output is not None else Path(run_dir) / "flight.gif")
+    _check_settings(fps, speed, max_frames)
+    table, metrics, vehicle = read_run(run_dir)
+    from quadcog.files import RunFiles
+    with RunFiles(output.parent, owned=()) as files:      # a GIF whole or not at all
+        animate_table(table, metrics, vehicle, files.path(output.name), fps=fps, speed=speed,
+                      max_frames=max_frames)
+    return output
 
-    Raises
-    ------
-    quadcog.InputError
-        A speed that is not positive, or a run folder ``read_run`` refuses.
+
+def _check_settings(fps, speed, max_frames):
+    import numbers
+    for name, v in (("fps", fps), ("max_frames", max_frames)):
+        if isinstance(v, bool) or not isinstance(v, numbers.Integral) or not 1 <= v <= 10_000:
+            raise InputError(f"{name}: expected a whole number 1..10000, got {v!r}")
+    if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or \
+            not (np.isfinite(speed) and speed > 0):
+        raise InputError(f"speed: expected a positive number of simulated seconds per second, "
+                         f"got {speed!r}")
+
+
+def animate_table(table: np.ndarray, metrics: dict, vehicle: Any, output: Path,
+                  fps: int = 15, speed: float = 1.0, max_frames: int = 120) -> Path:
+    """Draw the GIF of a trajectory table (as ``read_run`` returns it) into ``output``.
+
+    Parameters
+    ----------
+    table : numpy.ndarray, shape (N, 37)
+        The trajectory (``quadcog.model.columns.trajectory_columns()``).
+    metrics : dict
+        metrics.json of the run (``name`` and ``controller`` for the title; may be empty).
+    vehicle : Vehicle
+        The vehicle drawn.
+    output : pathlib.Path
+        The GIF to write (written directly: callers make it atomic).
+    fps, speed, max_frames
+        As for ``animate_run``.
+
+    Returns
+    -------
+    pathlib.Path
+        ``output``.
     """
     import matplotlib
     matplotlib.use("Agg", force=False)
@@ -146,11 +305,8 @@ def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int 
 
     from quadcog.viz.plots import flight_title
 
-    if not (np.isfinite(speed) and speed > 0):
-        raise InputError(f"speed: expected a positive number of simulated seconds per second, "
-                         f"got {speed!r}")
-    table, metrics, vehicle = read_run(run_dir)
-    output = Path(output) if output is not None else Path(run_dir) / "flight.gif"
+    _check_settings(fps, speed, max_frames)
+    output = Path(output)
     t, x, ref = table[:, 0], table[:, col.X], table[:, col.REF]
     r_hat, r_G = table[:, col.R_HAT], table[:, col.R_G]
     times = frame_times(t, fps, speed, max_frames)
@@ -222,7 +378,14 @@ def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int 
         return []
 
     anim = FuncAnimation(fig, draw, frames=len(idx), blit=False)
-    output.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(output, writer=PillowWriter(fps=fps))
-    plt.close(fig)
+    try:
+        anim.save(output, writer=PillowWriter(fps=fps))
+    except Exception as e:
+        # matplotlib finishes the file in a `finally`; after Ctrl-C with no frame yet that
+        # fails (IndexError) and hides the interrupt: report the interrupt
+        if isinstance(e.__context__, KeyboardInterrupt):
+            raise e.__context__ from None
+        raise
+    finally:
+        plt.close(fig)
     return output

@@ -1,0 +1,95 @@
+"""SIGINT and SIGTERM as one exception, and worker processes that do not outlive their parent.
+
+``install_handlers`` (called first thing by the `quadcog` command) turns both signals into
+``quadcog.errors.Interrupted`` raised in the main thread, so ``finally`` clauses and context
+managers (``quadcog.files.RunFiles``, the sweep lock, process pools) clean up on the way out
+and ``main`` prints one line and exits 130 or 143. ``die_with_parent`` is the initializer of
+quadcog's worker processes: on Linux it asks the kernel for SIGKILL when the parent dies
+(``prctl(PR_SET_PDEATHSIG)``), elsewhere a daemon thread polls the parent's pid; either way a
+worker does not outlive a killed ``quadcog sweep`` by more than ``WATCHDOG_PERIOD`` seconds.
+"""
+import ctypes
+import ctypes.util
+import os
+import signal
+import sys
+import threading
+
+from quadcog.errors import Interrupted
+
+__all__ = ["HANDLED", "WATCHDOG_PERIOD", "install_handlers", "restore_handlers", "die_with_parent"]
+
+HANDLED = (signal.SIGINT, signal.SIGTERM)
+WATCHDOG_PERIOD = 1.0       # s between two looks at the parent's pid (non-Linux fallback)
+_PR_SET_PDEATHSIG = 1       # from <linux/prctl.h>
+
+
+def _raise(signum, frame):
+    # Once is enough: a second signal during clean-up must not abort the clean-up.
+    for s in HANDLED:
+        signal.signal(s, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+def install_handlers() -> dict:
+    """Make SIGINT and SIGTERM raise ``Interrupted`` in the main thread.
+
+    Returns
+    -------
+    dict
+        {signal: previous handler} for ``restore_handlers``; empty off the main thread
+        (Python allows handlers only there).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    return {s: signal.signal(s, _raise) for s in HANDLED}
+
+
+def restore_handlers(previous: dict) -> None:
+    """Put back the handlers ``install_handlers`` replaced.
+
+    Parameters
+    ----------
+    previous : dict
+        What ``install_handlers`` returned.
+
+    Returns
+    -------
+    None
+    """
+    for s, handler in previous.items():
+        signal.signal(s, handler if handler is not None else signal.SIG_DFL)
+
+
+def _watchdog(parent):
+    import time
+    while True:
+        time.sleep(WATCHDOG_PERIOD)
+        if os.getppid() != parent:
+            os._exit(128 + signal.SIGTERM)
+
+
+def die_with_parent() -> None:
+    """Initializer of a worker process: end it when the process that started it dies.
+
+    Also restores the default SIGINT/SIGTERM actions in the worker (Ctrl-C reaches the whole
+    process group; the parent alone reports and cleans up, and it ends the pool).
+
+    Returns
+    -------
+    None
+    """
+    parent = os.getppid()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+            if libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0:
+                if os.getppid() != parent:      # the parent died before prctl took effect
+                    os._exit(128 + signal.SIGTERM)
+                return
+        except (OSError, AttributeError):
+            pass
+    threading.Thread(target=_watchdog, args=(parent,), daemon=True,
+                     name="quadcog-parent-watchdog").start()
