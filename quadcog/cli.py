@@ -48,16 +48,39 @@ def cmd_tour(args):
 def add_scenarios(sub):
     p = sub.add_parser("scenarios", help="list the shipped scenarios with their descriptions",
                        description="List the scenarios that ship with quadcog; `quadcog run "
-                                   "NAME` runs one.")
+                                   "NAME` runs one, `--show NAME` prints one to copy and edit.")
+    p.add_argument("--show", metavar="NAME", default=None,
+                   help="print the TOML of the shipped scenario NAME")
     p.set_defaults(func=cmd_scenarios)
+
+
+def _list_or_show(kind, listing, show):
+    from quadcog.sweeps.listing import shipped_text
+    if show is not None:
+        print(shipped_text(show, kind), end="")
+        return
+    width = max(map(len, listing), default=0)
+    for name, description in listing.items():
+        print(f"{name:<{width}}  {description}")
 
 
 def cmd_scenarios(args):
     from quadcog.scenarios.files import shipped_scenarios
-    scenarios = shipped_scenarios()
-    width = max(map(len, scenarios), default=0)
-    for name, description in scenarios.items():
-        print(f"{name:<{width}}  {description}")
+    _list_or_show("scenario", shipped_scenarios(), args.show)
+
+
+def add_sweeps(sub):
+    p = sub.add_parser("sweeps", help="list the shipped sweep files with their descriptions",
+                       description="List the sweep files that ship with quadcog; `quadcog sweep "
+                                   "NAME --out DIR` flies one, `--show NAME` prints one.")
+    p.add_argument("--show", metavar="NAME", default=None,
+                   help="print the TOML of the shipped sweep file NAME")
+    p.set_defaults(func=cmd_sweeps)
+
+
+def cmd_sweeps(args):
+    from quadcog.sweeps.listing import shipped_sweeps
+    _list_or_show("sweep", shipped_sweeps(), args.show)
 
 
 def add_run(sub):
@@ -68,7 +91,7 @@ def add_run(sub):
         epilog="examples:\n  quadcog run fig7\n  quadcog run fig6 --set controller=fl\n"
                "  quadcog run my.toml --set vehicle.m=0.8 --set 'cog=[{t=1, r=[0.03, 0, 0]}]'",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scenario", help="scenario file (see README 'Scenario files') or the name "
+    p.add_argument("scenario", help="scenario file (docs: Reference, Scenario keys) or the name "
                                     "of a shipped one (`quadcog scenarios` lists them)")
     p.add_argument("--out", type=Path, default=None,
                    help="folder for the results (default: out/<scenario> in this folder)")
@@ -81,8 +104,12 @@ def add_run(sub):
                    help="draw flight.png (default: yes)")
     p.add_argument("--animate", action="store_true",
                    help="also write flight.gif, a 3D animation (as `quadcog animate`)")
-    p.add_argument("--every", type=_positive_int, default=1, metavar="N",
-                   help="write every N-th sample (and the last) to the table (default: 1)")
+    rate = p.add_mutually_exclusive_group()
+    rate.add_argument("--every", type=_positive_int, default=None, metavar="N",
+                      help="write every N-th sample (and the last) to the table (default: "
+                           "every 10 ms, quadcog.config.defaults['run.sample_period'])")
+    rate.add_argument("--full-rate", dest="every", action="store_const", const=1,
+                      help="write every sample (as --every 1)")
     p.add_argument("--format", dest="fmt", choices=("csv", "parquet"), default="csv",
                    help="table format (parquet needs pyarrow; default: csv)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -111,20 +138,21 @@ def add_animate(sub):
                                    "the flight in 3D: body axes, rotors, the CoG offset to scale, "
                                    "the trail and the reference, with the time.")
     p.add_argument("run_dir", type=Path, help="folder written by `quadcog run`")
-    p.add_argument("--output", type=Path, default=None,
-                   help="GIF to write (default: RUN_DIR/flight.gif)")
+    p.add_argument("--out", "--output", dest="out", type=Path, default=None,
+                   help="GIF to write (default: RUN_DIR/flight.gif; --output is the old name)")
     p.add_argument("--fps", type=_positive_int, default=15, help="frames per second (default 15)")
     p.add_argument("--speed", type=float, default=1.0,
                    help="simulated seconds per wall-clock second (default 1)")
     p.add_argument("--max-frames", type=_positive_int, default=120,
                    help="at most this many frames; the speed goes up to fit (default 120)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_animate)
 
 
 def cmd_animate(args):
     from quadcog.viz.animation import animate_run
-    path = animate_run(args.run_dir, args.output, fps=args.fps, speed=args.speed,
-                       max_frames=args.max_frames)
+    path = animate_run(args.run_dir, args.out, fps=args.fps, speed=args.speed,
+                       max_frames=args.max_frames, progress=not args.quiet)
     print(f"wrote {path}")
 
 
@@ -164,13 +192,15 @@ def cmd_analyze(args):
 
 
 def add_export(sub):
+    from quadcog.controllers.registry import controller_names
     p = sub.add_parser("export", help="write a controller as a C99 module for a flight "
-                                      "controller (README: On a flight controller)",
+                                      "controller (docs: On a flight controller)",
                        description="Write one controller's law as a self-contained C99 module "
                                    "(.h and .c) in float32 or double.")
     p.add_argument("--controller", required=True,
-                   help="pd, fl, adaptive (any name of quadcog.controllers.CONTROLLERS)")
-    p.add_argument("--precision", default="float32", choices=("float32", "double"))
+                   help="the controller's short name: " + ", ".join(controller_names()))
+    p.add_argument("--precision", default="float32", choices=("float32", "double"),
+                   help="float32 (default) or double")
     p.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
     p.set_defaults(func=cmd_export)
 
@@ -185,8 +215,10 @@ def add_sweep(sub):
     p = sub.add_parser("sweep", help="fly a sweep file (TOML) locally or on Dask",
                        description="Fly every flight of a sweep file (scenario keys as lists, "
                                    "ranges or samples) and write one table, a summary and "
-                                   "plots; resumable.")
-    p.add_argument("sweep", help="sweep file, or the name of a shipped one (failure-map)")
+                                   "plots; resumable. Needs the sweep extra (pyarrow, dask, "
+                                   "distributed): pip install 'quadcog[sweep]'.")
+    p.add_argument("sweep", help="sweep file, or the name of a shipped one (`quadcog sweeps` "
+                                 "lists them)")
     p.add_argument("--out", type=Path, required=True,
                    help="results folder; run again with the same folder to resume")
     where = p.add_mutually_exclusive_group()
@@ -196,6 +228,8 @@ def add_sweep(sub):
 
 
 def cmd_sweep(args):
+    from quadcog.validate import require_extra
+    require_extra("sweep", "pyarrow", "dask", "distributed")   # before any flight
     from quadcog.sweeps.runner import run_cli
     run_cli(args.sweep, _out_dir(args.out), workers=args.workers, scheduler=args.scheduler)
 
@@ -246,7 +280,7 @@ def cmd_identify(args):
 
 
 SUBCOMMANDS = [add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
-               add_export, add_sweep, add_identify]
+               add_export, add_sweep, add_sweeps, add_identify]
 
 
 def _version():

@@ -306,3 +306,35 @@ def _bytes(b):
         if b < 1024 or unit == "EiB":
             return f"{b:.3g} {unit}"
         b /= 1024
+
+
+__all__ += ["require_extra"]
+
+
+def require_extra(extra: str, *modules: str) -> None:
+    """Check that an optional extra's packages are installed, before any work starts.
+
+    Parameters
+    ----------
+    extra : str
+        The name of the extra in pyproject.toml (``"sweep"``).
+    *modules : str
+        The modules the extra provides (``"pyarrow"``, ``"dask"``).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    quadcog.errors.MissingDependencyError
+        Naming the missing modules and the install command.
+    """
+    import importlib.util
+
+    from quadcog.errors import MissingDependencyError
+    missing = [m for m in modules if importlib.util.find_spec(m) is None]
+    if missing:
+        raise MissingDependencyError(
+            f"{', '.join(missing)} not installed: this needs the '{extra}' extra; install it "
+            f"with: pip install 'quadcog[{extra}]'")

@@ -1,5 +1,5 @@
-"""The README's measured tables are copies of files that commands wrote (bench/publish.py);
-the paper table is compared with a fresh run in tests/test_paper.py."""
+"""The published measured tables (docs pages, bench/publish.py PAGES) are copies of files that
+commands wrote; the paper table is compared with a fresh run in tests/test_paper.py."""
 import importlib.util
 from pathlib import Path
 import sys
@@ -16,7 +16,7 @@ def _publish():
 
 def test_bench_table_is_the_published_bench_run():
     pub = _publish()
-    readme = (ROOT / "README.md").read_text()
+    readme = pub.PAGES["bench"].read_text()
     assert pub.block(readme, "bench") == pub.table_of((ROOT / "bench" / "results.md").read_text())
 
 

@@ -365,6 +365,8 @@ def run_file(path, out=None, progress=True, overrides=(), plot=True, every=1, fm
     outputs into ``out`` (default ``out/<scenario>`` in the current folder); returns metrics."""
     scenario = load_scenario(path, overrides)
     out = Path(out) if out is not None else default_out(path)
+    if every is None:                       # the command's default: decimated, not every step
+        every = max(1, round(config.defaults["run.sample_period"] / scenario.dt))
     try:
         result = run_with_progress(scenario, progress=progress)
     except ScenarioError:
@@ -375,9 +377,11 @@ def run_file(path, out=None, progress=True, overrides=(), plot=True, every=1, fm
     written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else [])
     if animate:
         from quadcog.viz.animation import animate_run
-        animate_run(out, out / "flight.gif")
+        animate_run(out, out / "flight.gif", progress=progress)
         written.append("flight.gif")
-    status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']})"
+    status = (f"DIVERGED at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']}); "
+              f"the flight stops there, a valid result (the paper's failure scenarios diverge), "
+              f"not an error"
               if metrics["diverged"] else
               f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")
     print(f"{scenario.name}: {status}; wrote {out}/{', '.join(written)}")

@@ -19,7 +19,7 @@ import warnings
 
 import numpy as np
 
-from quadcog import validate
+from quadcog import config, validate
 from quadcog.codegen.compiled import cached_compile
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import InputError, ReferenceWarning
@@ -57,7 +57,7 @@ __all__ = ["simulate", "check_time", "check_step_size", "start_at_reference", "r
 
 def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=None,
              controller_model=None, cog=None, disturbances=(), truth=None, x0=None,
-             path="compiled", limits=None, progress=None, check_dt=True):
+             path="compiled", limits=None, progress=None, check_dt=True, sensing=None):
     """Fly one closed-loop run and return a SimulationResult.
 
     Parameters
@@ -81,12 +81,18 @@ def simulate(controller, trajectory="hover", duration=10.0, dt=None, vehicle=Non
     limits : Limits of divergence (default ``Limits()``).
     progress : a callable(fraction), e.g. a ProgressBar.
     check_dt : refuse a dt too large for RK4 on the closed loop at the start.
+    sensing : a Sensing (noise, gyro bias, one-period delay of what the controller measures);
+        default None, the perfect state. The controller is flown as ``Sensed(controller,
+        sensing, dt)``.
 
     Returns
     -------
     SimulationResult. A diverged run stops at the first diverged sample (kept when finite);
     result.metrics counts the samples before it and says when and why.
     """
+    if sensing is not None:
+        from quadcog.sim.sensing import Sensed
+        controller = Sensed(controller, sensing, config.get("simulate.dt", dt))
     setup = prepare_flight(controller, trajectory, duration, dt, vehicle, controller_model, cog,
                            disturbances, truth, x0, path, limits, progress, check_dt)
     t0 = time.perf_counter()

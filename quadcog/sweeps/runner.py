@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from quadcog import validate
 from quadcog.errors import QuadcogError
 from quadcog.files import atomic_write
 from quadcog.sweeps.flights import make_job, run_chunk
@@ -166,6 +167,14 @@ class SweepResult:
         """The results as a pyarrow Table."""
         return to_arrow(self.columns)
 
+    def to_arrow(self):
+        """The results as a pyarrow Table (one row per flight; needs the sweep extra)."""
+        return to_arrow(self.columns)
+
+    def to_pandas(self):
+        """The results as a pandas DataFrame (one row per flight; needs pandas)."""
+        return self.to_arrow().to_pandas()
+
 
 def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=True,
           **settings):
@@ -208,6 +217,11 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
         raise SweepError("give --workers or --scheduler, not both")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise SweepError(f"workers must be a whole number >= 1, got {workers!r}")
+    # the extras are checked before the first flight, not after the last
+    if out is not None:
+        validate.require_extra("sweep", "pyarrow")
+    if workers is not None or scheduler is not None:
+        validate.require_extra("sweep", "dask", "distributed")
     chunks = s.chunks()
     store = ChunkStore(out, s) if out is not None else None
     results = {}

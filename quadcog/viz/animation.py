@@ -60,7 +60,7 @@ def frame_times(t, fps, speed, max_frames):
     return np.append(times, t[-1]) if times[-1] < t[-1] else times
 
 
-def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
+def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120, progress=False):
     """Write the GIF of a run folder; returns its path.
 
     Parameters
@@ -76,6 +76,8 @@ def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
         Simulated seconds per second of GIF (1 = real time).
     max_frames : int
         At most this many frames (the speed is raised to fit).
+    progress : bool
+        Show a progress bar of the frames drawn on stderr (`quadcog animate`).
     """
     import matplotlib
     matplotlib.use("Agg", force=False)
@@ -159,6 +161,15 @@ def animate_run(run_dir, output=None, fps=15, speed=1.0, max_frames=120):
 
     anim = FuncAnimation(fig, draw, frames=len(idx), blit=False)
     output.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(output, writer=PillowWriter(fps=fps))
+    bar = None
+    if progress:                    # drawing the frames takes tens of seconds
+        from quadcog.viz.progress import ProgressBar
+        bar = ProgressBar(f"animate {output.name}")
+    try:
+        anim.save(output, writer=PillowWriter(fps=fps),
+                  progress_callback=(lambda i, n: bar((i + 1) / n)) if bar else None)
+    finally:
+        if bar:
+            bar.close()
     plt.close(fig)
     return output
