@@ -44,6 +44,14 @@ def block(readme_text, name):
     return mo.group(1).strip()
 
 
+def machine_of(text):
+    """The first line of prose after the title of a results file: where and when it ran."""
+    for line in text.splitlines():
+        if line.strip() and not line.startswith(("#", "|")):
+            return line.strip()
+    return ""
+
+
 def publish(name, source, readme=None):
     """Replace block ``name`` of ``readme`` (default: its page, ``PAGES[name]``) by the table
     of ``source``."""
@@ -55,6 +63,10 @@ def publish(name, source, readme=None):
     block(text, name)                       # the markers must exist
     text = re.sub(rf"(<!-- BEGIN {name} -->\n).*?(\n<!-- END {name} -->)",
                   lambda mo: mo.group(1) + table + mo.group(2), text, flags=re.S)
+    if f"<!-- BEGIN {name}-machine -->" in text:   # the machine the figures came from
+        machine = machine_of(Path(source).read_text())
+        text = re.sub(rf"(<!-- BEGIN {name}-machine -->\n).*?(<!-- END {name}-machine -->)",
+                      lambda mo: mo.group(1) + machine + "\n" + mo.group(2), text, flags=re.S)
     readme.write_text(text)
     if name == "bench":
         target = ROOT / "bench" / "results.md"

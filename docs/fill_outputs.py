@@ -5,6 +5,7 @@ checks that they agree), so the numbers shown as output are never typed.
     python docs/fill_outputs.py [PAGE...]     # default: README.md and every page of docs/
 """
 from pathlib import Path
+import re
 import sys
 import tempfile
 
@@ -14,6 +15,9 @@ sys.path.insert(0, str(ROOT))
 from tests.test_docs_examples import blocks_of, pages, run_block  # noqa: E402
 
 __all__ = ["fill"]
+
+OUTPUT = re.compile(r"^(?P<indent>[ \t]*)<!-- output -->\n(?P=indent)```text\n(?P<body>.*?)"
+                    r"^(?P=indent)```", re.M | re.S)
 
 
 def fill(page: Path) -> int:
@@ -38,9 +42,12 @@ def fill(page: Path) -> int:
             done = run_block(block, Path(folder))
         if done.returncode != 0:
             raise SystemExit(f"{page}:{block.line} failed:\n{done.stderr}")
-        old = f"<!-- output -->\n```text\n{block.output}```"
-        start = text.index(old, sum(len(x) + 1 for x in text.splitlines()[:block.line - 1]))
-        text = text[:start] + f"<!-- output -->\n```text\n{done.stdout}```" + text[start + len(old):]
+        offset = sum(len(x) + 1 for x in text.splitlines()[:block.line - 1])
+        mo = OUTPUT.search(text, offset)
+        indent = mo.group("indent")
+        shown = "".join(indent + line + "\n" if line else "\n"
+                        for line in done.stdout.splitlines())
+        text = text[:mo.start("body")] + shown + text[mo.end("body"):]
         n += 1
     page.write_text(text)
     return n

@@ -106,6 +106,7 @@ LAYERS = {
     "sweeps": ("sweeps", ["quadcog.sweeps"]),
     "embedded": ("embedded: C for a flight controller", ["quadcog.embedded"]),
     "studies": ("studies: the paper, beyond, analysis", ["quadcog.studies"]),
+    "cli": ("The command line", ["quadcog.cli"]),
 }
 
 

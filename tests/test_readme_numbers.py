@@ -52,3 +52,13 @@ def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
     assert "| a measurement | 1.5 | s |" in written
     assert not (tmp_path / "bench").exists()
     assert (ROOT / "bench" / "results.md").read_bytes() == tracked
+
+
+def test_bench_figures_name_their_machine():
+    """The published bench table says which machine and day it came from: the line the run
+    wrote above its table, copied with it."""
+    pub = _publish()
+    page = pub.PAGES["bench"].read_text()
+    machine = pub.block(page, "bench-machine")
+    assert machine == pub.machine_of((ROOT / "bench" / "results.md").read_text())
+    assert "cores" in machine and "20" in machine

@@ -169,3 +169,32 @@ def scenario_path(spec: str | Path) -> Path:
         The file to read.
     """
     return find_file(spec, "scenario")
+
+
+__all__ += ["display_name"]
+
+
+def display_name(path: str | Path, kind: str = "scenario") -> str:
+    """How messages name a file: a shipped file by its name, any other by its path.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (from ``find_file``).
+    kind : str
+        'scenario' or 'sweep'.
+
+    Returns
+    -------
+    str
+        ``"shipped scenario 'fig6'"`` for a file of the package's folder (not the full path of
+        an installed package), else the path as given.
+    """
+    path = Path(path)
+    try:
+        shipped = path.resolve().parent == shipped_folder(kind).resolve()
+    except OSError:
+        shipped = False
+    if shipped and path.suffix == SUFFIX:
+        return f"shipped {kind} '{path.stem}'"
+    return str(path)

@@ -17,7 +17,7 @@ from quadcog.controllers.registry import controller_names, make_controller
 from quadcog.errors import InputError, ScenarioError
 from quadcog.files import RunFiles, strict_json, write_csv
 from quadcog.model.columns import trajectory_columns
-from quadcog.scenarios.files import read_toml, scenario_path
+from quadcog.scenarios.files import display_name, read_toml, scenario_path
 from quadcog.scenarios.schema import (
     COG,
     DISTURBANCE,
@@ -281,13 +281,14 @@ def load_scenario(path, overrides=()):
     see ``quadcog.scenarios.keys``), applied before the validation, which then names them."""
     path = scenario_path(path)
     data = read_toml(path, ScenarioError)
-    source = str(path)
+    label = display_name(path, "scenario")      # a shipped file by its name, not a site-packages path
+    source = label
     if overrides:
         from quadcog.scenarios.keys import apply_overrides
         data, notes = apply_overrides(data, overrides)
         for note in notes:
-            warnings.warn(f"{path}: {note}", stacklevel=2)
-        source = f"{path} with " + " ".join(f"--set {o}" for o in overrides)
+            warnings.warn(f"{label}: {note}", stacklevel=2)
+        source = f"{label} with " + " ".join(f"--set {o}" for o in overrides)
     return parse(data, source)
 
 
@@ -301,7 +302,8 @@ def write_table(result, path, every=1, fmt="csv"):
                          f"got {every!r}")
     if fmt not in ("csv", "parquet"):
         raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
-    columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G]
+    columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G,
+               result.rotor_command, result.rotor_thrust]
     n = len(result.t)
     if every > 1:
         rows = np.unique(np.r_[np.arange(0, n, every), n - 1])

@@ -22,6 +22,7 @@ import numpy as np
 from quadcog import config, validate
 from quadcog.codegen.compiled import cached_compile
 from quadcog.codegen.fastcall import FastCall
+from quadcog.controllers.base import Controller
 from quadcog.errors import InputError, ReferenceWarning
 from quadcog.model.conventions import N_STATE, R_G
 from quadcog.model.functions import load
@@ -255,5 +256,32 @@ def _result(setup, X, U, code, elapsed):
         metrics.r_hat_final = X[last, N_STATE + nf:N_STATE + 3 + nf].tolist()
         metrics.r_G_final = r_G[last].tolist()
     name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))
+    inverse = np.linalg.inv(setup.actuation.mixer_matrix()).T
+    thrust = (X[:keep, N_STATE:N_STATE + nf].copy() if nf else
+              np.clip(U[:keep] @ inverse, setup.actuation.lower, setup.actuation.upper))
+    Xk, tk, refk, Uk = X[:keep], t[:keep], ref[:keep], U[:keep]
+    command = lambda: _commanded(controller, tk, Xk, refk, nf, Uk) @ inverse   # on first use
     return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,
-                            controller=name, path=path, info={"seconds": elapsed})
+                            controller=name, path=path, info={"seconds": elapsed},
+                            rotor_thrust=thrust, _command_law=command)
+
+
+def _commanded(controller, t, X, ref, nf, U_applied):
+    """The input U (n, 4) the law asked for at each sample, before the rotors' limits (the
+    result's U is what the rotors gave): the law re-evaluated along the flight, all samples
+    in one mapped call. A user's callable (path="python") is called sample by sample."""
+    n = len(t)
+    if not n:
+        return U_applied.copy()
+    c = X[:, N_STATE + nf:]
+    if isinstance(controller, Controller):
+        law = controller.function().map(n)
+        U = law(t[None, :], X[:, :N_STATE].T, ref.T, c.T)[0]
+        return np.array(U).T.reshape(n, 4)
+    out = np.empty((n, 4))
+    for k in range(n):
+        r = controller(float(t[k]), X[k, :N_STATE].copy(), ref[k].copy(), c[k].copy())
+        out[k] = np.asarray(r[0] if isinstance(r, tuple) and len(r) == 2 else r, float)
+    return out
+
+

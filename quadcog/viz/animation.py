@@ -29,6 +29,8 @@ def read_run(run_dir):
     names = col.trajectory_columns()
     if csv_path.is_file():
         header = csv_path.open().readline().strip().split(",")
+        if tuple(header) == names[:col.ROTOR_COMMAND.start]:     # a folder of before rotor columns
+            names = tuple(header)
         if tuple(header) != names:
             raise InputError(f"{csv_path}: unexpected columns (expected those of "
                              f"quadcog.model.columns.trajectory_columns(), starting {names[:3]})")
