@@ -197,8 +197,16 @@ def add_export(sub):
                                       "controller (docs: On a flight controller)",
                        description="Write one controller's law as a self-contained C99 module "
                                    "(.h and .c) in float32 or double.")
-    p.add_argument("--controller", required=True,
-                   help="the controller's short name: " + ", ".join(controller_names()))
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--controller",
+                       help="the controller's short name, with its default settings: "
+                            + ", ".join(controller_names()))
+    which.add_argument("--scenario", metavar="SCENARIO",
+                       help="a scenario file or shipped name: its controller, with its "
+                            "controller_params, designed for its controller model (your own "
+                            "vehicle or gains; --set changes keys as for `quadcog run`)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="with --scenario: override a scenario key (repeatable)")
     p.add_argument("--precision", default="float32", choices=("float32", "double"),
                    help="float32 (default) or double")
     p.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
@@ -207,7 +215,21 @@ def add_export(sub):
 
 def cmd_export(args):
     from quadcog.embedded import export_controller
-    for path in export_controller(args.controller, args.precision, _out_dir(args.out)):
+    if args.scenario is None:
+        if args.overrides:
+            raise QuadcogError("--set needs --scenario (the keys of a scenario file)")
+        paths = export_controller(args.controller, args.precision, _out_dir(args.out))
+    else:
+        from quadcog.scenarios.scenario import load_scenario
+        scenario = load_scenario(args.scenario, args.overrides)
+        law = scenario.make_controller()
+        law = getattr(law, "inner", law)        # without Sensed: on a vehicle the sensors are real
+        command = " ".join(["quadcog export --scenario", str(args.scenario)]
+                           + [f"--set {o}" for o in args.overrides]
+                           + [f"--precision {args.precision} --out DIR"])
+        paths = export_controller(law, args.precision, _out_dir(args.out),
+                                  name=scenario.controller, command=command)
+    for path in paths:
         print(f"wrote {path}")
 
 

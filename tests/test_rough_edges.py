@@ -162,3 +162,25 @@ def test_batch_result_prints_a_summary_and_gives_a_table():
     if importlib.util.find_spec("pyarrow"):
         table = r.to_arrow()
         assert table.num_rows == 3 and table.column("rms_position_error_tail_m").to_pylist()[0] == 0.01
+
+
+def test_export_a_scenario_controller_with_your_own_vehicle_and_gains(tmp_path, capsys):
+    """`quadcog export --scenario` writes the controller a scenario flies (its params, its
+    controller model, --set applied): the same files as exporting that controller object,
+    built here by hand, from Python."""
+    from quadcog.embedded import export_controller
+    sets = ["vehicle.m=0.8", "controller_params.gamma=0.02"]
+    assert main(["export", "--scenario", "fig6", *[a for s in sets for a in ("--set", s)],
+                 "--out", str(tmp_path / "cli")]) == 0
+    ctl = quadcog.AdaptiveFeedbackLinearization(vehicle=quadcog.HUMMINGBIRD.replace(m=0.8),
+                                                gamma=0.02)
+    command = ("quadcog export --scenario fig6 --set vehicle.m=0.8 --set "
+               "controller_params.gamma=0.02 --precision float32 --out DIR")
+    export_controller(ctl, "float32", tmp_path / "py", name="adaptive", command=command)
+    for name in ("quadcog_adaptive.h", "quadcog_adaptive.c"):
+        assert (tmp_path / "cli" / name).read_text() == (tmp_path / "py" / name).read_text()
+    header = (tmp_path / "cli" / "quadcog_adaptive.h").read_text()
+    assert "m        = 0.8 kg" in header and "gamma = [0.02, 0.02, 0.02]" in header
+    assert main(["export", "--controller", "pd", "--set", "vehicle.m=1", "--out",
+                 str(tmp_path / "x")]) == 2
+    assert "--set needs --scenario" in capsys.readouterr().err
