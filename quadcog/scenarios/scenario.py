@@ -355,7 +355,10 @@ def run_with_progress(scenario, label=None, progress=True):
     """Run a scenario with a progress bar on stderr (or none); returns the result."""
     bar = ProgressBar(label or scenario.name) if progress else None
     try:
-        return scenario.run(progress=bar)
+        result = scenario.run(progress=bar)
+        if bar and result.metrics.diverged:       # why the bar stops short of 100 %
+            bar.label += f" (diverged at {result.metrics.diverged_at:.3f} s: the run stops there)"
+        return result
     finally:
         if bar:
             bar.close()
