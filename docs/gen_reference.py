@@ -256,7 +256,7 @@ def scenario_keys_page() -> str:
              "`cog[0].r`, `cog[0].r[1]`). An unknown key, a wrong type or a value out of range "
              "stops with the file, the key, the value and what was expected.\n",
              "## Top level\n",
-             _table([(f"`{k}`", _check_words(v), _top_default(k, config), TOP_MEANING[k])
+             _table([(f"`{k}`", _check_words(v), _top_default(k, config), _top_meaning(k))
                      for k, v in schema.TOP.items()], head)]
     parts += ["## `[trajectory]`\n",
               "`kind` is one of " + ", ".join(f'`"{k}"`' for k in schema.trajectory_schema())
@@ -298,6 +298,13 @@ def scenario_keys_page() -> str:
               _table([(f"`{k}`", _check_words(v), _value(config.defaults[f"limits.{k}"]),
                        LIMITS_MEANING[k]) for k, v in schema.LIMITS.items()], head)]
     return "\n".join(parts)
+
+
+def _top_meaning(key: str) -> str:
+    if key == "controller":             # the choices, from the registry
+        from quadcog.controllers.registry import controller_names
+        return TOP_MEANING[key] + ": " + ", ".join(f'`"{n}"`' for n in controller_names())
+    return TOP_MEANING[key]
 
 
 def _top_default(key: str, config: Any) -> str:
