@@ -206,6 +206,11 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
     SweepResult
     """
     t0 = time.perf_counter()
+    # the extras are checked before any work (reading the file, expanding the flights)
+    if out is not None:
+        validate.require_extra("sweep", "pyarrow")
+    if workers is not None or scheduler is not None:
+        validate.require_extra("sweep", "dask", "distributed")
     if isinstance(spec, Sweep):
         s = spec
     elif isinstance(spec, dict):
@@ -217,11 +222,6 @@ def sweep(spec, out=None, *, workers=None, scheduler=None, progress=True, plots=
         raise SweepError("give --workers or --scheduler, not both")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise SweepError(f"workers must be a whole number >= 1, got {workers!r}")
-    # the extras are checked before the first flight, not after the last
-    if out is not None:
-        validate.require_extra("sweep", "pyarrow")
-    if workers is not None or scheduler is not None:
-        validate.require_extra("sweep", "dask", "distributed")
     chunks = s.chunks()
     store = ChunkStore(out, s) if out is not None else None
     results = {}
