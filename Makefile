@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded docs clean
 
 OUT ?= out
 
@@ -86,6 +86,11 @@ mutations: $(STAMP)
 ARM_PACKAGES := gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
 embedded: compile
 	$(PY) -m quadcog.embedded
+
+# The documentation site (MkDocs, Material, mkdocstrings) into $(OUT)/docs/; the reference pages
+# (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.
+docs: $(STAMP)
+	$(VENV)/bin/mkdocs build --strict --site-dir $(OUT)/docs
 
 clean:
 	rm -rf $(VENV) .pytest_cache quadcog.egg-info

@@ -1,7 +1,7 @@
 """`make bench`: timings in one run, medians of repeats, ratios beside absolute times.
 
 Prints a Markdown table and writes it to out/bench/results.md (``--out``); the tracked
-bench/results.md and the README's table change only through ``python bench/publish.py bench``.
+bench/results.md and the table of docs/performance.md change only through ``python bench/publish.py bench``.
 No assertion: these machines are noisy, so what counts is the ratios measured side by side in
 the same run.
 """
@@ -531,7 +531,7 @@ def main():
     out.write_text("# `make bench` results\n\nMedian of repeats, measured in one run on "
                    f"{m['cpu']} ({m['cores']} cores, {m['machine']}, kernel built for "
                    f"{m['isa']}), {time.strftime('%Y-%m-%d')}.\n\n" + table + "\n")
-    print(f"\nwritten to {out}; `python bench/publish.py bench` copies it into README.md and "
+    print(f"\nwritten to {out}; `python bench/publish.py bench` copies it into docs/performance.md and "
           "bench/results.md")
 
 

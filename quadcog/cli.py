@@ -82,12 +82,25 @@ def add_scenarios(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     """
     p = sub.add_parser("scenarios", help="list the shipped scenarios with their descriptions",
                        description="List the scenarios that ship with quadcog; `quadcog run "
-                                   "NAME` runs one.")
+                                   "NAME` runs one, `--show NAME` prints one to copy and edit.")
+    p.add_argument("--show", metavar="NAME", default=None,
+                   help="print the TOML of the shipped scenario NAME")
     p.set_defaults(func=cmd_scenarios)
 
 
+def _list_or_show(kind: str, listing: dict[str, str], show: str | None) -> None:
+    from quadcog.sweeps.listing import shipped_text
+    if show is not None:
+        print(shipped_text(show, kind), end="")
+        return
+    width = max(map(len, listing), default=0)
+    for name, description in listing.items():
+        print(f"{name:<{width}}  {description}")
+
+
 def cmd_scenarios(args: argparse.Namespace) -> None:
-    """Run `quadcog scenarios`: list the shipped scenarios with their descriptions.
+    """Run `quadcog scenarios`: list the shipped scenarios with their descriptions, or print one
+    (``--show NAME``).
 
     Parameters
     ----------
@@ -95,10 +108,35 @@ def cmd_scenarios(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.scenarios.lookup import shipped_scenarios
-    scenarios = shipped_scenarios()
-    width = max(map(len, scenarios), default=0)
-    for name, description in scenarios.items():
-        print(f"{name:<{width}}  {description}")
+    _list_or_show("scenario", shipped_scenarios(), args.show)
+
+
+def add_sweeps(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog sweeps`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
+    p = sub.add_parser("sweeps", help="list the shipped sweep files with their descriptions",
+                       description="List the sweep files that ship with quadcog; `quadcog sweep "
+                                   "NAME --out DIR` flies one, `--show NAME` prints one.")
+    p.add_argument("--show", metavar="NAME", default=None,
+                   help="print the TOML of the shipped sweep file NAME")
+    p.set_defaults(func=cmd_sweeps)
+
+
+def cmd_sweeps(args: argparse.Namespace) -> None:
+    """Run `quadcog sweeps`: list the shipped sweep files, or print one (``--show NAME``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+    from quadcog.sweeps.listing import shipped_sweeps
+    _list_or_show("sweep", shipped_sweeps(), args.show)
 
 
 def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -116,7 +154,7 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
         epilog="examples:\n  quadcog run fig7\n  quadcog run fig6 --set controller=fl\n"
                "  quadcog run my.toml --set vehicle.m=0.8 --set 'cog=[{t=1, r=[0.03, 0, 0]}]'",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scenario", help="scenario file (see README 'Scenario files') or the name "
+    p.add_argument("scenario", help="scenario file (docs: Reference, Scenario keys) or the name "
                                     "of a shipped one (`quadcog scenarios` lists them)")
     p.add_argument("--out", type=Path, default=None,
                    help="folder for the results (default: out/<scenario> in this folder)")
@@ -129,8 +167,12 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                    help="draw flight.png (default: yes)")
     p.add_argument("--animate", action="store_true",
                    help="also write flight.gif, a 3D animation (as `quadcog animate`)")
-    p.add_argument("--every", type=_positive_int, default=1, metavar="N",
-                   help="write every N-th sample (and the last) to the table (default: 1)")
+    rate = p.add_mutually_exclusive_group()
+    rate.add_argument("--every", type=_positive_int, default=None, metavar="N",
+                      help="write every N-th sample (and the last) to the table (default: "
+                           "every 10 ms, quadcog.config.defaults['run.sample_period'])")
+    rate.add_argument("--full-rate", dest="every", action="store_const", const=1,
+                      help="write every sample (as --every 1)")
     p.add_argument("--format", dest="fmt", choices=("csv", "parquet"), default="csv",
                    help="table format (parquet needs pyarrow; default: csv)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -174,13 +216,14 @@ def add_animate(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "the flight in 3D: body axes, rotors, the CoG offset to scale, "
                                    "the trail and the reference, with the time.")
     p.add_argument("run_dir", type=Path, help="folder written by `quadcog run`")
-    p.add_argument("--output", type=Path, default=None,
-                   help="GIF to write (default: RUN_DIR/flight.gif)")
+    p.add_argument("--out", "--output", dest="out", type=Path, default=None,
+                   help="GIF to write (default: RUN_DIR/flight.gif; --output is the old name)")
     p.add_argument("--fps", type=_positive_int, default=15, help="frames per second (default 15)")
     p.add_argument("--speed", type=float, default=1.0,
                    help="simulated seconds per wall-clock second (default 1)")
     p.add_argument("--max-frames", type=_positive_int, default=120,
                    help="at most this many frames; the speed goes up to fit (default 120)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_animate)
 
 
@@ -194,8 +237,8 @@ def cmd_animate(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.viz.animation import animate_run
-    path = animate_run(args.run_dir, args.output, fps=args.fps, speed=args.speed,
-                       max_frames=args.max_frames)
+    path = animate_run(args.run_dir, args.out, fps=args.fps, speed=args.speed,
+                       max_frames=args.max_frames, progress=not args.quiet)
     print(f"wrote {path}")
 
 
@@ -271,13 +314,23 @@ def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     sub : argparse._SubParsersAction
         The subcommands of ``parser()``.
     """
+    from quadcog.controllers.registry import controller_names
     p = sub.add_parser("export", help="write a controller as a C99 module for a flight "
-                                      "controller (README: On a flight controller)",
+                                      "controller (docs: On a flight controller)",
                        description="Write one controller's law as a self-contained C99 module "
                                    "(.h and .c) in float32 or double.")
-    p.add_argument("--controller", required=True,
-                   help="pd, fl, adaptive (any name of quadcog.controllers.CONTROLLERS)")
-    p.add_argument("--precision", default="float32", choices=("float32", "double"))
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--controller",
+                       help="the controller's short name, with its default settings: "
+                            + ", ".join(controller_names()))
+    which.add_argument("--scenario", metavar="SCENARIO",
+                       help="a scenario file or shipped name: its controller, with its "
+                            "controller_params, designed for its controller model (your own "
+                            "vehicle or gains; --set changes keys as for `quadcog run`)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="with --scenario: override a scenario key (repeatable)")
+    p.add_argument("--precision", default="float32", choices=("float32", "double"),
+                   help="float32 (default) or double")
     p.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
     p.set_defaults(func=cmd_export)
 
@@ -292,7 +345,21 @@ def cmd_export(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.embedded import export_controller
-    for path in export_controller(args.controller, args.precision, _out_dir(args.out)):
+    if args.scenario is None:
+        if args.overrides:
+            raise QuadcogError("--set needs --scenario (the keys of a scenario file)")
+        paths = export_controller(args.controller, args.precision, _out_dir(args.out))
+    else:
+        from quadcog.scenarios.scenario import load_scenario
+        scenario = load_scenario(args.scenario, args.overrides)
+        law = scenario.make_controller()
+        law = getattr(law, "inner", law)        # without Sensed: on a vehicle the sensors are real
+        command = " ".join(["quadcog export --scenario", str(args.scenario)]
+                           + [f"--set {o}" for o in args.overrides]
+                           + [f"--precision {args.precision} --out DIR"])
+        paths = export_controller(law, args.precision, _out_dir(args.out),
+                                  name=scenario.controller, command=command)
+    for path in paths:
         print(f"wrote {path}")
 
 
@@ -307,8 +374,10 @@ def add_sweep(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("sweep", help="fly a sweep file (TOML) locally or on Dask",
                        description="Fly every flight of a sweep file (scenario keys as lists, "
                                    "ranges or samples) and write one table, a summary and "
-                                   "plots; resumable.")
-    p.add_argument("sweep", help="sweep file, or the name of a shipped one (failure-map)")
+                                   "plots; resumable. Needs the sweep extra (pyarrow, dask, "
+                                   "distributed): pip install 'quadcog[sweep]'.")
+    p.add_argument("sweep", help="sweep file, or the name of a shipped one (`quadcog sweeps` "
+                                 "lists them)")
     p.add_argument("--out", type=Path, required=True,
                    help="results folder; run again with the same folder to resume")
     where = p.add_mutually_exclusive_group()
@@ -325,6 +394,8 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     args : argparse.Namespace
         The parsed command line.
     """
+    from quadcog.validate import require_extra
+    require_extra("sweep", "pyarrow", "dask", "distributed")   # before any flight
     from quadcog.sweeps.runner import run_cli
     # the folder is made by the sweep once the file validates: a rejected file leaves none
     run_cli(args.sweep, args.out, workers=args.workers, scheduler=args.scheduler)
@@ -393,7 +464,7 @@ def cmd_identify(args: argparse.Namespace) -> None:
 
 SUBCOMMANDS: list[Callable[[_Subparsers[argparse.ArgumentParser]], None]] = [
     add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
-    add_export, add_sweep, add_identify]
+    add_export, add_sweep, add_sweeps, add_identify]
 
 
 def _version() -> str:

@@ -27,6 +27,8 @@ _FACTORY: dict[str, Any] = {
     "limits.max_tilt_deg": 85.0,
     "metrics.tail_fraction": 0.25,
     "simulate.max_steps": 10_000_000,
+    # `quadcog run` writes trajectory.csv every this many seconds unless --every or --full-rate
+    "run.sample_period": 0.01,
 }
 
 defaults: dict[str, Any] = dict(_FACTORY)

@@ -15,6 +15,7 @@ from collections.abc import Iterable, Sequence
 import math
 import numbers
 import operator
+from types import ModuleType
 from typing import Any, NoReturn
 
 import numpy as np
@@ -23,7 +24,7 @@ import numpy.typing as npt
 from quadcog.errors import InputError
 
 __all__ = ["plain", "fail", "real", "positive", "nonnegative", "integer", "flag", "choice",
-           "array", "vector", "poles", "step_count", "BYTES_PER_STEP"]
+           "array", "vector", "poles", "step_count", "BYTES_PER_STEP", "require_extra", "import_extra"]
 
 _MAX_ITEMS_SHOWN = 8
 
@@ -546,3 +547,69 @@ def _bytes(b):
         if b < 1024 or unit == "EiB":
             return f"{b:.3g} {unit}"
         b /= 1024
+
+
+
+
+def require_extra(extra: str, *modules: str) -> None:
+    """Check that an optional extra's packages are installed, before any work starts.
+
+    Parameters
+    ----------
+    extra : str
+        The name of the extra in pyproject.toml (``"sweep"``).
+    *modules : str
+        The modules the extra provides (``"pyarrow"``, ``"dask"``).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    quadcog.errors.MissingDependencyError
+        Naming the missing modules and the install command.
+    """
+    import importlib.util
+
+    from quadcog.errors import MissingDependencyError
+    missing = [m for m in modules if importlib.util.find_spec(m) is None]
+    if missing:
+        raise MissingDependencyError(_missing_text(extra, missing))
+
+
+def _missing_text(extra: str, missing: Sequence[str]) -> str:
+    return (f"{', '.join(missing)} not installed: this needs the '{extra}' extra; install it "
+            f"with: pip install 'quadcog[{extra}]' (or pip install {' '.join(missing)})")
+
+
+def import_extra(extra: str, module: str) -> ModuleType:
+    """Import a module of an optional extra, or say how to install it.
+
+    Parameters
+    ----------
+    extra : str
+        The name of the extra in pyproject.toml (``"sweep"``).
+    module : str
+        The module to import (``"pyarrow.parquet"``).
+
+    Returns
+    -------
+    module
+        The imported module.
+
+    Raises
+    ------
+    quadcog.errors.MissingDependencyError
+        Naming the missing package and the install command.
+    """
+    import sys
+
+    from quadcog.errors import MissingDependencyError
+    top = module.split(".")[0]
+    require_extra(extra, top)
+    try:
+        __import__(module)
+    except ImportError:             # found but not importable (a broken install)
+        raise MissingDependencyError(_missing_text(extra, [top])) from None
+    return sys.modules[module]

@@ -11,28 +11,14 @@ from pathlib import Path
 
 import pytest
 
+from quadcog.layers import LAYERS as PACKAGE_LAYERS
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("quadcog", "derive", "report", "bench")
 
-# Bottom to top. A module may import from its own layer and from the layers before it.
-LAYERS = (
-    ("floor", ("quadcog.errors", "quadcog.config", "quadcog.validate", "quadcog.paths",
-               "quadcog.files", "quadcog.kinds", "quadcog.interrupts")),
-    ("codegen", ("quadcog.codegen",)),
-    ("model", ("quadcog.model",)),
-    ("vehicles", ("quadcog.vehicles",)),
-    ("logs", ("quadcog.logs",)),
-    ("trajectories", ("quadcog.trajectories",)),
-    ("controllers", ("quadcog.controllers",)),
-    ("viz", ("quadcog.viz",)),
-    ("sim", ("quadcog.sim",)),
-    ("identification", ("quadcog.identification",)),
-    ("scenarios", ("quadcog.scenarios",)),
-    ("sweeps", ("quadcog.sweeps",)),
-    ("embedded", ("quadcog.embedded",)),
-    ("studies", ("quadcog.studies",)),
-    ("command line", ("quadcog.cli", "quadcog.__main__", "quadcog")),
-)
+# Bottom to top (quadcog/layers.py): a module may import from its own layer and the layers
+# before it.
+LAYERS = tuple((name, prefixes) for name, _, prefixes in PACKAGE_LAYERS)
 # derive/ writes generated/ and never sees the runtime; report/ and bench/ sit on top.
 OUTSIDE = {"derive": ("derive",), "report": ("report", "derive", "quadcog"),
            "bench": ("bench", "report", "derive", "quadcog")}

@@ -1,5 +1,5 @@
-"""The README's measured tables are copies of files that commands wrote (bench/publish.py);
-the paper table is compared with a fresh run in tests/test_paper.py."""
+"""The published measured tables (docs pages, bench/publish.py PAGES) are copies of files that
+commands wrote; the paper table is compared with a fresh run in tests/test_paper.py."""
 import importlib.util
 from pathlib import Path
 import sys
@@ -16,7 +16,7 @@ def _publish():
 
 def test_bench_table_is_the_published_bench_run():
     pub = _publish()
-    readme = (ROOT / "README.md").read_text()
+    readme = pub.PAGES["bench"].read_text()
     assert pub.block(readme, "bench") == pub.table_of((ROOT / "bench" / "results.md").read_text())
 
 
@@ -54,3 +54,13 @@ def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
     assert "| a measurement | 1.5 | s |" in written
     assert not (tmp_path / "bench").exists()
     assert (ROOT / "bench" / "results.md").read_bytes() == tracked
+
+
+def test_bench_figures_name_their_machine():
+    """The published bench table says which machine and day it came from: the line the run
+    wrote above its table, copied with it."""
+    pub = _publish()
+    page = pub.PAGES["bench"].read_text()
+    machine = pub.block(page, "bench-machine")
+    assert machine == pub.machine_of((ROOT / "bench" / "results.md").read_text())
+    assert "cores" in machine and "20" in machine

@@ -15,13 +15,13 @@ from types import ModuleType
 
 import numpy as np
 
-from quadcog.errors import LogFormatError, MissingDependencyError
+from quadcog.errors import LogFormatError
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns, table_columns
+from quadcog.validate import import_extra
 
 __all__ = ["read_table", "write_table", "require_pyarrow"]
 
-_PYARROW_HINT = "pip install pyarrow (or pip install 'quadcog[sweep]')"
 
 
 def require_pyarrow() -> ModuleType:
@@ -37,13 +37,7 @@ def require_pyarrow() -> ModuleType:
     MissingDependencyError
         pyarrow is not installed.
     """
-    try:
-        import pyarrow  # noqa: F401
-        import pyarrow.parquet as pq
-    except ImportError:
-        raise MissingDependencyError(f"Parquet flight logs need pyarrow: {_PYARROW_HINT}") \
-            from None
-    return pq
+    return import_extra("sweep", "pyarrow.parquet")
 
 
 def _from_columns(path, fmt, columns, meta):

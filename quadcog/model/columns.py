@@ -32,9 +32,14 @@ def trajectory_columns() -> tuple[str, ...]:
             + tuple(f"{n}_{u}" for n, u in zip(STATE_NAMES, STATE_UNITS))
             + tuple(f"{n}_{u}" for n, u in zip(INPUT_NAMES, INPUT_UNITS))
             + tuple(f"ref_{n}_{u}" for n, u in REFERENCE)
-            + tuple(f"r_hat_{a}_m" for a in "xyz") + tuple(f"r_G_{a}_m" for a in "xyz"))
+            + tuple(f"r_hat_{a}_m" for a in "xyz") + tuple(f"r_G_{a}_m" for a in "xyz")
+            + tuple(f"rotor{i}_command_N" for i in range(1, 5))
+            + tuple(f"rotor{i}_thrust_N" for i in range(1, 5)))
 
 
 # Column slices, so a reader says which block it means.
 T, X, U = slice(0, 1), slice(1, 13), slice(13, 17)
 REF, R_HAT, R_G = slice(17, 31), slice(31, 34), slice(34, 37)
+# per rotor: commanded (the inverse mixer of U) and applied thrust (N); after the 37 columns
+# that older run folders have
+ROTOR_COMMAND, ROTOR_THRUST = slice(37, 41), slice(41, 45)

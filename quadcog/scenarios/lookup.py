@@ -14,7 +14,7 @@ from typing import Any
 from quadcog.errors import InputError, ScenarioError, SweepError
 
 __all__ = ["SUFFIX", "SHIPPED", "shipped_folder", "shipped_names", "find_file", "read_toml",
-           "scenario_names", "scenario_path", "shipped_scenarios"]
+           "scenario_names", "scenario_path", "shipped_scenarios", "display_name"]
 
 SUFFIX = ".toml"
 # kind of file -> (folder inside the package, the error class of its messages)
@@ -171,3 +171,30 @@ def scenario_path(spec: str | os.PathLike[str]) -> Path:
         The file to read.
     """
     return find_file(spec, "scenario")
+
+
+
+def display_name(path: str | Path, kind: str = "scenario") -> str:
+    """How messages name a file: a shipped file by its name, any other by its path.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (from ``find_file``).
+    kind : str
+        'scenario' or 'sweep'.
+
+    Returns
+    -------
+    str
+        ``"shipped scenario 'fig6'"`` for a file of the package's folder (not the full path of
+        an installed package), else the path as given.
+    """
+    path = Path(path)
+    try:
+        shipped = path.resolve().parent == shipped_folder(kind).resolve()
+    except OSError:
+        shipped = False
+    if shipped and path.suffix == SUFFIX:
+        return f"shipped {kind} '{path.stem}'"
+    return str(path)

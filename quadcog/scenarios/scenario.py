@@ -21,7 +21,7 @@ from quadcog.controllers.registry import controller_names, make_controller
 from quadcog.errors import InputError, ScenarioError
 from quadcog.files import RunFiles, strict_json, write_csv
 from quadcog.model.columns import trajectory_columns
-from quadcog.scenarios.lookup import read_toml, scenario_path
+from quadcog.scenarios.lookup import display_name, read_toml, scenario_path
 from quadcog.scenarios.schema import (
     COG,
     DISTURBANCE,
@@ -397,13 +397,14 @@ def load_scenario(path: str | os.PathLike[str],
     """
     path = scenario_path(path)
     data = read_toml(path, ScenarioError)
-    source = str(path)
+    label = display_name(path, "scenario")      # a shipped file by its name, not a site-packages path
+    source = label
     if overrides:
         from quadcog.scenarios.keys import apply_overrides
         data, notes = apply_overrides(data, overrides)
         for note in notes:
-            warnings.warn(f"{path}: {note}", stacklevel=2)
-        source = f"{path} with " + " ".join(f"--set {o}" for o in overrides)
+            warnings.warn(f"{label}: {note}", stacklevel=2)
+        source = f"{label} with " + " ".join(f"--set {o}" for o in overrides)
     return parse(data, source)
 
 
@@ -441,7 +442,8 @@ def write_table(result: SimulationResult, path: str | os.PathLike[str], every: i
                          f"got {every!r}")
     if fmt not in ("csv", "parquet"):
         raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
-    columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G]
+    columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G,
+               result.rotor_command, result.rotor_thrust]
     n = len(result.t)
     every = min(every, max(n, 1))       # a step beyond the run: first and last sample only
     if every > 1:
@@ -485,7 +487,7 @@ def output_files(fmt: str = "csv", plot: bool = True) -> tuple[str, ...]:
 
 def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.PathLike[str],
                   plot: bool = True, every: int = 1, fmt: str = "csv",
-                  animate: bool = False) -> dict[str, Any]:
+                  animate: bool = False, progress: bool = False) -> dict[str, Any]:
     """The files of one run, into a folder: all of them or none.
 
     metrics.json, vehicle.json, trajectory.csv (or .parquet), with ``plot`` flight.png and
@@ -510,6 +512,8 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
         'csv' or 'parquet'.
     animate : bool
         Also write flight.gif (``quadcog.viz.animation``), in the same all-or-nothing commit.
+    progress : bool
+        A progress bar while the animation is drawn.
 
     Returns
     -------
@@ -531,7 +535,7 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
         if animate:         # from the table as written, as `quadcog animate` would read it
             from quadcog.viz.animation import animate_table, read_table
             animate_table(read_table(files.path(f"trajectory.{fmt}")), metrics,
-                          scenario.vehicle, files.path("flight.gif"))
+                          scenario.vehicle, files.path("flight.gif"), progress=progress)
     return metrics
 
 
@@ -555,7 +559,10 @@ def run_with_progress(scenario: Scenario, label: str | None = None,
     """
     bar = ProgressBar(label or scenario.name) if progress else None
     try:
-        return scenario.run(progress=bar)
+        result = scenario.run(progress=bar)
+        if bar and result.metrics.diverged:       # why the bar stops short of 100 %
+            bar.label += f" (diverged at {result.metrics.diverged_at:.3f} s: the run stops there)"
+        return result
     finally:
         if bar:
             bar.close()
@@ -598,6 +605,8 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
     """
     scenario = load_scenario(path, overrides)
     out = Path(out) if out is not None else default_out(path)
+    if every is None:                       # the command's default: decimated, not every step
+        every = max(1, round(config.defaults["run.sample_period"] / scenario.dt))
     try:
         result = run_with_progress(scenario, progress=progress)
     except ScenarioError:
@@ -605,10 +614,12 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
     except InputError as e:                 # e.g. dt too large for the closed loop
         raise ScenarioError(f"{scenario.source}: {e}") from None
     metrics = write_outputs(result, scenario, out, plot=plot, every=every, fmt=fmt,
-                            animate=animate)
+                            animate=animate, progress=progress)
     written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else []) + (
         ["flight.gif"] if animate else [])
-    status = (f"diverged at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']})"
+    status = (f"DIVERGED at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']}); "
+              f"the flight stops there, a valid result (the paper's failure scenarios diverge), "
+              f"not an error"
               if metrics["diverged"] else
               f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")
     print(f"{scenario.name}: {status}; wrote {out}/{', '.join(written)}")

@@ -65,6 +65,62 @@ class BatchResult:
     final_state: np.ndarray           # (B, 12 + rotor states + n_state)
     seconds: float
 
+    def __repr__(self) -> str:
+        n = len(self.diverged)
+        ok = ~np.asarray(self.diverged, bool)
+        tail = np.asarray(self.rms_position_error_tail)[ok]
+        rms = (f"tail RMS median {np.median(tail):.4g} m, max {np.max(tail):.4g} m"
+               if tail.size else "no flight survived")
+        return (f"BatchResult({n} flights in {self.seconds:.2f} s: {int(n - ok.sum())} diverged, "
+                f"{rms}; .to_pandas() for the table)")
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The metrics as columns, one row per flight.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            {name: (B,) array}: the metrics (m, s), ``diverged`` and ``diverged_cause`` (its
+            name, or '' where the flight did not diverge).
+        """
+        return {"rms_position_error_m": np.asarray(self.rms_position_error),
+                "max_position_error_m": np.asarray(self.max_position_error),
+                "rms_position_error_tail_m": np.asarray(self.rms_position_error_tail),
+                "final_position_error_m": np.asarray(self.final_position_error),
+                "diverged": np.asarray(self.diverged, bool),
+                "diverged_at_s": np.asarray(self.diverged_at),
+                "diverged_cause": np.array([c.name if c is not None else ""
+                                            for c in self.diverged_cause])}
+
+    def to_arrow(self) -> Any:  # a pyarrow.Table (pyarrow is optional, has no stubs)
+        """The metrics as a pyarrow Table, one row per flight (needs pyarrow).
+
+        Returns
+        -------
+        pyarrow.Table
+            The columns of ``columns()``.
+        """
+        validate.require_extra("sweep", "pyarrow")
+        import pyarrow as pa
+        return pa.table({k: v.tolist() if v.dtype.kind == "U" else v
+                         for k, v in self.columns().items()})
+
+    def to_pandas(self) -> Any:  # a pandas.DataFrame (pandas is optional)
+        """The metrics as a pandas DataFrame, one row per flight (needs pandas).
+
+        Returns
+        -------
+        pandas.DataFrame
+            The columns of ``columns()``.
+        """
+        try:
+            import pandas as pd
+        except ImportError:
+            from quadcog.errors import MissingDependencyError
+            raise MissingDependencyError("BatchResult.to_pandas needs pandas: pip install pandas") \
+                from None
+        return pd.DataFrame(self.columns())
+
 
 def batch_kernel(controller: Controller, actuation: Actuation, limits: Limits
                  ) -> VectorKernel | None:

@@ -22,7 +22,7 @@ import warnings
 import numpy as np
 import numpy.typing as npt
 
-from quadcog import validate
+from quadcog import config, validate
 from quadcog.codegen.compiled import cached_compile
 from quadcog.codegen.fastcall import FastCall
 from quadcog.controllers.base import Controller
@@ -51,6 +51,7 @@ from quadcog.sim.prepare import (
 )
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
 from quadcog.sim.schedule import Schedule, truth_parameters
+from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.user_controller import user_call
 from quadcog.trajectories.feasibility import check_reference
 from quadcog.vehicles.vehicle import Vehicle
@@ -65,8 +66,8 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
              controller_model: Vehicle | None = None, cog: Any = None, disturbances: Any = (),
              truth: TruthOptions | None = None, x0: npt.ArrayLike | None = None,
              path: str = "compiled", limits: Limits | None = None,
-             progress: Callable[[float], Any] | None = None, check_dt: bool = True
-             ) -> SimulationResult:
+             progress: Callable[[float], Any] | None = None, check_dt: bool = True,
+             sensing: Sensing | None = None) -> SimulationResult:
     """Fly one closed-loop run and return a SimulationResult.
 
     Parameters
@@ -105,6 +106,9 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
         ``progress(fraction)``, e.g. a ProgressBar.
     check_dt : bool
         Refuse a dt too large for RK4 on the closed loop at the start.
+    sensing : Sensing, optional
+        Noise, gyro bias, one-period delay of what the controller measures; default None,
+        the perfect state. The controller is flown as ``Sensed(controller, sensing, dt)``.
 
     Returns
     -------
@@ -122,6 +126,11 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
     quadcog.EulerSingularityError
         |theta| reached pi/2 (only with a tilt limit at or above 90 deg).
     """
+    if sensing is not None:
+        if not isinstance(controller, Controller):
+            validate.fail("controller", "a quadcog Controller when sensing is given (a Python "
+                          "callable measures what it likes itself)", controller)
+        controller = Sensed(controller, sensing, config.get("simulate.dt", dt))
     setup = prepare_flight(controller, trajectory, duration, dt, vehicle, controller_model, cog,
                            disturbances, truth, x0, path, limits, progress, check_dt)
     t0 = time.perf_counter()
@@ -286,5 +295,32 @@ def _result(setup, X, U, code, elapsed):
         metrics.r_hat_final = X[last, N_STATE + nf:N_STATE + 3 + nf].tolist()
         metrics.r_G_final = r_G[last].tolist()
     name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))
+    inverse = np.linalg.inv(setup.actuation.mixer_matrix()).T
+    thrust = (X[:keep, N_STATE:N_STATE + nf].copy() if nf else
+              np.clip(U[:keep] @ inverse, setup.actuation.lower, setup.actuation.upper))
+    Xk, tk, refk, Uk = X[:keep], t[:keep], ref[:keep], U[:keep]
+    command = lambda: _commanded(controller, tk, Xk, refk, nf, Uk) @ inverse   # on first use
     return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,
-                            controller=name, path=path, info={"seconds": elapsed})
+                            controller=name, path=path, info={"seconds": elapsed},
+                            rotor_thrust=thrust, _command_law=command)
+
+
+def _commanded(controller, t, X, ref, nf, U_applied):
+    """The input U (n, 4) the law asked for at each sample, before the rotors' limits (the
+    result's U is what the rotors gave): the law re-evaluated along the flight, all samples
+    in one mapped call. A user's callable (path="python") is called sample by sample."""
+    n = len(t)
+    if not n:
+        return U_applied.copy()
+    c = X[:, N_STATE + nf:]
+    if isinstance(controller, Controller):
+        law = controller.function().map(n)
+        U = law(t[None, :], X[:, :N_STATE].T, ref.T, c.T)[0]
+        return np.array(U).T.reshape(n, 4)
+    out = np.empty((n, 4))
+    for k in range(n):
+        r = controller(float(t[k]), X[k, :N_STATE].copy(), ref[k].copy(), c[k].copy())
+        out[k] = np.asarray(r[0] if isinstance(r, tuple) and len(r) == 2 else r, float)
+    return out
+
+

@@ -275,6 +275,12 @@ class SimulationResult:
         'compiled' or 'python'.
     info : dict
         More about the run (e.g. "seconds", "scenario", "disturbances").
+    rotor_thrust : (N, 4) numpy.ndarray or None
+        What each rotor gives (N), within its limits (with motor lag, the lagged thrust).
+    _command_law : callable or None
+        Internal: computes ``rotor_command`` on first use.
+    _rotor_command : (N, 4) numpy.ndarray or None
+        Internal: the cache of ``rotor_command``.
     """
     t: np.ndarray
     x: np.ndarray
@@ -286,6 +292,20 @@ class SimulationResult:
     controller: str = ""
     path: str = ""
     info: dict = field(default_factory=dict)
+    # per rotor (N, 4), N: what the rotor gives (clipped to its limits; with motor lag, the
+    # lagged thrust) and, computed on first use (the law re-evaluated along the flight), what
+    # the controller's U asked of it (the inverse mixer, no limit)
+    rotor_thrust: np.ndarray | None = None
+    _command_law: object = field(default=None, repr=False, compare=False)
+    _rotor_command: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def rotor_command(self):
+        """The thrust (N, 4) in N that the controller's input asked of each rotor, before the
+        rotors' limits (a negative value: a rotor asked to pull); None if not known."""
+        if self._rotor_command is None and self._command_law is not None:
+            self._rotor_command = self._command_law()
+        return self._rotor_command
 
     @property
     def diverged(self) -> bool:

@@ -263,6 +263,7 @@ def _plot(flights, z_rows, out):
             ax.semilogy(res.t, np.maximum(e, 1e-4), color=colours[kind], label=label)
         ax.set_title(f"{name}: position error (floored at 0.1 mm)")
         ax.set_xlabel("time (s)")
+        ax.set_ylabel("position error (m)")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
     ax = axes[0, 1]
@@ -276,7 +277,7 @@ def _plot(flights, z_rows, out):
     ax.set_ylim(-5, 12)
     ax.set_title("x_G estimate, [6, 6, 0] cm step (truth 6 cm)")
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("cm")
+    ax.set_ylabel("x_G estimate (cm)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     ax = axes[1, 1]

@@ -4,7 +4,7 @@ from typing import Any
 
 from numpy.typing import NDArray
 
-from quadcog.errors import QuadcogError
+from quadcog.validate import import_extra
 
 __all__ = ["require_pyarrow", "to_arrow"]
 
@@ -19,16 +19,11 @@ def require_pyarrow() -> ModuleType:
 
     Raises
     ------
-    quadcog.errors.QuadcogError
+    quadcog.errors.MissingDependencyError
         Without pyarrow, saying how to install it.
     """
-    try:
-        import pyarrow
-        import pyarrow.parquet  # noqa: F401
-        return pyarrow
-    except ImportError:
-        raise QuadcogError("writing sweep results needs pyarrow: pip install 'quadcog[sweep]'") \
-            from None
+    import_extra("sweep", "pyarrow.parquet")
+    return import_extra("sweep", "pyarrow")
 
 
 def to_arrow(columns: dict[str, NDArray[Any]]) -> Any:

@@ -19,6 +19,7 @@ from typing import Any, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
+from quadcog import validate
 from quadcog.errors import QuadcogError, SchedulerError, SizeError
 from quadcog.files import atomic_write
 from quadcog.interrupts import die_with_parent
@@ -299,6 +300,26 @@ class SweepResult:
         """
         return to_arrow(self.columns)
 
+    def to_arrow(self) -> Any:
+        """The results as a pyarrow Table (needs the sweep extra).
+
+        Returns
+        -------
+        pyarrow.Table
+            One row per flight, the columns of ``columns``.
+        """
+        return to_arrow(self.columns)
+
+    def to_pandas(self) -> Any:
+        """The results as a pandas DataFrame (needs pandas).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per flight, the columns of ``columns``.
+        """
+        return self.to_arrow().to_pandas()
+
 
 def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
           out: str | os.PathLike[str] | None = None, *, workers: int | None = None,
@@ -341,6 +362,11 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
         When Dask or pyarrow is needed and missing, or the scheduler cannot be reached.
     """
     t0 = time.perf_counter()
+    # the extras are checked before any work (reading the file, expanding the flights)
+    if out is not None:
+        validate.require_extra("sweep", "pyarrow")
+    if workers is not None or scheduler is not None:
+        validate.require_extra("sweep", "dask", "distributed")
     check_backend(workers, scheduler, out)
     if isinstance(spec, Sweep):
         s = spec

@@ -180,18 +180,21 @@ def plot_sweep(sweep: Sweep, columns: dict[str, NDArray[Any]], out: Path) -> lis
         finite = tail[adm & np.isfinite(tail) & (tail > 0)]
         norm = LogNorm(vmin=max(finite.min(), 1e-4), vmax=max(finite.max(), 1e-3)) \
             if finite.size else None
+        # squares that fill their grid cell (about 250 pt of axis over the points per axis)
+        per_axis = max(len(np.unique(columns[cx])), len(np.unique(columns[cy])), 1)
+        s = float(np.clip((0.9 * 250 / per_axis) ** 2, 14, 400))
         for ax, name in zip(axes[0], names):
             sel = ctl == name
             x, y = 100 * columns[cx][sel], 100 * columns[cy][sel]
             a, f = adm[sel], failed[sel]
-            ax.scatter(x[~a], y[~a], c="0.8", s=12, marker="s", label="inadmissible")
+            ax.scatter(x[~a], y[~a], c="0.8", s=s, marker="s", label="inadmissible")
             ok = a & ~columns["diverged"][sel]
             sc = ax.scatter(x[ok], y[ok], c=np.maximum(tail[sel][ok], 1e-4), cmap="viridis",
-                            norm=norm, s=14, marker="s")
+                            norm=norm, s=s, marker="s")
             div = a & columns["diverged"][sel]
-            ax.scatter(x[div], y[div], c="red", s=14, marker="s", label="diverged")
+            ax.scatter(x[div], y[div], c="red", s=s, marker="s", label="diverged")
             ax.scatter(x[a & f & ~div], y[a & f & ~div], facecolors="none", edgecolors="white",
-                       s=14, marker="s", linewidths=0.6, label="failed")
+                       s=s, marker="s", linewidths=0.6, label="failed")
             ax.set_xlabel(f"{cx} (cm)")
             ax.set_ylabel(f"{cy} (cm)")
             ax.set_aspect("equal")
@@ -199,8 +202,10 @@ def plot_sweep(sweep: Sweep, columns: dict[str, NDArray[Any]], out: Path) -> lis
             ax.set_title(f"{name}: survives {surv}")
         if norm is not None:
             fig.colorbar(sc, ax=axes[0].tolist(), label="tail RMS position error (m)")
-        axes[0][0].legend(loc="lower left", fontsize=7)
-        fig.savefig(out / "failure_map.png", dpi=110)
+        # below the axes, outside the data: the legend never hides a point
+        axes[0][0].legend(loc="upper left", bbox_to_anchor=(0.0, -0.14), ncol=3, fontsize=7,
+                          markerscale=min(1.0, 8.0 / np.sqrt(s)), facecolor="0.85")
+        fig.savefig(out / "failure_map.png", dpi=110, bbox_inches="tight")
         plt.close(fig)
         written.append("failure_map.png")
 

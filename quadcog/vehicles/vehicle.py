@@ -292,7 +292,7 @@ class Vehicle:
         Returns
         -------
         (4,) numpy.ndarray
-            U = [m g, m g y_G, -m g x_G, 0] [N, N m, N m, N m].
+            U = [m g, m g y_G, -m g x_G, 0] (N, N m, N m, N m).
         """
         return hover_trim(self.parameters())
 

@@ -75,6 +75,8 @@ def read_table(path: Path) -> np.ndarray:
         except Exception as e:      # noqa: BLE001 - pyarrow raises many kinds on damage
             raise InputError(f"{path}: not a readable Parquet file ({type(e).__name__})") \
                 from None
+        if tuple(t.column_names) == names[:col.ROTOR_COMMAND.start]:  # before rotor columns
+            names = tuple(t.column_names)
         missing = [n for n in names if n not in t.column_names]
         if missing:
             raise InputError(f"{path}: lacks the columns {missing[:3]}... of "
@@ -87,6 +89,8 @@ def read_table(path: Path) -> np.ndarray:
     else:
         lines = _text(path).splitlines()
         header = lines[0].strip().split(",") if lines else []
+        if tuple(header) == names[:col.ROTOR_COMMAND.start]:    # a folder of before rotor columns
+            names = tuple(header)
         if tuple(header) != names:
             raise InputError(f"{path}: unexpected columns (expected those of "
                              f"quadcog.model.columns.trajectory_columns(), starting {names[:3]})")
@@ -233,7 +237,7 @@ def frame_times(t: npt.NDArray[np.float64], fps: float, speed: float, max_frames
 
 
 def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int = 15,
-                speed: float = 1.0, max_frames: int = 120) -> Path:
+                speed: float = 1.0, max_frames: int = 120, progress: bool = False) -> Path:
     """Write the GIF of a run folder; returns its path.
 
     Parameters
@@ -249,6 +253,8 @@ def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int 
         Simulated seconds per second of GIF (1 = real time).
     max_frames : int
         At most this many frames (the speed is raised to fit).
+    progress : bool
+        Show a progress bar of the frames drawn on stderr (`quadcog animate`).
 
     Returns
     -------
@@ -261,7 +267,7 @@ def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int 
     from quadcog.files import RunFiles
     with RunFiles(output.parent, owned=()) as files:      # a GIF whole or not at all
         animate_table(table, metrics, vehicle, files.path(output.name), fps=fps, speed=speed,
-                      max_frames=max_frames)
+                      max_frames=max_frames, progress=progress)
     return output
 
 
@@ -277,7 +283,8 @@ def _check_settings(fps, speed, max_frames):
 
 
 def animate_table(table: np.ndarray, metrics: dict, vehicle: Any, output: Path,
-                  fps: int = 15, speed: float = 1.0, max_frames: int = 120) -> Path:
+                  fps: int = 15, speed: float = 1.0, max_frames: int = 120,
+                  progress: bool = False) -> Path:
     """Draw the GIF of a trajectory table (as ``read_run`` returns it) into ``output``.
 
     Parameters
@@ -290,7 +297,7 @@ def animate_table(table: np.ndarray, metrics: dict, vehicle: Any, output: Path,
         The vehicle drawn.
     output : pathlib.Path
         The GIF to write (written directly: callers make it atomic).
-    fps, speed, max_frames
+    fps, speed, max_frames, progress
         As for ``animate_run``.
 
     Returns
@@ -378,8 +385,14 @@ def animate_table(table: np.ndarray, metrics: dict, vehicle: Any, output: Path,
         return []
 
     anim = FuncAnimation(fig, draw, frames=len(idx), blit=False)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    bar = None
+    if progress:                    # drawing the frames takes tens of seconds
+        from quadcog.viz.progress import ProgressBar
+        bar = ProgressBar(f"animate {output.name}")
     try:
-        anim.save(output, writer=PillowWriter(fps=fps))
+        anim.save(output, writer=PillowWriter(fps=fps),
+                  progress_callback=(lambda i, n: bar((i + 1) / n)) if bar else None)
     except Exception as e:
         # matplotlib finishes the file in a `finally`; after Ctrl-C with no frame yet that
         # fails (IndexError) and hides the interrupt: report the interrupt
@@ -387,5 +400,7 @@ def animate_table(table: np.ndarray, metrics: dict, vehicle: Any, output: Path,
             raise e.__context__ from None
         raise
     finally:
+        if bar:
+            bar.close()
         plt.close(fig)
     return output

@@ -101,6 +101,53 @@ def _intervals(disturbances: Iterable[Any] | None) -> list[tuple[float, float]]:
     return [(float(d.t), float(d.t) + float(d.duration)) for d in disturbances or ()]
 
 
+MARKERS = ("o", "s", "^", "D")
+
+
+def _marks(i, n, count=12):
+    """Line options that put ``count`` markers of series ``i`` on a line of ``n`` samples, at
+    times shifted per series: two series that coincide (x and y after a symmetric CoG step)
+    both stay visible."""
+    step = max(1, n // count)
+    return {"marker": MARKERS[i % len(MARKERS)], "markersize": 4, "markevery":
+            (min(n - 1, (i * step) // len(MARKERS)), step)}
+
+
+def _rotor_panel(a, result):
+    """Each rotor's applied thrust (solid, with markers) and commanded thrust (dashed), in N.
+    The axis spans the applied thrusts and the 1st-99th percentiles of the commands, so one
+    spike of the command cannot flatten the rest; what lies beyond is said in the legend."""
+    f, fc = result.rotor_thrust, result.rotor_command
+    if f is None or fc is None:               # a result from before per-rotor thrust
+        a.plot(result.t, result.U[:, 0], color="C3", label="U1 (thrust)")
+        a.set_ylabel("thrust U1 (N)")
+        return
+    t = result.t
+    for i in range(4):
+        a.plot(t, fc[:, i], color=f"C{i}", ls="--", lw=0.9)
+        a.plot(t, f[:, i], color=f"C{i}", lw=1.2, label=f"rotor {i + 1}", **_marks(i, len(t)))
+    a.plot([], [], color="0.3", ls="--", lw=0.9, label="commanded")
+    _robust_ylim(a, np.concatenate([f.ravel(), fc.ravel()]), "N")
+    a.set_ylabel("rotor thrust (N)")
+
+
+def _robust_ylim(a, values, unit):
+    """Limit axis ``a`` to the 1st-99th percentiles of ``values`` (with a margin), so that a
+    spike (the last samples of a diverging flight) cannot flatten the rest; when values lie
+    beyond, a note in the panel says how far."""
+    finite = values[np.isfinite(values)]
+    if not finite.size:
+        return
+    lo, hi = np.percentile(finite, [1, 99])
+    pad = 0.1 * max(hi - lo, 1e-3 * max(abs(hi), abs(lo), 1.0))
+    lo, hi = lo - pad, hi + pad
+    if finite.min() < lo or finite.max() > hi:
+        a.set_ylim(lo, hi)
+        a.text(0.99, 0.96, f"axis clipped; values from {finite.min():.3g} to {finite.max():.3g} {unit}",
+               transform=a.transAxes, ha="right", va="top", fontsize=8, color="0.3",
+               bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1})
+
+
 def plot_flight(result: Any, path: str | Path | None = None, name: str | None = None,
                 title: str | None = None, disturbances: Iterable[Any] | None = None
                 ) -> "Figure":
@@ -141,32 +188,33 @@ def plot_flight(result: Any, path: str | Path | None = None, name: str | None = 
         fig, ax = plt.subplot_mosaic(layout, figsize=(12, 9),  # type: ignore[arg-type]
                                      sharex=True)
         for i, (axis, col) in enumerate(zip("xyz", ("C0", "C1", "C2"))):
-            ax["P"].plot(t, x[:, i], color=col, label=axis)
+            ax["P"].plot(t, x[:, i], color=col, label=axis, **_marks(i, len(t)))
             ax["P"].plot(t, ref[:, i], color=col, ls="--", lw=1)
         ax["P"].plot([], [], color="0.3", ls="--", lw=1, label="reference")
         ax["P"].set_ylabel("position (m)")
         err = x[:, :3] - ref[:, :3]
         for i, (axis, col) in enumerate(zip("xyz", ("C0", "C1", "C2"))):
-            ax["E"].plot(t, 100 * err[:, i], color=col, lw=1, label=f"{axis} - {axis}_ref")
+            ax["E"].plot(t, 100 * err[:, i], color=col, lw=1, label=f"{axis} - {axis}_ref",
+                         **_marks(i, len(t)))
         ax["E"].plot(t, 100 * np.linalg.norm(err, axis=1), color="k", lw=1.5, label="|error|")
         ax["E"].set_ylabel("position error (cm)")
         for i, (angle, col) in enumerate(zip(("phi", "theta", "psi"), ("C0", "C1", "C2"))):
-            ax["A"].plot(t, np.degrees(x[:, 3 + i]), color=col, label=angle)
+            ax["A"].plot(t, np.degrees(x[:, 3 + i]), color=col, label=angle, **_marks(i, len(t)))
         ax["A"].set_ylabel("attitude (deg)")
-        ax["T"].plot(t, result.U[:, 0], color="C3", label="U1 (thrust)")
-        ax["T"].set_ylabel("thrust U1 (N)")
+        _rotor_panel(ax["T"], result)
         for i, col in zip(range(1, 4), ("C0", "C1", "C2")):
-            ax["M"].plot(t, result.U[:, i], color=col, label=f"U{i + 1}")
+            ax["M"].plot(t, result.U[:, i], color=col, label=f"U{i + 1}", **_marks(i - 1, len(t)))
+        _robust_ylim(ax["M"], result.U[:, 1:].ravel(), "N m")
         ax["M"].set_ylabel("moments (N m)")
         if show_cog:
             for i, (axis, col) in enumerate(zip(("x_G", "y_G", "z_G"), ("C0", "C1", "C2"))):
                 estimating = np.any(result.r_hat)
-                ax["C"].plot(t, 100 * result.r_G[:, i], color=col,
-                             ls="--" if estimating else "-", lw=1.2,
-                             label=None if estimating else axis)
+                ax["C"].plot(t, 100 * result.r_G[:, i], color=col, ls="--" if estimating else "-",
+                             lw=1.2, label=None if estimating else axis,
+                             **({} if estimating else _marks(i, len(t))))
                 if estimating:
                     ax["C"].plot(t, 100 * result.r_hat[:, i], color=col,
-                                 label=f"{axis} estimate")
+                                 label=f"{axis} estimate", **_marks(i, len(t)))
             if np.any(result.r_hat):
                 ax["C"].plot([], [], color="0.3", ls="--", lw=1.2, label="true")
             ax["C"].set_ylabel("CoG offset (cm)")
