@@ -533,6 +533,10 @@ def _main(argv):
         print("quadcog: interrupted", file=sys.stderr)
         return e.status             # 128 + the signal, as shells report it: 130, 143
     except QuadcogError as e:
+        from quadcog.interrupts import received
+        if received() is not None:  # a signal inside compiled code, reported as a wrong input
+            print("quadcog: interrupted", file=sys.stderr)
+            return received().status
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2
     except OSError as e:
@@ -546,6 +550,11 @@ def _main(argv):
               f"for this machine", file=sys.stderr)
         return 2
     except Exception as e:          # a bug: one line for users, the traceback on request
+        from quadcog.interrupts import received
+        interrupt = received()
+        if interrupt is not None:   # the signal came out of compiled code as another error
+            print("quadcog: interrupted", file=sys.stderr)
+            return interrupt.status
         if os.environ.get("QUADCOG_TRACEBACK"):
             raise
         print(f"quadcog: internal error: {type(e).__name__}: {e} (a bug in quadcog; "

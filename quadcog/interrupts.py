@@ -17,18 +17,38 @@ import threading
 
 from quadcog.errors import Interrupted
 
-__all__ = ["HANDLED", "WATCHDOG_PERIOD", "install_handlers", "restore_handlers", "die_with_parent"]
+__all__ = ["HANDLED", "WATCHDOG_PERIOD", "install_handlers", "restore_handlers", "die_with_parent",
+           "received"]
 
 HANDLED = (signal.SIGINT, signal.SIGTERM)
 WATCHDOG_PERIOD = 1.0       # s between two looks at the parent's pid (non-Linux fallback)
 _PR_SET_PDEATHSIG = 1       # from <linux/prctl.h>
 
 
+_RECEIVED: list[int] = []   # the signal that arrived, if one did
+
+
 def _raise(signum, frame):
     # Once is enough: a second signal during clean-up must not abort the clean-up.
     for s in HANDLED:
         signal.signal(s, signal.SIG_IGN)
+    _RECEIVED.append(signum)
     raise Interrupted(signum)
+
+
+def received() -> Interrupted | None:
+    """The interrupt that arrived since ``install_handlers``, if one did.
+
+    A signal that lands inside a call into compiled code (CasADi's SWIG layer) can come out as
+    another exception (a ``NotImplementedError`` about the arguments): the command asks here
+    before it reports an error, so the user sees the interrupt, not a mangled message.
+
+    Returns
+    -------
+    quadcog.errors.Interrupted or None
+        The interrupt (its ``status`` is 130 or 143), or None.
+    """
+    return Interrupted(_RECEIVED[0]) if _RECEIVED else None
 
 
 def install_handlers() -> dict:
@@ -42,6 +62,7 @@ def install_handlers() -> dict:
     """
     if threading.current_thread() is not threading.main_thread():
         return {}
+    _RECEIVED.clear()
     return {s: signal.signal(s, _raise) for s in HANDLED}
 
 

@@ -53,8 +53,8 @@ def assert_close(actual, expected, rtol, what, point=None):
 # there and then if it was not started (--collect-only). A job's exception is raised in the
 # test that takes its result.
 
-_JOBS = {}            # name -> dict(module=file name, user, prepare=callable, future=None)
-_POOL = []
+_JOBS = {}            # name -> dict(module=file name, user, prepare=callable, future=None, lane)
+_POOLS = {}           # lane -> a one-thread executor: jobs of one lane run one after another
 _DIRS = []
 
 
@@ -64,14 +64,16 @@ def background_dir(prefix):
     return _DIRS[-1]
 
 
-def background_job(name, module, user, prepare):
+def background_job(name, module, user, prepare, lane="main"):
     """Register ``prepare`` for ``user``, the fixture or the test of ``module`` (its __file__)
-    that takes the result: the job starts if a collected test of that module is or uses it.
-    ``prepare`` is called in the main thread (for anything that touches CasADi or quadcog
-    state) and returns the function that does the long work on the background thread; that
-    function's return value is the job's result."""
+    that takes the result (a test's name, or one parametrized case as ``test_x[id]``): the job
+    starts if a collected test of that module is or uses it. ``prepare`` is called in the main
+    thread (for anything that touches CasADi or quadcog state) and returns the function that
+    does the long work on the background thread of ``lane``; that function's return value is
+    the job's result. Jobs of another lane run beside those of the first (subprocesses that
+    would otherwise wait behind one another)."""
     _JOBS.setdefault(name, dict(module=Path(module).name, user=user, prepare=prepare,
-                                future=None))
+                                future=None, lane=lane))
 
 
 def background_result(name):
@@ -89,7 +91,10 @@ def _start(job):
     except Exception as e:                               # raised in the test, not here
         def work(e=e):
             raise e
-    return _POOL[0].submit(work)
+    if job["lane"] not in _POOLS:
+        _POOLS[job["lane"]] = ThreadPoolExecutor(max_workers=1,
+                                                 thread_name_prefix=f"tests-bg-{job['lane']}")
+    return _POOLS[job["lane"]].submit(work)
 
 
 def pytest_collection_finish(session):
@@ -97,15 +102,14 @@ def pytest_collection_finish(session):
         return
     for job in _JOBS.values():
         if any(item.path.name == job["module"] and (job["user"] in item.fixturenames or
-                                                     job["user"] == item.originalname)
+                                                     job["user"] in (item.originalname,
+                                                                     item.name))
                for item in session.items):
-            if not _POOL:
-                _POOL.append(ThreadPoolExecutor(max_workers=1, thread_name_prefix="tests-bg"))
             job["future"] = _start(job)
 
 
 def pytest_sessionfinish(session):
-    for pool in _POOL:
+    for pool in _POOLS.values():
         pool.shutdown(wait=True, cancel_futures=True)
     for folder in _DIRS:
         shutil.rmtree(folder, ignore_errors=True)

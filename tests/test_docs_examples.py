@@ -23,6 +23,7 @@ import re
 import subprocess
 import sys
 
+from conftest import background_dir, background_job, background_result
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -108,9 +109,24 @@ def _param(b: Block):
     return pytest.param(b, id=f"{b.page}:{b.line}", marks=marks)
 
 
+def _job(block: Block):
+    """The background job of one block: a subprocess in a folder of its own, started at
+    collection on a lane of its own (conftest.background_job), so the blocks run while the
+    other tests do."""
+    def prepare():
+        folder = background_dir("docs-block")
+        return lambda: run_block(block, folder)
+    return prepare
+
+
+for _b in runnable():
+    background_job(f"docs block {_b.page}:{_b.line}", __file__,
+                   f"test_block_runs[{_b.page}:{_b.line}]", _job(_b), lane="docs")
+
+
 @pytest.mark.parametrize("block", [_param(b) for b in runnable()])
-def test_block_runs(block, tmp_path):
-    done = run_block(block, tmp_path)
+def test_block_runs(block):
+    done = background_result(f"docs block {block.page}:{block.line}")
     assert done.returncode == 0, (f"{block.page}:{block.line} ({block.lang}) exited "
                                   f"{done.returncode}\n--- block\n{block.text}--- stdout\n"
                                   f"{done.stdout[-3000:]}--- stderr\n{done.stderr[-3000:]}")

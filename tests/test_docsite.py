@@ -9,6 +9,7 @@ import subprocess
 import sys
 import tomllib
 
+from conftest import background_dir, background_job, background_result
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -32,14 +33,25 @@ def _rows(page, heading):
 
 @pytest.mark.slow
 @pytest.mark.skipif(not MKDOCS.exists(), reason="mkdocs not installed (the docs extra)")
-def test_site_builds_strict(tmp_path):
+def _build_site():
+    """The build, a subprocess started at collection on a lane of its own
+    (conftest.background_job)."""
+    folder = background_dir("site")
+    return lambda: (folder, subprocess.run(
+        [str(MKDOCS), "build", "--strict", "--site-dir", str(folder / "site")], cwd=ROOT,
+        capture_output=True, text=True, timeout=600,
+        env={"NO_MKDOCS_2_WARNING": "1", "PATH": str(MKDOCS.parent) + ":/usr/bin:/bin"}))
+
+
+background_job("docs site", __file__, "test_site_builds_strict", _build_site, lane="tools")
+
+
+def test_site_builds_strict():
     """`mkdocs build --strict`, as `make docs` runs it: every page and link resolves, every
     ``::: module`` of the API pages is found, every generated page is in the nav."""
-    done = subprocess.run([str(MKDOCS), "build", "--strict", "--site-dir", str(tmp_path / "site")],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600,
-                          env={"NO_MKDOCS_2_WARNING": "1", "PATH": str(MKDOCS.parent) + ":/usr/bin:/bin"})
+    folder, done = background_result("docs site")
     assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-4000:]
-    site = tmp_path / "site"
+    site = folder / "site"
     for page in ("index.html", "reference/scenario-keys/index.html", "reference/cli/index.html",
                  "reference/api/sim/index.html", "howto/controller/index.html"):
         assert (site / page).is_file(), page

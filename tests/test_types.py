@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 
+from conftest import background_dir, background_job, background_result
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -16,9 +17,18 @@ def _mypy():
     return str(exe) if exe.exists() else shutil.which("mypy")
 
 
+def _run_mypy():
+    """mypy, a subprocess started at collection on a lane of its own (conftest.background_job)."""
+    folder = background_dir("mypy")
+    return lambda: subprocess.run([_mypy(), "--cache-dir", str(folder / "cache"), "quadcog"],
+                                  cwd=ROOT, capture_output=True, text=True)
+
+
+background_job("mypy", __file__, "test_mypy_is_clean", _run_mypy, lane="tools")
+
+
 @pytest.mark.slow
-def test_mypy_is_clean(tmp_path):
+def test_mypy_is_clean():
     assert _mypy(), "mypy is missing: it comes with the dev extra (pip install -e '.[dev]')"
-    res = subprocess.run([_mypy(), "--cache-dir", str(tmp_path / "cache"), "quadcog"],
-                         cwd=ROOT, capture_output=True, text=True)
+    res = background_result("mypy")
     assert res.returncode == 0, res.stdout[-6000:] + res.stderr[-2000:]

@@ -23,6 +23,7 @@ import numpy.typing as npt
 from quadcog.codegen.compiled import compile_function
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import InputError
+from quadcog.model.conventions import N_PARAM, N_STATE
 from quadcog.model.functions import Model, load
 from quadcog.model.parameters import with_cog
 from quadcog.trajectories.analytic import REF_SIZE
@@ -178,7 +179,7 @@ class Controller:
             compose into bigger expressions.
         """
         if self._function is None:
-            t, x = ca.SX.sym("t"), ca.SX.sym("x", 12)
+            t, x = ca.SX.sym("t"), ca.SX.sym("x", N_STATE)
             ref, c = ca.SX.sym("ref", REF_SIZE), ca.SX.sym("c", self.n_state)
             U, c_dot = self.expression(t, x, ref, c)
             # the generated functions share trigonometry and I_G^{-1}: merge it once here
@@ -298,7 +299,7 @@ class Controller:
             truth dynamics without extra effects, c0 = ``initial_state()``.
         """
         if self._jacobian is None:
-            x, ref, p = ca.SX.sym("x", 12), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("p", 14)
+            x, ref, p = ca.SX.sym("x", N_STATE), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("p", N_PARAM)
             U, _ = self.function()(0.0, x, ref, self.initial_state())
             f = self.model.casadi_function("truth_dynamics")
             self._jacobian = ca.Function(

@@ -23,7 +23,7 @@ from quadcog.controllers.registry import CONTROLLERS, make_controller
 from quadcog.embedded.c_text import c_identifier, comment_text
 from quadcog.embedded.emit import C_TYPE, PRECISIONS, body, literal
 from quadcog.errors import ExportError
-from quadcog.model.conventions import PARAM_NAMES, STATE_NAMES
+from quadcog.model.conventions import N_STATE, PARAM_NAMES, STATE_NAMES
 from quadcog.trajectories.analytic import REF_SIZE
 
 __all__ = ["NOTICE", "PARAM_UNITS", "short_name", "step_function", "documented_constants",
@@ -79,7 +79,7 @@ def step_function(controller: Controller) -> ca.Function:
     nc = int(controller.n_state)
     law = controller.function()
     t = ca.SX.sym("t")
-    x, ref = ca.SX.sym("x", 12), ca.SX.sym("ref", REF_SIZE)
+    x, ref = ca.SX.sym("x", N_STATE), ca.SX.sym("ref", REF_SIZE)
     c, dt = ca.SX.sym("c", nc), ca.SX.sym("dt")
     U, c_dot = law(t, x, ref, c)
     if ca.depends_on(ca.vertcat(U, c_dot), t):

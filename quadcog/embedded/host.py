@@ -15,7 +15,7 @@ from quadcog.codegen.compiled import compile_function
 from quadcog.codegen.compiler import find_compiler
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import CompileError
-from quadcog.model.conventions import R_G
+from quadcog.model.conventions import N_STATE, R_G
 from quadcog.model.functions import load
 from quadcog.scenarios.scenario import Scenario
 from quadcog.sim.plant import Actuation, initial_rotor_thrusts, plant_step_function
@@ -112,7 +112,7 @@ class HostStep:
         self.lib = ctypes.CDLL(str(library))
         self.dtype = NP_TYPE[precision]
         self.nc = nc
-        self.x, self.ref = np.zeros(12, self.dtype), np.zeros(REF_SIZE, self.dtype)
+        self.x, self.ref = np.zeros(N_STATE, self.dtype), np.zeros(REF_SIZE, self.dtype)
         self.c, self.U = np.zeros(max(nc, 1), self.dtype), np.zeros(4, self.dtype)
         self.dt_type = C_TYPE[precision]
         self._step = getattr(self.lib, f"quadcog_{name}_step")

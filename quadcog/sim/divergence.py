@@ -10,6 +10,7 @@ import numpy.typing as npt
 
 from quadcog import config, validate
 from quadcog.errors import EulerSingularityError
+from quadcog.model.conventions import N_STATE
 
 __all__ = ["Limits", "DivergenceCause", "divergence_code", "divergence_rule", "magnitude",
            "first_divergence", "check_euler_singularity"]
@@ -130,7 +131,7 @@ def divergence_rule(limits: Limits) -> ca.Function:
         ``divergence(x (12), position_error, rest) -> code`` (see ``divergence_code``).
     """
     if limits not in _rules:
-        x, e, rest = ca.SX.sym("x", 12), ca.SX.sym("position_error"), ca.SX.sym("rest")
+        x, e, rest = ca.SX.sym("x", N_STATE), ca.SX.sym("position_error"), ca.SX.sym("rest")
         _rules[limits] = ca.Function("divergence", [x, e, rest],
                                      [divergence_code(x, e, limits, rest)],
                                      ["x", "position_error", "rest"], ["code"])

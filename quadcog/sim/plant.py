@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import InputError
-from quadcog.model.conventions import IDX, R_G, hover_trim
+from quadcog.model.conventions import IDX, N_PARAM, N_STATE, R_G, hover_trim
 from quadcog.model.functions import Model
 from quadcog.vehicles.vehicle import N_ROTORS, Vehicle
 
@@ -267,7 +267,7 @@ def plant_step_function(model: Model, actuation: Actuation) -> ca.Function:
         ``rk4_step_expression``.
     """
     nf = actuation.n_rotor_states
-    x, f, U, p = ca.SX.sym("x", 12), ca.SX.sym("f", nf), ca.SX.sym("U", 4), ca.SX.sym("p", 14)
+    x, f, U, p = ca.SX.sym("x", N_STATE), ca.SX.sym("f", nf), ca.SX.sym("U", 4), ca.SX.sym("p", N_PARAM)
     w, dt = ca.SX.sym("wrench", 6), ca.SX.sym("dt")
     x_next, f_next, U_app = rk4_step_expression(model, x, f, U, p, w, dt, actuation)
     return ca.Function("plant_step", [x, f, U, p, w, dt], [x_next, f_next, U_app],

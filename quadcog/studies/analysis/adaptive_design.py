@@ -14,6 +14,7 @@ import casadi as ca
 import numpy as np
 
 from quadcog.controllers import AdaptiveFeedbackLinearization
+from quadcog.model.conventions import N_STATE
 from quadcog.sim.divergence import Limits
 from quadcog.sim.flight import simulate
 from quadcog.sim.result import SimulationResult
@@ -24,6 +25,7 @@ from quadcog.studies.analysis.adaptive_variants import (
     OracleOutputRegulationAdaptive,
     OutputRegulationAdaptive,
 )
+from quadcog.trajectories.analytic import REF_SIZE
 
 __all__ = ["STEP_TIME", "STEP_R", "FAR", "design_checks", "lyapunov_along", "lyapunov_summary",
            "variants", "lyapunov_study", "plot_lyapunov"]
@@ -64,7 +66,7 @@ def design_checks(ctl: AdaptiveFeedbackLinearization | None = None) -> dict[str,
 def _error_function(ctl):
     """CasADi Function (x, ref, r_hat, r_true) -> (e_s (8), mismatch (1)), evaluated with the
     base class law (B at the estimate), whatever the variant."""
-    x, ref = ca.SX.sym("x", 12), ca.SX.sym("ref", 14)
+    x, ref = ca.SX.sym("x", N_STATE), ca.SX.sym("ref", REF_SIZE)
     rh, rt = ca.SX.sym("r_hat", 3), ca.SX.sym("r_true", 3)
     parts = lambda r: AdaptiveFeedbackLinearization.parts(ctl, x, ref, r)
     _, e_s, Phi, B = parts(rh)

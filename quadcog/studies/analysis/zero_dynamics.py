@@ -227,7 +227,7 @@ def _output_tracking_law(model, kp, kd):
     """CasADi Function (x, p, y_d, y_dot_d, y_ddot_d) -> x_dot of the exact FL closed loop
     with the true parameters: U = alpha^{-1} (y_ddot_d - kp e - kd e_dot - b)."""
     f = model.casadi_function("dynamics")
-    x, p = ca.SX.sym("x", 12), ca.SX.sym("p", N_PARAM)
+    x, p = ca.SX.sym("x", N_STATE), ca.SX.sym("p", N_PARAM)
     yd, ydd, yddd = ca.SX.sym("yd", 4), ca.SX.sym("ydd", 4), ca.SX.sym("yddd", 4)
     y_dot = f(x, ca.SX.zeros(4), p)[list(OUTPUT_ROWS)]
     v = yddd - ca.DM(kp) * (x[list(OUTPUT_ROWS)] - yd) - ca.DM(kd) * (y_dot - ydd)
