@@ -40,13 +40,17 @@ HOSTILE = st.one_of(st.none(), st.booleans(), st.text(max_size=5), st.integers()
 
 
 def _textbook_rigid(m, I_O, r):
-    """Principal inertias about the CoG (parallel-axis theorem: I_G = I_O - m(|r|^2 1 - r r^T))
-    and whether they are those of a rigid body: all > 0 and each below the sum of the other
-    two (Goldstein, Classical Mechanics, sec. 5.3)."""
+    """Whether a Vehicle with principal inertias I_O and CoG offset r is accepted: I_O is that
+    of a rigid body (each principal inertia below the sum of the other two; Goldstein,
+    Classical Mechanics, sec. 5.3), and the paper's model admits the offset: the inertia about
+    the CoG (parallel-axis theorem, I_G = I_O - m(|r|^2 1 - r r^T)) keeps at least 1 % of I_O
+    in every direction. Returns (accepted, distance to the nearest rim, relative)."""
     r = np.asarray(r, float)
+    a, b, c = sorted(I_O)
     I_G = np.diag(I_O) - m * (r @ r * np.eye(3) - np.outer(r, r))
-    a, b, c = np.linalg.eigvalsh(I_G)
-    return a > 0 and c < a + b, min(a, a + b - c) / c
+    s = np.diag(1 / np.sqrt(I_O))
+    ratio = np.linalg.eigvalsh(s @ I_G @ s)[0]
+    return c < a + b and ratio >= 0.01, min((a + b - c) / c, ratio - 0.01)
 
 
 def test_izz_beyond_ixx_plus_iyy_is_refused_in_those_terms():
