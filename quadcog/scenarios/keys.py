@@ -182,8 +182,9 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     key, sep, value = text.partition("=")
     key = key.strip()
     if not sep or parse_key(key) is None:
-        reason = _not_a_key(key) if sep and key else "expected KEY=VALUE"
-        raise OverrideError(f"--set {text!r}: {reason} (KEY: {KEY_EXAMPLE}; e.g. "
+        if sep and key:         # the grammar's own reason names the accepted spelling
+            raise OverrideError(f"--set {text!r}: {_not_a_key(key)}")
+        raise OverrideError(f"--set {text!r}: expected KEY=VALUE (KEY: {KEY_EXAMPLE}; e.g. "
                             f"vehicle.m=0.8 or controller=adaptive)")
     try:
         parsed = tomllib.loads(f"v = {value.strip()}")["v"]
