@@ -56,7 +56,7 @@ from quadcog.model.conventions import B_U, NU
 from quadcog.model.functions import Model
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["CompositeAdaptive", "unpack_covariance", "pack_covariance"]
+__all__ = ["CompositeAdaptive", "unpack_covariance", "pack_covariance", "believed_input"]
 
 _P_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
@@ -103,6 +103,42 @@ def pack_covariance(P: ca.SX) -> ca.SX:
         Its entries (xx, xy, xz, yy, yz, zz) (6x1).
     """
     return ca.vertcat(*[P[i, j] for i, j in _P_INDEX])
+
+
+def believed_input(U: ca.SX, f_hat: ca.SX, vehicle: Vehicle, allocation: bool,
+                   motor_lag: bool) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """The input a law commands and what it believes its rotors deliver (see
+    ``CompositeAdaptive.delivered_input``; the payload law uses it too).
+
+    Parameters
+    ----------
+    U : casadi.SX
+        The law's input (4x1) [U1 (N), U2, U3, U4 (N m)].
+    f_hat : casadi.SX
+        The believed rotor thrusts (4,) (N), empty (0,) without ``motor_lag``.
+    vehicle : Vehicle
+        The controller's model (mixer, rotor limits, motor time constant).
+    allocation : bool
+        Reduce U to what the rotors can give, yaw first (``allocation.prioritized_input``).
+    motor_lag : bool
+        The rotor thrusts lag behind the command with the vehicle's motor time constant
+        (which must then be > 0).
+
+    Returns
+    -------
+    U_a : casadi.SX
+        The input believed delivered (4x1).
+    U_cmd : casadi.SX
+        The commanded input (4x1).
+    f_hat_dot : casadi.SX
+        Rate of the believed rotor thrusts (N/s), empty without ``motor_lag``.
+    """
+    if allocation:
+        U = prioritized_input(U, vehicle)
+    if not motor_lag:
+        return U, U, ca.SX(0, 1)
+    f_cmd = ca.DM(np.linalg.inv(vehicle.mixer())) @ U
+    return ca.DM(vehicle.mixer()) @ f_hat, U, (f_cmd - f_hat) / vehicle.motor_time_constant
 
 
 class CompositeAdaptive(AdaptiveFeedbackLinearization):
@@ -213,13 +249,7 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         f_hat_dot : casadi.SX
             Rate of the believed rotor thrusts (N/s), empty without ``motor_lag``.
         """
-        if self.allocation:
-            U = prioritized_input(U, self.vehicle)
-        if not self.motor_states:
-            return U, U, ca.SX(0, 1)
-        v = self.vehicle
-        f_cmd = ca.DM(np.linalg.inv(v.mixer())) @ U
-        return ca.DM(v.mixer()) @ f_hat, U, (f_cmd - f_hat) / v.motor_time_constant
+        return believed_input(U, f_hat, self.vehicle, self.allocation, self.motor_states > 0)
 
     def filtered_regression(self, x: ca.SX, U_a: ca.SX, zeta: ca.SX,
                             Psi: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:

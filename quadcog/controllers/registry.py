@@ -12,6 +12,7 @@ from quadcog.controllers.cascade_pd import CascadePD
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.fl_integral import FeedbackLinearizationIntegral
+from quadcog.controllers.payload_adaptive import PayloadAdaptive
 from quadcog.kinds import Kind, settings_of
 
 __all__ = ["CONTROLLERS", "controller_names", "controller_settings", "make_controller"]
@@ -22,6 +23,7 @@ CONTROLLERS: dict[str, type[Controller]] = {
     "adaptive": AdaptiveFeedbackLinearization,
     "fl_integral": FeedbackLinearizationIntegral,
     "composite": CompositeAdaptive,
+    "payload_adaptive": PayloadAdaptive,
 }
 
 
@@ -66,7 +68,7 @@ def make_controller(kind: str, **params: Any) -> Controller:
     ----------
     kind : str
         A short name of ``CONTROLLERS`` ('pd', 'fl', 'adaptive', 'fl_integral',
-        'composite').
+        'composite', 'payload_adaptive').
     **params
         The constructor's keyword arguments (``vehicle``, ``model`` and the settings).
 

@@ -302,7 +302,8 @@ def _result(setup, X, U, code, elapsed):
     command = lambda: _commanded(controller, tk, Xk, refk, nf, Uk) @ inverse   # on first use
     return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,
                             controller=name, path=path, info={"seconds": elapsed},
-                            rotor_thrust=thrust, _command_law=command)
+                            rotor_thrust=thrust, controller_state=X[:keep, N_STATE + nf:],
+                            _command_law=command)
 
 
 def _commanded(controller, t, X, ref, nf, U_applied):

@@ -277,6 +277,9 @@ class SimulationResult:
         More about the run (e.g. "seconds", "scenario", "disturbances").
     rotor_thrust : (N, 4) numpy.ndarray or None
         What each rotor gives (N), within its limits (with motor lag, the lagged thrust).
+    controller_state : (N, n_state) numpy.ndarray or None
+        The controller's own state c at each sample (with sensing, the sensed controller's:
+        the inner state first); None when not recorded.
     _command_law : callable or None
         Internal: computes ``rotor_command`` on first use.
     _rotor_command : (N, 4) numpy.ndarray or None
@@ -296,6 +299,7 @@ class SimulationResult:
     # lagged thrust) and, computed on first use (the law re-evaluated along the flight), what
     # the controller's U asked of it (the inverse mixer, no limit)
     rotor_thrust: np.ndarray | None = None
+    controller_state: np.ndarray | None = None
     _command_law: object = field(default=None, repr=False, compare=False)
     _rotor_command: np.ndarray | None = field(default=None, repr=False, compare=False)
 
