@@ -434,8 +434,24 @@ class PayloadAdaptive(FeedbackLinearization):
         W = f("inertial_regressor")(x, x[NU], g) - f("inertial_regressor")(x, ca.SX.zeros(6), g)
         return W[:, :N_THETA], W[:, N_THETA:] @ ca.DM(self.inertia)
 
-    def _projected(self, th: ca.SX, u: ca.SX, P: ca.SX) -> ca.SX:
-        """The update u = P tau projected onto the tangent cone of K at th (normalized)."""
+    def projected_update(self, th: ca.SX, u: ca.SX, P: ca.SX) -> ca.SX:
+        """The update projected onto the tangent cone of K (module docstring).
+
+        Parameters
+        ----------
+        th : casadi.SX
+            theta_n (4,): [m / m0, m r_G / (m0 l)].
+        u : casadi.SX
+            The raw update P tau (4,) (1/s).
+        P : casadi.SX
+            The covariance (4x4), symmetric positive definite.
+
+        Returns
+        -------
+        casadi.SX
+            The nearest point to u, in the metric of P^-1, of the cone
+            ``{v : n_i^T v <= 0}`` of the faces of K that th is on (u itself inside K).
+        """
         a, b = th[0], th[1:4]
         lo, hi = self.mass_bounds
         keep = 1.0 - self.consistency_margin
@@ -444,7 +460,8 @@ class PayloadAdaptive(FeedbackLinearization):
         n_m = ca.if_else(a >= hi, 1.0, -1.0) * e1            # the face of the nearer bound
         on_m = ca.logic_or(a >= hi, a <= lo)
         n_c = ca.vertcat(-keep, 2 * Q @ b)
-        on_c = ca.dot(b, Q @ b) - keep * a >= 0
+        # on the cone to rounding: the discrete map puts an estimate beyond it back on it
+        on_c = ca.dot(b, Q @ b) - keep * a >= -1e-9 * a
 
         def single(n):
             Pn = P @ n
@@ -516,7 +533,7 @@ class PayloadAdaptive(FeedbackLinearization):
         if self.gamma > 0:
             kappa = self.gamma / self.covariance_bound
             tau -= kappa * Sp * (Phi.T @ (B.T @ (ca.DM(self.P) @ e_s)))
-        th_dot = self._projected(th, P @ tau, P)
+        th_dot = self.projected_update(th, P @ tau, P)
         m_dot = Sp[0] * th_dot[0]
         h_dot = Sp[1:4] * th_dot[1:4]
         r_dot = (h_dot - r_hat * m_dot) / m_hat
