@@ -40,8 +40,9 @@ DEBIAN_PACKAGES = "gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm"
 TARGET_RTOL = {"float32": 1e-4, "double": 1e-11}
 # The composite law's filters and least-squares recursion accumulate those float32 differences
 # (no FMA on either side: -std=c99 keeps contraction off, checked with objdump): measured up to
-# 3e-3 of the input's scale, bounded (the filters forget).
-TARGET_RTOL_FLOAT32 = {"composite": 1e-2}
+# 3e-3 of the input's scale, bounded (the filters forget). The payload law has the same
+# filters and recursion (4x4 covariance, mass and m r_G): measured 1.6e-3.
+TARGET_RTOL_FLOAT32 = {"composite": 1e-2, "payload_adaptive": 1e-2}
 
 
 def target_rtol(name: str, precision: str) -> float:
