@@ -1,7 +1,8 @@
 """Layer 5, controllers: the paper's three (cascade PD, feedback linearization, the adaptive
-law) and two beyond it (feedback linearization with integral action, the composite adaptive
-law, and the payload law that learns the mass with the CoG), each a CasADi law, a compiled call and a Python object. ``registry`` is the one table of
-them by short name; ``template`` states the interface a controller of your own implements."""
+law) and three beyond it (feedback linearization with integral action, the composite adaptive
+law, and the payload law that learns the mass with the CoG), each a CasADi law, a compiled
+call and a Python object. ``registry`` is the one table of them by short name; ``template``
+states the interface a controller of your own implements."""
 from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization
 from quadcog.controllers.base import Controller
 from quadcog.controllers.cascade_pd import CascadePD
