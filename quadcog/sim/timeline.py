@@ -356,7 +356,7 @@ class PayloadProfile:
             validate.fail("payload", "a list of payload events (attach, move, drop)", self.events)
         on_board = {p.name for p in self.carried}
         clean: list[PayloadEvent] = []
-        last, busy = -np.inf, {}
+        last, busy = -np.inf, dict[str, float]()
         for i, e in enumerate(self.events):
             e = _as_event(e, f"payload[{i}]")
             where = f"payload[{i}] ({e.action} {e.name!r} at t = {e.t:g} s)"

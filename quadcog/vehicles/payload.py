@@ -113,7 +113,8 @@ class Payload:
         Payload
             The moved payload (validated).
         """
-        return Payload(self.mass, position, self.size, self.name)
+        return Payload(self.mass, tuple(np.asarray(position, dtype=float).tolist()),
+                       self.size, self.name)
 
     def as_dict(self) -> dict[str, Any]:
         """Its fields as plain Python values (for JSON and scenario files).
