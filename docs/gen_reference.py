@@ -48,6 +48,8 @@ TOP_MEANING = {
     "initial_offset": "start this far (m) from the reference's first point",
     "trajectory": "table: the reference; `kind` and its settings (below)",
     "cog": "array of tables: the CoG changes (below); r_G is the vehicle's before the first",
+    "payload": "array of tables: payloads attached, moved and dropped (below); the vehicle's own "
+               "`payloads` are on board from the start",
     "disturbance": "array of tables: force and moment pulses (below)",
     "vehicle": "table: the truth vehicle (below)",
     "controller_model": "table: what the controller believes, same keys as `[vehicle]`; starts "
@@ -231,6 +233,7 @@ def scenario_keys_page() -> str:
     from quadcog.scenarios import schema
     from quadcog.sim.plant import TruthOptions
     from quadcog.sim.sensing import Sensing
+    from quadcog.sim.timeline import PayloadEvent
     from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
     head = ("key", "value", "default", "meaning")
@@ -255,6 +258,14 @@ def scenario_keys_page() -> str:
     parts += ["## `[[cog]]`\n", _table([(f"`{k}`", _check_words(v), "0" if k == "ramp" else
                                          "required", COG_MEANING[k])
                                         for k, v in schema.COG.items()], head)]
+    event_docs = parameter_docs(PayloadEvent)
+    parts += ["## `[[payload]]`\n",
+              "Events in time order (`quadcog.sim.timeline.PayloadEvent`); the truth flies the "
+              "airframe with what is on board ([the model, sec. 7.3](../model.md#73-payloads-the-"
+              "truth-flies-the-whole-body)).\n",
+              _table([(f"`{k}`", _check_words(v), "required" if k in ("t", "action", "name")
+                       else ("0" if k == "ramp" else "by action"), event_docs.get(k, ""))
+                      for k, v in schema.PAYLOAD.items()], head)]
     parts += ["## `[[disturbance]]`\n",
               _table([(f"`{k}`", _check_words(v), "required" if k in ("t", "duration") else
                        "`[0, 0, 0]`", DISTURBANCE_MEANING[k])

@@ -496,10 +496,11 @@ def poles(value: object, where: str, n: int,
     return p
 
 
-# Memory one simulated step of one flight costs: the schedule (27 numbers), state and
+# Memory one simulated step of one flight costs: the schedule (37 numbers), state and
 # controller state, input, reference and the result arrays handed out. Measured: 512 B per
-# step at the peak of a 60 s adaptive figure-8 run (tracemalloc); rounded up.
-BYTES_PER_STEP = 576
+# step at the peak of a 60 s adaptive figure-8 run (tracemalloc) with a 27-number schedule,
+# plus the 10 numbers of the payloads' pi; rounded up.
+BYTES_PER_STEP = 656
 
 
 def step_count(duration: float, dt: float, max_steps: int, where: str | None = None,

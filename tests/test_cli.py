@@ -52,9 +52,11 @@ def test_run_by_name_from_another_folder_writes_to_out_scenario(tmp_path, monkey
 
 
 def test_every_csv_column_names_its_unit():
-    units = {"s", "m", "rad", "m_s", "rad_s", "N", "N_m", "m_s2", "m_s3"}
+    units = {"s", "m", "rad", "m_s", "rad_s", "N", "N_m", "m_s2", "m_s3", "kg"}
     names = trajectory_columns()
-    assert len(names) == len(set(names)) == 45      # 37, then the commanded and applied thrust of each rotor
+    # 37, then the commanded and applied thrust of each rotor, then the whole body's mass
+    assert len(names) == len(set(names)) == 46
+    assert names[-1] == "mass_kg"
     for n in names:
         assert any(n.endswith("_" + u) for u in units), n
     # angles in radians, rates in rad/s: the state's rows 3..5 and 9..11

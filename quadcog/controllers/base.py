@@ -25,7 +25,7 @@ from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_PARAM, N_STATE
 from quadcog.model.functions import Model, load
-from quadcog.model.parameters import with_cog
+from quadcog.model.parameters import check_parameters, with_cog
 from quadcog.trajectories.analytic import REF_SIZE
 from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
@@ -97,7 +97,10 @@ class Controller:
             raise InputError(f"vehicle must be a quadcog Vehicle (the controller's model), got "
                              f"{vehicle!r}")
         self.vehicle = vehicle
-        self.nominal = vehicle.parameters()       # the model's parameter vector p (14,)
+        # the model's parameter vector p (14,); a loaded vehicle's p is the paper's model of
+        # the whole body (diagonal I_O), which must itself be admissible to design with
+        self.nominal = (check_parameters(vehicle.parameters(), f"controller model {vehicle.name!r}")
+                        if vehicle.payloads else vehicle.parameters())
         self._function = None
         self._compiled = None
         self._cache_key = None

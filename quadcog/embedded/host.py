@@ -197,13 +197,17 @@ def fly(step: HostStep, reference_result: SimulationResult,
     vehicle = scenario.vehicle
     actuation = Actuation.of(vehicle, scenario.truth)
     plant = FastCall(compile_function(plant_step_function(load(), actuation)))
-    px, pf, pU, pP, pw, pdt = plant.inputs
+    px, pf, pU, pP, pload, pr, pw, pdt = plant.inputs
     x_next, f_next, _ = plant.outputs
     evaluate = plant.eval
     t, refs = reference_result.t, reference_result.ref
     n = len(t)
-    P = np.repeat(vehicle.parameters()[None, :], n, axis=0)
-    P[:, R_G] = reference_result.r_G
+    # the plant as simulate has it: the airframe at its CoG profile, plus the payloads
+    airframe = vehicle.airframe
+    pr[:] = airframe.r_G                   # where the vehicle states its inertia
+    P = np.repeat(airframe.parameters()[None, :], n, axis=0)
+    P[:, R_G] = airframe.r_G + scenario.cog.sample(t)
+    loads = scenario.payload_profile().sample(t)
     wrenches = wrench_table(scenario.disturbances, t)
     X = np.empty((n, 12))
     C = np.empty((n, step.nc))
@@ -219,6 +223,7 @@ def fly(step: HostStep, reference_result: SimulationResult,
         call(dt)
         pU[:] = sU
         pP[:] = P[k]
+        pload[:] = loads[k]
         pw[:] = wrenches[k]
         evaluate()
         X[k + 1] = x_next

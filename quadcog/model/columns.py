@@ -8,7 +8,7 @@ radians here (the plots show degrees and say so). Defined once; the writers, the
 from quadcog.model.conventions import INPUT_NAMES, STATE_NAMES
 
 __all__ = ["STATE_UNITS", "INPUT_UNITS", "REFERENCE", "trajectory_columns", "T", "X", "U", "REF",
-           "R_HAT", "R_G"]
+           "R_HAT", "R_G", "ROTOR_COMMAND", "ROTOR_THRUST", "MASS"]
 
 # unit of each state entry, in the order of STATE_NAMES
 STATE_UNITS = ("m", "m", "m", "rad", "rad", "rad", "m_s", "m_s", "m_s", "rad_s", "rad_s", "rad_s")
@@ -25,8 +25,10 @@ def trajectory_columns() -> tuple[str, ...]:
     Returns
     -------
     tuple of str
-        In order: time, state (12), input (4), reference (14), r_hat (3), r_G (3): 37 names,
-        each ``<quantity>_<unit>`` (``t_s``, ``x_m``, ..., ``r_G_z_m``).
+        In order: time, state (12), input (4), reference (14), r_hat (3), r_G (3), each
+        rotor's commanded and delivered thrust (4 + 4), the whole body's mass: 46 names, each
+        ``<quantity>_<unit>`` (``t_s``, ``x_m``, ..., ``r_G_z_m``, ..., ``mass_kg``). r_G and
+        mass are the truth's, airframe and payloads together.
     """
     return (("t_s",)
             + tuple(f"{n}_{u}" for n, u in zip(STATE_NAMES, STATE_UNITS))
@@ -34,7 +36,7 @@ def trajectory_columns() -> tuple[str, ...]:
             + tuple(f"ref_{n}_{u}" for n, u in REFERENCE)
             + tuple(f"r_hat_{a}_m" for a in "xyz") + tuple(f"r_G_{a}_m" for a in "xyz")
             + tuple(f"rotor{i}_command_N" for i in range(1, 5))
-            + tuple(f"rotor{i}_thrust_N" for i in range(1, 5)))
+            + tuple(f"rotor{i}_thrust_N" for i in range(1, 5)) + ("mass_kg",))
 
 
 # Column slices, so a reader says which block it means.
@@ -43,3 +45,4 @@ REF, R_HAT, R_G = slice(17, 31), slice(31, 34), slice(34, 37)
 # per rotor: commanded (the inverse mixer of U) and applied thrust (N); after the 37 columns
 # that older run folders have
 ROTOR_COMMAND, ROTOR_THRUST = slice(37, 41), slice(41, 45)
+MASS = slice(45, 46)        # the whole body's true mass (kg), after the rotor columns

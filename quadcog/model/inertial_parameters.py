@@ -34,7 +34,7 @@ from quadcog.validate import array, plain, positive, real, vector
 __all__ = ["PI_NAMES", "N_PI", "TOLERANCE", "inertial_parameters", "from_inertial_parameters",
            "inertial_arguments", "parallel_axis", "point_mass", "box", "combine",
            "pseudo_inertia", "inertia_about_cog", "is_physically_consistent",
-           "check_physically_consistent"]
+           "check_physically_consistent", "placed"]
 
 PI_NAMES = CONTRACT.vectors["pi"]
 N_PI = len(PI_NAMES)
@@ -394,3 +394,33 @@ def check_physically_consistent(pi: ArrayLike, where: str = "pi") -> np.ndarray:
     # Within round-off of the rim: J is only semidefinite to working precision.
     raise PhysicalConsistencyError(f"{head}: the mass distribution is flat (on a plane, a "
                                    f"line or a point) to working precision")
+
+
+def placed(m: float, I_G: ArrayLike, positions: ArrayLike) -> np.ndarray:
+    """pi about O of one body placed with its CoG at many positions (vectorized).
+
+    Parameters
+    ----------
+    m : float
+        Its mass (kg), > 0.
+    I_G : array_like, shape (3, 3)
+        Its inertia about its CoG in body axes (kg m^2), symmetric.
+    positions : array_like, shape (N, 3)
+        Where its CoG is, from O in body axes (m), one row per placement.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 10)
+        One pi per row: ``[m, m r, I_G + m (|r|^2 I_3 - r r^T)]`` in ``PI_NAMES`` order (the
+        parallel-axis theorem).
+    """
+    m = positive(m, "placed: m", unit="kg")
+    I_G = _symmetric(I_G, "placed: I_G")
+    r = array(positions, "placed: positions", (None, 3))
+    out = np.empty((r.shape[0], N_PI))
+    out[:, _M] = m
+    out[:, _H] = m * r
+    r2 = np.einsum("ni,ni->n", r, r)
+    for k, i, j in _I:
+        out[:, k] = I_G[i, j] + m * ((r2 if i == j else 0.0) - r[:, i] * r[:, j])
+    return out

@@ -27,6 +27,7 @@ from quadcog.scenarios.schema import (
     DISTURBANCE,
     LIMITS,
     NUMBER,
+    PAYLOAD,
     SENSING,
     TOP,
     TRUTH,
@@ -39,7 +40,7 @@ from quadcog.sim.flight import simulate, start_at_reference
 from quadcog.sim.plant import TruthOptions
 from quadcog.sim.result import SimulationResult
 from quadcog.sim.sensing import Sensed, Sensing
-from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
+from quadcog.sim.timeline import CogChange, CogProfile, Disturbance, PayloadEvent, PayloadProfile
 from quadcog.trajectories.analytic import Hover, Trajectory
 from quadcog.vehicles.vehicle import HUMMINGBIRD, PRESETS, Vehicle
 from quadcog.viz.progress import ProgressBar
@@ -70,6 +71,8 @@ class Scenario:
         The reference (default: hover).
     cog : quadcog.sim.timeline.CogProfile
         The CoG changes of the truth vehicle over time.
+    payloads : list of quadcog.sim.timeline.PayloadEvent
+        Payloads attached, moved and dropped over time (``[[payload]]``).
     disturbances : list of quadcog.sim.timeline.Disturbance
         External force and moment pulses.
     vehicle : quadcog.Vehicle
@@ -98,6 +101,7 @@ class Scenario:
     path: str = "compiled"
     trajectory: Trajectory = field(default_factory=Hover)
     cog: CogProfile = field(default_factory=CogProfile)
+    payloads: list[PayloadEvent] = field(default_factory=list)
     disturbances: list[Disturbance] = field(default_factory=list)
     vehicle: Vehicle = HUMMINGBIRD                # the truth Vehicle
     controller_model: Vehicle | None = None       # what the controller believes (a Vehicle)
@@ -145,7 +149,17 @@ class Scenario:
         """
         if self.controller_model is not None:
             return self.controller_model
-        return self.vehicle.with_cog(np.zeros(3))
+        return self.vehicle.airframe.with_cog(np.zeros(3))
+
+    def payload_profile(self) -> PayloadProfile:
+        """The payloads over the run: the truth vehicle's own from t = 0, then ``payloads``.
+
+        Returns
+        -------
+        quadcog.sim.timeline.PayloadProfile
+            The checked profile.
+        """
+        return PayloadProfile(self.payloads, self.vehicle.payloads)
 
     def run(self, progress: Callable[[float], object] | None = None) -> SimulationResult:
         """Simulate the scenario.
@@ -168,7 +182,7 @@ class Scenario:
                         dt=self.dt, vehicle=self.vehicle, controller_model=self.model_vehicle(),
                         cog=self.cog, disturbances=self.disturbances,
                         truth=self.truth, x0=x0, path=self.path, limits=self.limits,
-                        progress=progress)
+                        progress=progress, payloads=self.payloads)
 
 
 def _check(value, kind, where):
@@ -247,6 +261,20 @@ def _cog_changes(data, source):
         last = t + ramp
         changes.append(CogChange(float(t), tuple(entry["r"]), float(ramp)))
     return CogProfile(changes)
+
+
+def _payload_events(data, source, vehicle):
+    events = []
+    for where, entry in _entries(data, "payload", PAYLOAD, source, ("t", "action", "name")):
+        try:
+            events.append(PayloadEvent(**entry))
+        except InputError as e:
+            raise ScenarioError(f"{source}: key {where!r}: {e}") from None
+    try:
+        PayloadProfile(events, vehicle.payloads)        # time order and names on board
+    except InputError as e:
+        raise ScenarioError(f"{source}: {e}") from None
+    return events
 
 
 def _disturbances(data, source):
@@ -333,12 +361,13 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
                             f"diverged), got {validate.plain(offset)}, "
                             f"{math.hypot(*offset):.3g} m long")
     cog, pulses = _cog_changes(data, source), _disturbances(data, source)
+    events = _payload_events(data, source, vehicle)
     try:
         return Scenario(
             name=data["name"], controller=controller, duration=duration, dt=dt,
             description=data.get("description", ""),
             path=data.get("path", "compiled"), trajectory=cls(**traj), cog=cog,
-            disturbances=pulses, vehicle=vehicle, controller_model=controller_model,
+            payloads=events, disturbances=pulses, vehicle=vehicle, controller_model=controller_model,
             controller_params=dict(cparams),
             truth=TruthOptions(**truth),
             sensing=None if sensing is None else Sensing(**sensing),
@@ -443,7 +472,7 @@ def write_table(result: SimulationResult, path: str | os.PathLike[str], every: i
     if fmt not in ("csv", "parquet"):
         raise InputError(f"format: expected 'csv' or 'parquet', got {fmt!r}")
     columns = [result.t, result.x, result.U, result.ref, result.r_hat, result.r_G,
-               result.rotor_command, result.rotor_thrust]
+               result.rotor_command, result.rotor_thrust, result.mass]
     n = len(result.t)
     every = min(every, max(n, 1))       # a step beyond the run: first and last sample only
     if every > 1:

@@ -14,7 +14,7 @@ from quadcog.kinds import Kind
 from quadcog.trajectories.registry import TRAJECTORIES, trajectory_kinds, trajectory_settings
 from quadcog.vehicles.vehicle import FIELD_NAMES
 
-__all__ = ["NUMBER", "CHECK", "TOP", "VEHICLE", "TRUTH", "SENSING", "LIMITS", "COG",
+__all__ = ["NUMBER", "CHECK", "TOP", "VEHICLE", "TRUTH", "SENSING", "LIMITS", "COG", "PAYLOAD",
            "DISTURBANCE", "controller_params", "trajectory_schema"]
 
 NUMBER = (int, float)
@@ -25,12 +25,14 @@ CHECK: dict[Kind, Any] = {
     Kind.NUMBER_OR_VEC3: "number_or_vec3", Kind.NUMBER_OR_FALSE: "number_or_false",
 }
 TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "dt": NUMBER,
-       "path": str, "trajectory": dict, "cog": list, "disturbance": list, "vehicle": dict,
+       "path": str, "trajectory": dict, "cog": list, "payload": list, "disturbance": list,
+       "vehicle": dict,
        "controller_model": dict, "controller_params": dict, "truth": dict, "limits": dict,
        "sensing": dict, "initial_offset": "vec3"}
 # every Vehicle field, and a preset to start from
 VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
-                  "name": str, "rotor_model": str}.get(name, NUMBER) for name in FIELD_NAMES}
+                  "name": str, "rotor_model": str, "payloads": list}.get(name, NUMBER)
+           for name in FIELD_NAMES}
 VEHICLE["preset"] = str
 VEHICLE["identified"] = str         # the JSON of `quadcog identify --json`: its r_G
 TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
@@ -38,6 +40,8 @@ SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "ve
            "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}
 LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}
 COG = {"t": NUMBER, "r": "vec3", "ramp": NUMBER}
+PAYLOAD = {"t": NUMBER, "action": str, "name": str, "mass": NUMBER, "position": "vec3",
+           "size": "vec3", "ramp": NUMBER}
 DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3"}
 
 

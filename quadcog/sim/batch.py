@@ -19,10 +19,10 @@ from quadcog.model.conventions import N_STATE, R_G
 from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, monitored_chunk_function, monitored_step, packed
 from quadcog.sim.divergence import DivergenceCause, Limits, divergence_rule, magnitude
 from quadcog.sim.plant import Actuation, TruthOptions
-from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference
+from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference, whole_body
 from quadcog.sim.result import metric_arrays, position_errors
 from quadcog.sim.schedule import Schedule, cog_at
-from quadcog.sim.timeline import CogProfile
+from quadcog.sim.timeline import CogProfile, PayloadProfile
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -171,7 +171,11 @@ def _vehicles(vehicles: Any, options: TruthOptions
         if v is not vehicles[0] and tuple(getattr(v, f) for f in _ROTOR_FIELDS) != rotors:
             raise InputError(f"vehicles[{b}] has other rotors than vehicles[0] (layout, "
                              "constants, limits or motor time constant); a batch shares them")
-    params = np.array([v.parameters() for v in vehicles])
+        if v.payloads != vehicles[0].payloads:
+            raise InputError(f"vehicles[{b}] carries other payloads than vehicles[0]; a batch "
+                             "shares them (they are part of its schedule)")
+    # the airframes: the payloads reach the truth through the schedule
+    params = np.array([v.airframe.parameters() for v in vehicles])
     return vehicles, params, actuation
 
 
@@ -260,18 +264,19 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
         if b is not None:
             raise InputError(f"vehicles[{b}] differs from vehicles[0] in more than r_G: "
                              "pass controller_model (what the controller believes)")
-        controller_model = vehicles[0].with_cog(np.zeros(3))
+        controller_model = vehicles[0].airframe.with_cog(np.zeros(3))
     elif not isinstance(controller_model, Vehicle):
         raise InputError(f"controller_model must be a quadcog Vehicle, got {controller_model!r}")
     controller = controller.for_vehicle(controller_model)
     duration, dt = check_time(duration, dt)
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
-                              disturbances=disturbances, cog_scale=cog_scale)
+                              disturbances=disturbances, cog_scale=cog_scale,
+                              payloads=PayloadProfile([], vehicles[0].payloads))
     x0 = start_at_reference(schedule.ref[0])
     nX = N_STATE + actuation.n_rotor_states + controller.n_state
     P0 = params.copy()
     P0[:, R_G] = cog_at(params[:, R_G], schedule.cog_scale[0], schedule.cog[0])
-    Z = batch_start(controller, actuation, P0, x0)
+    Z = batch_start(controller, actuation, whole_body(P0, schedule.payload[0]), x0)
     t0 = time.perf_counter()
     kernel = batch_kernel(controller, actuation, limits)
     if kernel is not None:

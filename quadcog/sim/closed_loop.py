@@ -12,7 +12,7 @@ import casadi as ca
 
 from quadcog.codegen.compiled import cached_compile
 from quadcog.controllers.base import Controller
-from quadcog.model.conventions import N_PARAM, N_STATE
+from quadcog.model.conventions import N_PARAM, N_STATE, R_G
 from quadcog.sim.divergence import Limits, divergence_code
 from quadcog.sim.plant import Actuation, rk4_step_expression
 from quadcog.sim.schedule import STEP_INPUTS, truth_parameters
@@ -43,7 +43,8 @@ def closed_loop_step(controller: Controller, actuation: Actuation, limits: Limit
     Returns
     -------
     casadi.Function
-        ``step(X, P, t, dt, ref, cog, cog_scale, wrench, tail) -> (X_next, U_applied, code)``:
+        ``step(X, P, t, dt, ref, cog, cog_scale, payload, wrench, tail) -> (X_next, U_applied,
+        code)``:
         P is the vehicle's parameter vector (14,), the per-step inputs are those of
         ``STEP_INPUTS``; code is the divergence code of the sample at the start of the step
         (X and the controller's input U there, with ref).
@@ -55,7 +56,7 @@ def closed_loop_step(controller: Controller, actuation: Actuation, limits: Limit
     U, c_dot = controller.function()(s["t"], x, s["ref"], c)
     x_next, f_next, U_app = rk4_step_expression(
         controller.model, x, f, U, truth_parameters(P, s["cog_scale"], s["cog"]), s["wrench"],
-        s["dt"], actuation)
+        s["dt"], actuation, s["payload"], P[R_G.start:R_G.stop])
     X_next = ca.vertcat(x_next, f_next,
                         controller.project(c + s["dt"] * c_dot) if nc else ca.SX(0, 1))
     X_next, U_app = ca.cse([X_next, U_app])    # the RK4 stages share parameter-only terms

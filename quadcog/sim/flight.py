@@ -27,7 +27,7 @@ from quadcog.codegen.compiled import cached_compile
 from quadcog.codegen.fastcall import FastCall
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError, ReferenceWarning
-from quadcog.model.conventions import N_STATE, R_G
+from quadcog.model.conventions import IDX, N_STATE, R_G
 from quadcog.model.functions import load
 from quadcog.sim.closed_loop import CHUNK, chunk_function
 from quadcog.sim.divergence import (
@@ -38,7 +38,7 @@ from quadcog.sim.divergence import (
     first_divergence,
     magnitude,
 )
-from quadcog.sim.plant import TruthOptions, plant_step_function
+from quadcog.sim.plant import PI_INDEX, TruthOptions, body_mass_and_cog, plant_step_function
 from quadcog.sim.prepare import (
     RK4_LIMIT,
     as_cog_profile,
@@ -67,7 +67,7 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
              truth: TruthOptions | None = None, x0: npt.ArrayLike | None = None,
              path: str = "compiled", limits: Limits | None = None,
              progress: Callable[[float], Any] | None = None, check_dt: bool = True,
-             sensing: Sensing | None = None) -> SimulationResult:
+             sensing: Sensing | None = None, payloads: Any = None) -> SimulationResult:
     """Fly one closed-loop run and return a SimulationResult.
 
     Parameters
@@ -109,6 +109,12 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
     sensing : Sensing, optional
         Noise, gyro bias, one-period delay of what the controller measures; default None,
         the perfect state. The controller is flown as ``Sensed(controller, sensing, dt)``.
+    payloads : sequence of PayloadEvent or dict, optional
+        Payloads attached, moved and dropped during the run
+        (``quadcog.sim.timeline.PayloadEvent``: t, action "attach" | "move" | "drop", name,
+        mass, position, size, ramp), in time order; the vehicle's own ``payloads`` are on
+        board from the start. The truth model flies the whole body; the controller's model
+        does not know them.
 
     Returns
     -------
@@ -123,6 +129,8 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
         gives a non-finite input or state at t = 0.
     quadcog.ParameterError
         A vehicle that is inadmissible with one of the CoG changes.
+    quadcog.PhysicalConsistencyError
+        An airframe that with the payloads on board is no rigid body's.
     quadcog.EulerSingularityError
         |theta| reached pi/2 (only with a tilt limit at or above 90 deg).
     """
@@ -132,7 +140,7 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
                           "callable measures what it likes itself)", controller)
         controller = Sensed(controller, sensing, config.get("simulate.dt", dt))
     setup = prepare_flight(controller, trajectory, duration, dt, vehicle, controller_model, cog,
-                           disturbances, truth, x0, path, limits, progress, check_dt)
+                           disturbances, truth, x0, path, limits, progress, check_dt, payloads)
     t0 = time.perf_counter()
     if setup.path == "compiled":
         X, U, code = _run_compiled(setup, progress)
@@ -214,7 +222,8 @@ def _run_python(setup, progress):
         project = lambda c, t: controller.project_numpy(c)
     else:
         call, project = user_call(controller, nc)
-    px, pf, pU, pP, pw, pdt = plant.inputs
+    px, pf, pU, pP, pload, pr, pw, pdt = plant.inputs
+    pr[:] = P[R_G]
     x_next, f_next, U_app = plant.outputs
     rule_x, rule_e, rule_rest = rule.inputs
     code = rule.outputs[0]
@@ -236,6 +245,7 @@ def _run_python(setup, progress):
             px[:] = x
             pf[:] = X[k, N_STATE:ic]
             pP[:] = truth_parameters(P, s.cog_scale[k], s.cog[k])
+            pload[:] = s.payload[k]
             pw[:] = s.wrench[k]
             pdt[0] = s.dt[k]
             plant()
@@ -268,7 +278,12 @@ def _result(setup, X, U, code, elapsed):
     path, nf = setup.path, setup.n_rotor_states
     n = X.shape[0]
     t, ref = schedule.t[:n], schedule.ref[:n]
-    r_G = schedule.r_G(P[R_G])[:n]
+    # the whole body's mass and CoG: the airframe at its CoG profile with the payloads
+    load = schedule.payload[:n]
+    mass, r_G = body_mass_and_cog(P[IDX["m"]], schedule.r_G(P[R_G])[:n],
+                                  load[:, PI_INDEX["m"], None],
+                                  load[:, [PI_INDEX[f"m{a}_G"] for a in "xyz"]])
+    mass = mass[:, 0]
     e = position_errors(X, ref)
     if code:
         idx, cause = n - 1, DivergenceCause(code)
@@ -302,8 +317,8 @@ def _result(setup, X, U, code, elapsed):
     command = lambda: _commanded(controller, tk, Xk, refk, nf, Uk) @ inverse   # on first use
     return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,
                             controller=name, path=path, info={"seconds": elapsed},
-                            rotor_thrust=thrust, controller_state=X[:keep, N_STATE + nf:],
-                            _command_law=command)
+                            rotor_thrust=thrust, mass=mass[:keep],
+                            controller_state=X[:keep, N_STATE + nf:], _command_law=command)
 
 
 def _commanded(controller, t, X, ref, nf, U_applied):

@@ -8,7 +8,7 @@ mapped to rotor thrusts by the inverse mixer, clipped, and mapped back. Saturati
 follow the clipped command with the vehicle's motor time constant.
 """
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import casadi as ca
 import numpy as np
@@ -17,11 +17,13 @@ import numpy.typing as npt
 from quadcog.errors import InputError
 from quadcog.model.conventions import IDX, N_PARAM, N_STATE, R_G, hover_trim
 from quadcog.model.functions import Model
+from quadcog.model.inertial_parameters import PI_NAMES
 from quadcog.vehicles.vehicle import N_ROTORS, Vehicle
 
-__all__ = ["TruthOptions", "Actuation", "truth_arguments", "rk4_step_expression",
+__all__ = ["TruthOptions", "Actuation", "PI_INDEX", "body_mass_and_cog", "truth_arguments", "rk4_step_expression",
            "plant_step_function", "initial_rotor_thrusts"]
 
+PI_INDEX = {name: k for k, name in enumerate(PI_NAMES)}
 _Matrix = TypeVar("_Matrix", ca.SX, ca.DM)      # a symbolic or a numeric CasADi matrix
 
 
@@ -164,35 +166,91 @@ class Actuation:
         return np.clip(f, self.lower, self.upper)
 
 
-def truth_arguments(p: ca.SX, options: TruthOptions) -> tuple[ca.SX, ca.SX]:
-    """The parameter and inertia-product arguments of the truth model.
+def body_mass_and_cog(m: Any, r: Any, dm: Any, dh: Any) -> tuple[Any, Any]:
+    """Mass and CoG of the airframe (m, r) with payloads of mass dm and first moment dh added.
+
+    ``r + (dh - dm r) / (m + dm)``, which is ``(m r + dh) / (m + dm)`` written so that it is
+    exactly r when nothing is on board (x + 0 is x), so a run without payloads keeps its bits.
+    Numpy arrays (broadcast: m, dm of shape (N, 1) against r, dh of shape (N, 3)) or CasADi.
+
+    Parameters
+    ----------
+    m : float, numpy.ndarray or casadi.SX
+        The airframe's mass (kg).
+    r : (..., 3) numpy.ndarray or (3,) casadi.SX
+        The airframe's CoG (m, body axes).
+    dm : float, numpy.ndarray or casadi.SX
+        The payloads' mass (kg).
+    dh : (..., 3) numpy.ndarray or (3,) casadi.SX
+        The payloads' first moment of mass about O (kg m).
+
+    Returns
+    -------
+    m_total : float, numpy.ndarray or casadi.SX
+        The whole body's mass (kg).
+    r_total : (..., 3) numpy.ndarray or casadi.SX
+        The whole body's CoG (m).
+    """
+    m_total = m + dm
+    return m_total, r + (dh - dm * r) / m_total
+
+
+def truth_arguments(p: ca.SX, options: TruthOptions, payload: ca.SX | None = None,
+                    r_stated: ca.SX | None = None) -> tuple[ca.SX, ca.SX]:
+    """The parameter and inertia-product arguments of the truth model: the airframe at the
+    step's CoG plus the payloads on board.
+
+    With ``parallel_axis`` the airframe's inertia about O follows its moving mass: the
+    vehicle's Ixx, Iyy, Izz are its inertia about O at its stated CoG ``r_stated`` (as the
+    controllers' model reads them), and a CoG at r adds ``m (S(r) - S(r_stated))``,
+    ``S(r) = |r|^2 I - r r^T``. The payloads' inertial parameters ``payload`` (about O) add to
+    the airframe's: mass, first moment and inertia are integrals over the body.
 
     Parameters
     ----------
     p : (14,) casadi.SX
-        The parameter vector (``quadcog.PARAM_NAMES``).
+        The airframe's parameter vector at the step (``quadcog.PARAM_NAMES``).
     options : TruthOptions
         With ``parallel_axis``, the inertia about O follows the CoG.
+    payload : (10,) casadi.SX, optional
+        The summed pi of the payloads on board (``quadcog.model.inertial_parameters.PI_NAMES``
+        order); None for none.
+    r_stated : (3,) casadi.SX, optional
+        The CoG at which the vehicle states its inertia (default 0).
 
     Returns
     -------
     p_eff : (14,) casadi.SX
-        ``p`` with the adjusted diagonal inertia (kg m^2).
+        The whole body's mass, diagonal inertia about O and CoG in ``p``'s layout.
     products : (3,) casadi.SX
-        The products of inertia (Ixy, Ixz, Iyz) (kg m^2); zeros without ``parallel_axis``.
+        The whole body's products of inertia (Ixy, Ixz, Iyz) (kg m^2).
     """
-    if not options.parallel_axis:
-        return p, ca.SX.zeros(3)
     m, r = p[IDX["m"]], p[R_G.start:R_G.stop]
-    x, y, z = r[0], r[1], r[2]
-    diag = ca.vertcat(y * y + z * z, x * x + z * z, x * x + y * y) * m
-    p_eff = ca.vertcat(p[:IDX["Ixx"]], p[IDX["Ixx"]:IDX["Izz"] + 1] + diag, p[IDX["Izz"] + 1:])
-    return p_eff, -m * ca.vertcat(x * y, x * z, y * z)
+    diag, products = p[IDX["Ixx"]:IDX["Izz"] + 1], ca.SX.zeros(3)
+    if options.parallel_axis:
+        x, y, z = r[0], r[1], r[2]
+        S_diag = ca.vertcat(y * y + z * z, x * x + z * z, x * x + y * y)
+        S_off = ca.vertcat(x * y, x * z, y * z)
+        if r_stated is not None:
+            # the stated inertia holds at the stated CoG (a - 0 is a: no change at r_stated = 0)
+            a, b, c = r_stated[0], r_stated[1], r_stated[2]
+            S_diag = S_diag - ca.vertcat(b * b + c * c, a * a + c * c, a * a + b * b)
+            S_off = S_off - ca.vertcat(a * b, a * c, b * c)
+        diag, products = diag + S_diag * m, -m * S_off
+    if payload is not None:
+        m, r = body_mass_and_cog(m, r, payload[PI_INDEX["m"]],
+                                 payload[[PI_INDEX[f"m{a}_G"] for a in "xyz"]])
+        diag = diag + payload[[PI_INDEX[n] for n in ("Ixx", "Iyy", "Izz")]]
+        products = products + payload[[PI_INDEX[n] for n in ("Ixy", "Ixz", "Iyz")]]
+    p_eff = ca.vertcat(m, p[IDX["m"] + 1:IDX["Ixx"]], diag, p[IDX["Izz"] + 1:R_G.start], r,
+                       p[R_G.stop:])
+    return p_eff, products
 
 
 def rk4_step_expression(model: Model, x: ca.SX, f: ca.SX, U: ca.SX, p: ca.SX, wrench: ca.SX,
-                        dt: ca.SX, actuation: Actuation) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """One RK4 step of length dt of the truth plant with U, p and wrench held.
+                        dt: ca.SX, actuation: Actuation, payload: ca.SX | None = None,
+                        r_stated: ca.SX | None = None) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """One RK4 step of length dt of the truth plant with U, p, payload and wrench held.
 
     Parameters
     ----------
@@ -212,6 +270,10 @@ def rk4_step_expression(model: Model, x: ca.SX, f: ca.SX, U: ca.SX, p: ca.SX, wr
         Step length (s).
     actuation : Actuation
         The rotors.
+    payload : (10,) casadi.SX, optional
+        The payloads' summed pi about O (``truth_arguments``); None for none.
+    r_stated : (3,) casadi.SX, optional
+        The CoG at which the vehicle states its inertia (``truth_arguments``).
 
     Returns
     -------
@@ -224,7 +286,7 @@ def rk4_step_expression(model: Model, x: ca.SX, f: ca.SX, U: ca.SX, p: ca.SX, wr
     """
     truth = model.casadi_function("truth_dynamics")
     mix = ca.DM(actuation.mixer_matrix())
-    p_eff, products = truth_arguments(p, actuation.options)
+    p_eff, products = truth_arguments(p, actuation.options, payload, r_stated)
     f_cmd = actuation.rotor_command(U)
     if not actuation.n_rotor_states:
         U_app = mix @ f_cmd
@@ -263,15 +325,17 @@ def plant_step_function(model: Model, actuation: Actuation) -> ca.Function:
     Returns
     -------
     casadi.Function
-        ``plant_step(x, f, U, p, wrench, dt) -> (x_next, f_next, U_applied)``, see
-        ``rk4_step_expression``.
+        ``plant_step(x, f, U, p, payload, r_stated, wrench, dt) -> (x_next, f_next,
+        U_applied)``, see ``rk4_step_expression``.
     """
     nf = actuation.n_rotor_states
     x, f, U, p = ca.SX.sym("x", N_STATE), ca.SX.sym("f", nf), ca.SX.sym("U", 4), ca.SX.sym("p", N_PARAM)
+    load, r0 = ca.SX.sym("payload", len(PI_NAMES)), ca.SX.sym("r_stated", 3)
     w, dt = ca.SX.sym("wrench", 6), ca.SX.sym("dt")
-    x_next, f_next, U_app = rk4_step_expression(model, x, f, U, p, w, dt, actuation)
-    return ca.Function("plant_step", [x, f, U, p, w, dt], [x_next, f_next, U_app],
-                       ["x", "f", "U", "p", "wrench", "dt"], ["x_next", "f_next", "U_applied"])
+    x_next, f_next, U_app = rk4_step_expression(model, x, f, U, p, w, dt, actuation, load, r0)
+    return ca.Function("plant_step", [x, f, U, p, load, r0, w, dt], [x_next, f_next, U_app],
+                       ["x", "f", "U", "p", "payload", "r_stated", "wrench", "dt"],
+                       ["x_next", "f_next", "U_applied"])
 
 
 def initial_rotor_thrusts(P0: npt.NDArray[np.float64], actuation: Actuation

@@ -16,14 +16,15 @@ import numpy.typing as npt
 from quadcog import config, validate
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
-from quadcog.model.conventions import N_STATE, R_G, rotation_matrix
+from quadcog.model.conventions import IDX, N_STATE, R_G, rotation_matrix
+from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import LARGEST, check_parameters, with_cog
 from quadcog.sim.closed_loop import ACCUMULATORS
 from quadcog.sim.divergence import Limits, first_divergence
-from quadcog.sim.plant import Actuation, TruthOptions, initial_rotor_thrusts
+from quadcog.sim.plant import PI_INDEX, Actuation, TruthOptions, body_mass_and_cog, initial_rotor_thrusts
 from quadcog.sim.result import position_errors
 from quadcog.sim.schedule import Schedule, cog_at, truth_parameters
-from quadcog.sim.timeline import CogProfile
+from quadcog.sim.timeline import CogProfile, PayloadProfile
 from quadcog.sim.user_controller import user_state
 from quadcog.trajectories.analytic import POS, VEL, YAW
 from quadcog.trajectories.registry import as_trajectory
@@ -32,7 +33,7 @@ from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
 __all__ = ["RK4_LIMIT", "FlightSetup", "prepare_flight", "batch_start", "check_time",
            "run_options", "check_step_size", "start_at_reference", "as_cog_profile",
-           "check_cog_changes"]
+           "check_cog_changes", "as_payload_profile", "check_payload_events", "whole_body"]
 
 RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region with margin
 
@@ -80,7 +81,7 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
                    vehicle: Vehicle | None, controller_model: Vehicle | None, cog: Any,
                    disturbances: Any, truth: TruthOptions | None, x0: Any, path: str,
                    limits: Limits | None, progress: Callable[[float], Any] | None,
-                   check_dt: bool) -> FlightSetup:
+                   check_dt: bool, payloads: Any = None) -> FlightSetup:
     """The checked set-up of one flight (the arguments as ``quadcog.simulate`` takes them).
 
     Parameters
@@ -113,6 +114,8 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
         ``progress(fraction)``.
     check_dt : bool
         Refuse a dt too large for RK4 on the closed loop at the start.
+    payloads : sequence of PayloadEvent or dict, PayloadProfile or None
+        Payloads attached, moved and dropped during the run, as for ``quadcog.simulate``.
 
     Returns
     -------
@@ -136,7 +139,9 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
         vehicle = controller.vehicle if is_law else HUMMINGBIRD
         model_default = vehicle
     else:
-        model_default = vehicle.with_cog(np.zeros(3)) if isinstance(vehicle, Vehicle) else None
+        # the controller knows the airframe, not its CoG offset or what it carries
+        model_default = (vehicle.airframe.with_cog(np.zeros(3)) if isinstance(vehicle, Vehicle)
+                         else None)
     for name, v in (("vehicle", vehicle), ("controller_model", controller_model)):
         if v is not None and not isinstance(v, Vehicle):
             raise InputError(f"{name} must be a quadcog Vehicle, got {v!r}")
@@ -145,9 +150,11 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     duration, dt = check_time(duration, dt)
     trajectory = as_trajectory(trajectory)
     cog = as_cog_profile(cog)
-    P = vehicle.parameters()
+    loads = as_payload_profile(payloads, vehicle)
+    P = vehicle.airframe.parameters()        # the payloads reach the truth through the schedule
     check_cog_changes(P, cog)
-    schedule = Schedule.build(trajectory, duration, dt, cog, disturbances)
+    check_payload_events(vehicle, loads)
+    schedule = Schedule.build(trajectory, duration, dt, cog, disturbances, payloads=loads)
     x0 = start_at_reference(schedule.ref[0]) if x0 is None else validate.vector(x0, "x0", 12)
     if not np.abs(x0).max() <= LARGEST:
         validate.fail("x0", f"12 finite numbers within +-{LARGEST:g}", x0.tolist())
@@ -156,7 +163,8 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     if cause is not None:
         raise InputError(f"x0 = {x0.tolist()} has already diverged: {cause.describe(limits)}")
     actuation = Actuation.of(vehicle, options)
-    P0 = truth_parameters(P, schedule.cog_scale[0], schedule.cog[0])
+    P0 = whole_body(truth_parameters(P, schedule.cog_scale[0], schedule.cog[0]),
+                    schedule.payload[0])
     f0 = initial_rotor_thrusts(P0, actuation)
     if check_dt:
         check_step_size(controller if is_law else None, x0, schedule.ref[0], P0, dt, actuation)
@@ -380,3 +388,93 @@ def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile) -> None:
     for i, change in enumerate(cog.changes):
         check_parameters(with_cog(P, cog_at(P[R_G], 1.0, np.asarray(change.r))),
                          f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
+
+
+def as_payload_profile(payloads: Any, vehicle: Vehicle) -> PayloadProfile:
+    """The PayloadProfile of a run: the vehicle's own payloads on board from t = 0, then the
+    events.
+
+    Parameters
+    ----------
+    payloads : sequence of PayloadEvent or dict, PayloadProfile or None
+        The events (attach, move, drop) in time order; a PayloadProfile is taken as its events.
+    vehicle : Vehicle
+        The truth vehicle; its ``payloads`` are on board at the start.
+
+    Returns
+    -------
+    PayloadProfile
+        The checked profile.
+
+    Raises
+    ------
+    quadcog.InputError
+        ``payloads`` is none of those, or an event is out of order or names no payload on
+        board.
+    """
+    if isinstance(payloads, PayloadProfile):
+        payloads = payloads.events
+    if payloads is None:
+        payloads = []
+    if isinstance(payloads, (str, bytes, dict)) or not isinstance(payloads, (list, tuple)):
+        validate.fail("payloads", "None or a list of payload events (PayloadEvent or dicts "
+                      "with t, action, name, ...)", payloads)
+    return PayloadProfile(list(payloads), vehicle.payloads)
+
+
+def check_payload_events(vehicle: Vehicle, loads: PayloadProfile) -> None:
+    """Raise PhysicalConsistencyError if the airframe with what is on board after any event is
+    not physically consistent.
+
+    Adding a payload of positive mass to a consistent body keeps it consistent wherever the
+    payload sits (the pseudo-inertia matrices add, and a payload's is positive semidefinite),
+    so the check at the events' ends covers the moves between them; it fails only when the
+    airframe itself is not a rigid body's (a CoG offset that the paper's model holds with
+    I_O fixed, beyond what any mass distribution allows).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The truth vehicle (its airframe at its own CoG).
+    loads : PayloadProfile
+        The payloads over the run.
+
+    Raises
+    ------
+    quadcog.PhysicalConsistencyError
+        Naming the event after which the whole body is not physically consistent.
+    """
+    airframe = vehicle.airframe.inertial_parameters()
+    for i, e in enumerate(loads.events):
+        for when in sorted({e.t, e.t + e.ramp}):
+            on_board = loads.on_board(when)
+            if on_board:
+                pi = airframe + sum(p.inertial_parameters() for p in on_board)
+                check_physically_consistent(
+                    pi, f"payload[{i}] ({e.action} {e.name!r}): the airframe with "
+                        f"{[p.name for p in on_board]} on board at t = {when:g} s")
+
+
+def whole_body(p: npt.NDArray[np.float64], payload: npt.NDArray[np.float64]
+               ) -> npt.NDArray[np.float64]:
+    """The paper's 14-entry p of the airframe ``p`` with payloads ``payload`` on board.
+
+    Parameters
+    ----------
+    p : (14,) or (B, 14) numpy.ndarray
+        The airframe's parameters, of one flight or of B flights.
+    payload : (10,) numpy.ndarray
+        The payloads' summed inertial parameters about O (shared by the flights).
+
+    Returns
+    -------
+    (14,) or (B, 14) numpy.ndarray
+        m and r_G of the whole body, the diagonal of its inertia about O, the rest of ``p``.
+    """
+    out = np.array(p, dtype=float)
+    m, r = body_mass_and_cog(out[..., IDX["m"], None], out[..., R_G], payload[PI_INDEX["m"]],
+                             payload[[PI_INDEX[f"m{a}_G"] for a in "xyz"]])
+    out[..., IDX["m"]] = m[..., 0]
+    out[..., R_G] = r
+    out[..., IDX["Ixx"]:IDX["Izz"] + 1] += payload[[PI_INDEX[n] for n in ("Ixx", "Iyy", "Izz")]]
+    return out

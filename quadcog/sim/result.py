@@ -266,7 +266,7 @@ class SimulationResult:
     r_hat : (N, 3) numpy.ndarray
         The CoG estimate (m; zeros for controllers without one).
     r_G : (N, 3) numpy.ndarray
-        The true CoG (m, body frame).
+        The true CoG of the whole body, airframe and payloads (m, body frame).
     metrics : Metrics
         The flight's metrics.
     controller : str
@@ -277,6 +277,8 @@ class SimulationResult:
         More about the run (e.g. "seconds", "scenario", "disturbances").
     rotor_thrust : (N, 4) numpy.ndarray or None
         What each rotor gives (N), within its limits (with motor lag, the lagged thrust).
+    mass : (N,) numpy.ndarray or None
+        The true mass of the whole body, airframe and payloads (kg).
     controller_state : (N, n_state) numpy.ndarray or None
         The controller's own state c at each sample (with sensing, the sensed controller's:
         the inner state first); None when not recorded.
@@ -299,6 +301,7 @@ class SimulationResult:
     # lagged thrust) and, computed on first use (the law re-evaluated along the flight), what
     # the controller's U asked of it (the inverse mixer, no limit)
     rotor_thrust: np.ndarray | None = None
+    mass: np.ndarray | None = None
     controller_state: np.ndarray | None = None
     _command_law: object = field(default=None, repr=False, compare=False)
     _rotor_command: np.ndarray | None = field(default=None, repr=False, compare=False)

@@ -1,9 +1,10 @@
 """What a run's steps read, sampled once per run: the Schedule.
 
 Step k starts at t_k = k dt. Everything that changes with time comes from the schedule: the
-reference row, the CoG (``r_G(t_k) = cog_scale_k * r_G(vehicle) + cog_k``), the disturbance
-wrench, the step length (0 for padding steps, which change nothing) and whether the sample is in
-the tail of the metrics. The compiled steps take these as named inputs (``STEP_INPUTS``),
+reference row, the CoG (``r_G(t_k) = cog_scale_k * r_G(vehicle) + cog_k``), the payloads on
+board (their summed inertial parameters about O), the disturbance wrench, the step length (0
+for padding steps, which change nothing) and whether the sample is in the tail of the
+metrics. The compiled steps take these as named inputs (``STEP_INPUTS``),
 never as columns of one table.
 """
 from collections.abc import Callable, Iterable
@@ -16,14 +17,15 @@ import numpy.typing as npt
 
 from quadcog import config
 from quadcog.model.conventions import R_G
-from quadcog.sim.timeline import CogProfile, wrench_table
+from quadcog.model.inertial_parameters import N_PI
+from quadcog.sim.timeline import CogProfile, PayloadProfile, wrench_table
 from quadcog.trajectories.analytic import REF_SIZE, Trajectory
 
 __all__ = ["STEP_INPUTS", "tail_start", "cog_at", "truth_parameters", "Schedule"]
 
 # (name, rows) of the per-step inputs of the compiled steps, in their order
 STEP_INPUTS = (("t", 1), ("dt", 1), ("ref", REF_SIZE), ("cog", 3), ("cog_scale", 1),
-               ("wrench", 6), ("tail", 1))
+               ("payload", N_PI), ("wrench", 6), ("tail", 1))
 
 
 def tail_start(duration: float) -> float:
@@ -109,6 +111,9 @@ class Schedule:
         The CoG profile (m, body frame).
     cog_scale : (N,) numpy.ndarray
         Scale of the vehicle's own r_G (1 for single flights).
+    payload : (N, 10) numpy.ndarray
+        Summed inertial parameters about O of the payloads on board
+        (``quadcog.model.inertial_parameters.PI_NAMES``; zeros: none).
     wrench : (N, 6) numpy.ndarray
         Disturbance force (N, ground axes) and moment (N m, body axes).
     tail : (N,) numpy.ndarray
@@ -119,13 +124,15 @@ class Schedule:
     ref: np.ndarray
     cog: np.ndarray
     cog_scale: np.ndarray
+    payload: np.ndarray
     wrench: np.ndarray
     tail: np.ndarray
 
     @classmethod
     def build(cls, trajectory: Trajectory, duration: float, dt: float,
               cog: CogProfile | None = None, disturbances: Iterable[Any] | None = (),
-              cog_scale: Callable[[float], float] | None = None) -> "Schedule":
+              cog_scale: Callable[[float], float] | None = None,
+              payloads: PayloadProfile | None = None) -> "Schedule":
         """Sample a run.
 
         Parameters
@@ -142,6 +149,8 @@ class Schedule:
             Wrench pulses (or what ``as_disturbances`` accepts).
         cog_scale : callable, optional
             ``cog_scale(t)``, the scale of the vehicle's own r_G at time t (s); None for 1.
+        payloads : PayloadProfile, optional
+            The payloads carried over time (default none).
 
         Returns
         -------
@@ -155,6 +164,7 @@ class Schedule:
                  else np.array([float(cog_scale(tk)) for tk in t]))
         arrays = dict(t=t, dt=np.full(n + 1, float(dt)), ref=trajectory.sample(t),
                       cog=cog.sample(t), cog_scale=scale,
+                      payload=(payloads.sample(t) if payloads else np.zeros((n + 1, N_PI))),
                       wrench=wrench_table(disturbances, t),
                       tail=(t >= tail_start(duration) - 1e-12).astype(float))
         return cls(**{k: np.ascontiguousarray(v, dtype=float) for k, v in arrays.items()})

@@ -1,4 +1,5 @@
-"""What happens to the vehicle over time: the CoG profile r_G(t) and disturbance pulses."""
+"""What happens to the vehicle over time: the CoG profile r_G(t), the payloads carried (attach,
+move, drop) and disturbance pulses."""
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -8,9 +9,12 @@ import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.errors import InputError
+from quadcog.model.inertial_parameters import N_PI
 from quadcog.model.parameters import LARGEST
+from quadcog.vehicles.payload import Payload
 
-__all__ = ["CogChange", "CogProfile", "Disturbance", "wrench_table", "as_disturbances"]
+__all__ = ["CogChange", "CogProfile", "Disturbance", "wrench_table", "as_disturbances",
+           "PAYLOAD_ACTIONS", "PayloadEvent", "PayloadProfile"]
 
 
 @dataclass(frozen=True)
@@ -222,3 +226,237 @@ def as_disturbances(disturbances: Any) -> list[Disturbance]:
         validate.fail(f"disturbances[{i}]", "a Disturbance, a dict of its fields (t, duration, "
                       "force, moment) or a tuple (t, duration[, force[, moment]])", d)
     return out
+
+
+PAYLOAD_ACTIONS = ("attach", "move", "drop")
+
+
+@dataclass(frozen=True)
+class PayloadEvent:
+    """At time ``t`` a payload is attached, moved (over ``ramp``) or dropped.
+
+    Parameters
+    ----------
+    t : float
+        When (s), >= 0.
+    action : str
+        ``"attach"`` (needs ``mass`` and ``position``; ``size`` optional), ``"move"`` (needs
+        ``position``; slides there linearly over ``ramp``) or ``"drop"``.
+    name : str
+        Which payload (attach names it; move and drop refer to it; a vehicle's own payloads
+        count).
+    mass : float, optional
+        Its mass (kg), attach only.
+    position : (3,) sequence of float, optional
+        Its centre from O in body axes (m): where it is attached or moved to.
+    size : (3,) sequence of float, optional
+        Box edges (m), attach only; default a point mass.
+    ramp : float
+        Duration of a move (s; 0: a step). Attach and drop are instants.
+
+    Raises
+    ------
+    quadcog.InputError
+        A field missing, not allowed for the action, or of the wrong type.
+    """
+    t: float
+    action: str
+    name: str = "payload"
+    mass: float | None = None
+    position: tuple | None = None
+    size: tuple | None = None
+    ramp: float = 0.0
+
+    def __post_init__(self) -> None:
+        where = f"payload event {self.name!r}"
+        object.__setattr__(self, "t", validate.nonnegative(self.t, f"{where}: t", "s"))
+        validate.choice(self.action, f"{where}: action", PAYLOAD_ACTIONS)
+        object.__setattr__(self, "ramp", validate.nonnegative(self.ramp, f"{where}: ramp", "s"))
+        needs = {"attach": ("mass", "position"), "move": ("position",), "drop": ()}[self.action]
+        allowed = {"attach": ("mass", "position", "size"), "move": ("position",),
+                   "drop": ()}[self.action]
+        for key in ("mass", "position", "size"):
+            given = getattr(self, key) is not None
+            if key in needs and not given:
+                raise InputError(f"{where}: {self.action} needs {key!r}")
+            if given and key not in allowed:
+                raise InputError(f"{where}: {key!r} is not a setting of {self.action!r} "
+                                 f"(expected only {', '.join(map(repr, allowed)) or 'name and t'})")
+        if self.ramp > 0 and self.action != "move":
+            raise InputError(f"{where}: ramp = {self.ramp} s: only a move has a ramp ({self.action} "
+                             "is an instant)")
+        if self.position is not None:
+            r = validate.array(self.position, f"{where}: position", (3,),
+                               what="3 finite numbers (m, body axes)")
+            object.__setattr__(self, "position", tuple(r.tolist()))
+        if self.action == "attach":
+            # the Payload checks mass, position and size once
+            object.__setattr__(self, "size", self.payload().size)
+
+    def payload(self) -> Payload:
+        """The payload an attach puts on.
+
+        Returns
+        -------
+        Payload
+            Its mass, position, size and name.
+
+        Raises
+        ------
+        quadcog.InputError
+            For a move or a drop, which carry no payload.
+        """
+        if self.action != "attach":
+            raise InputError(f"payload event {self.name!r}: a {self.action} carries no payload")
+        return Payload(self.mass, self.position,     # type: ignore[arg-type]
+                       self.size if self.size is not None else (0.0, 0.0, 0.0), self.name)
+
+
+def _as_event(e: Any, where: str) -> PayloadEvent:
+    if isinstance(e, PayloadEvent):
+        return e
+    if isinstance(e, dict):
+        try:
+            return PayloadEvent(**e)
+        except TypeError:
+            keys = ("t", "action", "name", "mass", "position", "size", "ramp")
+            unknown = sorted(set(e) - set(keys))
+            raise InputError(f"{where}: expected a table with keys t, action and name (and "
+                             f"mass, position, size, ramp by action), got keys {sorted(e)}"
+                             + (f"; unknown: {unknown}" if unknown else "")) from None
+    validate.fail(where, "a PayloadEvent or a table with keys t, action, name[, mass, position, "
+                  "size, ramp]", e)
+
+
+@dataclass
+class PayloadProfile:
+    """The payloads carried over time: attach, move and drop events in time order.
+
+    ``sample`` gives the summed inertial parameters about O of every payload on board at each
+    time; the truth model adds them to the airframe's (``quadcog.sim.plant``).
+
+    Parameters
+    ----------
+    events : sequence of PayloadEvent
+        In time order; dicts of the fields are accepted.
+    carried : sequence of Payload
+        Payloads on board at t = 0 (a vehicle's own, ``Vehicle.payloads``).
+
+    Raises
+    ------
+    quadcog.InputError
+        An event out of time order, an attach of a name already on board, a move or drop of a
+        name not on board, or an event that starts inside another's ramp of the same payload.
+    """
+    events: list = field(default_factory=list)
+    carried: tuple = ()
+
+    def __post_init__(self) -> None:
+        if isinstance(self.events, (str, bytes, dict)) or not hasattr(self.events, "__iter__"):
+            validate.fail("payload", "a list of payload events (attach, move, drop)", self.events)
+        on_board = {p.name for p in self.carried}
+        clean: list[PayloadEvent] = []
+        last, busy = -np.inf, dict[str, float]()
+        for i, e in enumerate(self.events):
+            e = _as_event(e, f"payload[{i}]")
+            where = f"payload[{i}] ({e.action} {e.name!r} at t = {e.t:g} s)"
+            if e.t < last:
+                raise InputError(f"{where}: comes before the previous event (t = {last:g} s); "
+                                 "expected events in time order")
+            if e.t < busy.get(e.name, -np.inf):
+                raise InputError(f"{where}: starts while its previous move still slides (until "
+                                 f"t = {busy[e.name]:g} s)")
+            if e.action == "attach" and e.name in on_board:
+                raise InputError(f"{where}: a payload named {e.name!r} is already on board; "
+                                 "expected a new name (or move it)")
+            if e.action != "attach" and e.name not in on_board:
+                raise InputError(f"{where}: no payload named {e.name!r} is on board then "
+                                 f"(on board: {sorted(on_board) or 'none'})")
+            if e.action == "attach":
+                on_board.add(e.name)
+            elif e.action == "drop":
+                on_board.discard(e.name)
+            busy[e.name] = e.t + e.ramp
+            last = e.t
+            clean.append(e)
+        self.events = clean
+        self.carried = tuple(self.carried)
+
+    def __bool__(self) -> bool:
+        return bool(self.events or self.carried)
+
+    def on_board(self, t: float) -> list[Payload]:
+        """The payloads on board at time t, where they are then.
+
+        Parameters
+        ----------
+        t : float
+            Time (s).
+
+        Returns
+        -------
+        list of Payload
+            In the order they came on board.
+        """
+        return [p.moved(r[0]) for p, r, on in self._tracks(np.array([float(t)])) if on[0]]
+
+    def _tracks(self, t: np.ndarray) -> list[tuple[Payload, np.ndarray, np.ndarray]]:
+        """(payload, its centre at each t (N, 3), on board at each t (N,)) per payload life."""
+        tracks: list[list[Any]] = []           # [payload, positions, on board]
+        alive: dict[str, list[Any]] = {}
+        for p in self.carried:
+            alive[p.name] = [p, np.repeat(np.array([p.position]), t.size, 0), np.ones(t.size, bool)]
+            tracks.append(alive[p.name])
+        for e in self.events:
+            after = t >= e.t
+            if e.action == "attach":
+                p = e.payload()
+                alive[e.name] = [p, np.repeat(np.array([p.position]), t.size, 0), after.copy()]
+                tracks.append(alive[e.name])
+            elif e.action == "drop":
+                alive.pop(e.name)[2] &= ~after
+            else:
+                track = alive[e.name]
+                start = self._position_at(track, e.t, t)
+                s = (np.clip((t - e.t) / e.ramp, 0.0, 1.0) if e.ramp > 0
+                     else after.astype(float))
+                moved = start + s[:, None] * (np.array(e.position) - start)
+                track[1] = np.where(after[:, None], moved, track[1])
+        return [(p, r, on) for p, r, on in tracks]
+
+    @staticmethod
+    def _position_at(track: list[Any], when: float, t: np.ndarray) -> np.ndarray:
+        """Where a payload's centre is just before ``when``: its last position sampled before
+        then, else where it was attached."""
+        k = int(np.searchsorted(t, when)) - 1
+        return np.array(track[1][k] if k >= 0 else track[0].position)
+
+    def sample(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The summed inertial parameters of the payloads on board at given times.
+
+        Parameters
+        ----------
+        t : (N,) array_like
+            Times (s), increasing.
+
+        Returns
+        -------
+        (N, 10) numpy.ndarray
+            pi about O (``quadcog.model.inertial_parameters.PI_NAMES`` order; kg, kg m,
+            kg m^2); zeros where nothing is on board.
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.zeros((t.size, N_PI))
+        for p, r, on in self._tracks(t):
+            out[on] += p.inertial_parameters(r[on])
+        return out
+
+    def times(self) -> list[float]:
+        """The times at which what is on board changes: each event's start and a move's end.
+
+        Returns
+        -------
+        list of float
+            Sorted, unique (s).
+        """
+        return sorted({e.t for e in self.events} | {e.t + e.ramp for e in self.events})

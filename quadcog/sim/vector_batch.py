@@ -24,9 +24,9 @@ from quadcog.sim.batch import BatchResult, batch_metrics, run_kernel, run_map
 from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
 from quadcog.sim.divergence import Limits
 from quadcog.sim.plant import Actuation, TruthOptions
-from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference
+from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference, whole_body
 from quadcog.sim.schedule import STEP_INPUTS, Schedule, cog_at
-from quadcog.sim.timeline import CogChange, CogProfile
+from quadcog.sim.timeline import CogChange, CogProfile, PayloadProfile
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -100,7 +100,7 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
               cog_times: Sequence[tuple[float, float]] = (), disturbances: Any = (),
               truth: TruthOptions | None = None, limits: Limits | None = None,
               x0: npt.ArrayLike | None = None, threads: int = 1, kernel: str = "auto",
-              precision: str = "float64") -> BatchResult:
+              precision: str = "float64", payloads: PayloadProfile | None = None) -> BatchResult:
     """Fly ``controller`` (designed for its model already) with each truth vehicle and CoG
     increments D (B, 3 J).
 
@@ -135,6 +135,9 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
     precision : {"float64", "float32"}
         The vector kernel's precision. float32 is for measuring only (bench/precision.py):
         its metrics are not within 1e-4 of float64's (docs/performance.md).
+    payloads : PayloadProfile, optional
+        The payloads over the run, shared by the flights (the vehicles' own must be the
+        profile's ``carried``); default: the first vehicle's own payloads.
 
     Returns
     -------
@@ -152,10 +155,12 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
     options, limits = run_options(truth, limits, None)
     dt = config.get("simulate.dt", dt)
     duration, dt = check_time(duration, dt)
+    if payloads is None:
+        payloads = PayloadProfile([], vehicles[0].payloads)
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
-                              disturbances=disturbances)
+                              disturbances=disturbances, payloads=payloads)
     actuation = Actuation.of(vehicles[0], options)
-    P = np.array([v.parameters() for v in vehicles])
+    P = np.array([v.airframe.parameters() for v in vehicles])
     B, J = P.shape[0], len(cog_times)
     D = np.asarray(D, dtype=float).reshape(B, 3 * J)
     shapes = cog_shapes(schedule.t, cog_times)
@@ -166,7 +171,7 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
     if J:           # each flight's CoG at t = 0
         P0[:, R_G] = cog_at(P[:, R_G], 1.0,
                             np.einsum("j,bjk->bk", shapes[0], D.reshape(B, J, 3)))
-    Z = batch_start(controller, actuation, P0, x0)
+    Z = batch_start(controller, actuation, whole_body(P0, schedule.payload[0]), x0)
     Q = np.hstack([P, D])
     t0 = time.perf_counter()
     run = None

@@ -156,5 +156,5 @@ def fly_group(key: str, scenarios: Sequence[Scenario], threads: int = 1,
                   dt=s0.dt,
                   cog_times=[(c.t, c.ramp) for c in s0.cog.changes],
                   disturbances=s0.disturbances, truth=s0.truth, limits=s0.limits, x0=x0,
-                  threads=threads, precision=precision)
+                  threads=threads, precision=precision, payloads=s0.payload_profile())
     return {name: getattr(r, name) for name in METRICS}

@@ -27,6 +27,7 @@ from quadcog.scenarios.keys import KEY_EXAMPLE, parse_key, set_key
 from quadcog.scenarios.lookup import find_file, read_toml, scenario_path, shipped_names
 from quadcog.scenarios.scenario import Scenario, ScenarioError, parse
 from quadcog.sim.flight import check_cog_changes
+from quadcog.sim.prepare import check_payload_events
 from quadcog.sweeps.groups import CONTROLLERS_BY_GROUP, group_key
 
 __all__ = ["MODES", "TOP", "SOURCES", "DEFAULT_CHUNK", "DEFAULT_THRESHOLD", "Dimension",
@@ -423,7 +424,8 @@ def cog_admissible(scenario: Scenario) -> str | None:
         ParameterError message).
     """
     try:
-        check_cog_changes(scenario.vehicle.parameters(), scenario.cog)
+        check_cog_changes(scenario.vehicle.airframe.parameters(), scenario.cog)
+        check_payload_events(scenario.vehicle, scenario.payload_profile())
     except ParameterError as e:
         return str(e)
     return None
@@ -566,7 +568,7 @@ def _validate_flights(sweep, combos, skip):
             if random or not skip:
                 key = random[0] if random else _cog_key(values)
                 hint = ("samples must stay inside the admissible CoG ball (radius "
-                        f"{admissible_radius(scenario.vehicle.parameters()):.4g} m "
+                        f"{admissible_radius(scenario.vehicle.airframe.parameters()):.4g} m "
                         "for this vehicle)" if random else
                         "set inadmissible = \"skip\" to keep such grid points as rows "
                         "without metrics")

@@ -23,9 +23,11 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import InputError, ParameterError
-from quadcog.model.conventions import IDX, PARAM_NAMES, hover_trim
+from quadcog.model.conventions import IDX, PARAM_NAMES, R_G, hover_trim
+from quadcog.model.inertial_parameters import check_physically_consistent, from_inertial_parameters, inertial_parameters
 from quadcog.model.parameters import check_parameters
 from quadcog.validate import array, plain, real, vector
+from quadcog.vehicles.payload import Payload, as_payload
 from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "PRESETS", "FIELD_NAMES", "N_ROTORS",
@@ -117,6 +119,10 @@ class Vehicle:
         A ``quadcog.vehicles.rotor_model.RotorModel`` or the name of one in its
         ``ROTOR_MODELS`` (optional): what turns this vehicle's logged motor outputs into rotor
         thrust (``quadcog identify`` reads it); ``as_dict`` writes its name.
+    payloads : tuple of Payload, default ()
+        Rigid bodies it carries (``with_payload``; dicts of their fields are accepted). The
+        fields above are the airframe's; ``inertial_parameters`` and ``parameters`` are those
+        of the whole body, airframe and payloads, which must be physically consistent.
 
     Raises
     ------
@@ -149,11 +155,12 @@ class Vehicle:
     z_G: float = 0.0
     name: str = "vehicle"
     rotor_model: RotorModel | None = None
+    payloads: tuple[Payload, ...] = ()
 
     def __post_init__(self) -> None:
         where = lambda f: f"vehicle {self.name!r}: {f}"
         for f in fields(self):
-            if f.name in ("rotor_positions", "rotor_directions", "name", "rotor_model"):
+            if f.name in ("rotor_positions", "rotor_directions", "name", "rotor_model", "payloads"):
                 continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
@@ -207,12 +214,22 @@ class Vehicle:
                 f"the mixer of rotor_positions {self.rotor_positions} and rotor_directions "
                 f"{self.rotor_directions} is singular (condition number {cond:.3g}): the rotors "
                 "cannot produce every [U1, U2, U3, U4]"))
-        check_parameters(self.parameters(), where("parameters"))
+        # the airframe's own parameters as the paper's model takes them; with payloads the
+        # whole body must be a rigid body's (the pseudo-inertia), which makes the admissible
+        # radius of the paper's model (I_O held as the CoG moves) moot for it
+        check_parameters(np.array([getattr(self, n) for n in PARAM_NAMES], dtype=float),
+                         where("parameters"))
+        _check_payloads(self, where)
         _check_rigid_body(self, where)
 
     # -- what the generated functions and the plant need --------------------------------
     def parameters(self) -> npt.NDArray[np.float64]:
-        """The parameter vector p of the generated functions.
+        """The parameter vector p of the generated functions: the paper's model of the whole
+        body.
+
+        With payloads, m and r_G are the whole body's and Ixx, Iyy, Izz the diagonal of its
+        inertia about O; the products of inertia are left out, as the paper's model has none
+        (``inertial_parameters`` keeps them, and the truth model flies them).
 
         Returns
         -------
@@ -220,7 +237,80 @@ class Vehicle:
             ``[m, g, Ixx, Iyy, Izz, c_x, c_y, c_z, c_phi, c_theta, c_psi, x_G, y_G, z_G]``
             [kg, m/s^2, kg m^2 (3), N s/m (3), N m s/rad (3), m (3)], a new array.
         """
-        return np.array([getattr(self, n) for n in PARAM_NAMES], dtype=float)
+        p = np.array([getattr(self, n) for n in PARAM_NAMES], dtype=float)
+        if self.payloads:
+            m, r, I_O = from_inertial_parameters(self.inertial_parameters(), "vehicle")
+            p[IDX["m"]] = m
+            p[IDX["Ixx"]:IDX["Izz"] + 1] = np.diag(I_O)
+            p[R_G] = r
+        return p
+
+    def inertial_parameters(self) -> npt.NDArray[np.float64]:
+        """The ten inertial parameters about O of the whole body: the airframe (its m, r_G and
+        diagonal inertia about O) plus every payload.
+
+        Returns
+        -------
+        (10,) numpy.ndarray
+            ``[m, m x_G, m y_G, m z_G, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` (kg, kg m, kg m^2),
+            the order of ``quadcog.model.inertial_parameters.PI_NAMES``.
+        """
+        pi = inertial_parameters(self.m, self.r_G, np.diag([self.Ixx, self.Iyy, self.Izz]),
+                                 f"vehicle {self.name!r}")
+        for payload in self.payloads:
+            pi = pi + payload.inertial_parameters()
+        return pi
+
+    @property
+    def airframe(self) -> "Vehicle":
+        """Vehicle: This vehicle without its payloads (the fields as they are)."""
+        return replace(self, payloads=()) if self.payloads else self
+
+    def with_payload(self, payload: Payload | dict[str, Any]) -> "Vehicle":
+        """A copy that carries one more payload (parallel-axis theorem: the pi add up).
+
+        Parameters
+        ----------
+        payload : Payload or dict
+            The payload, or a dict of its fields (mass, position[, size, name]).
+
+        Returns
+        -------
+        Vehicle
+            The loaded vehicle (validated: the whole body must be physically consistent).
+
+        Raises
+        ------
+        InputError
+            When ``payload`` is not a payload, or one of that name is already carried.
+        PhysicalConsistencyError
+            When the airframe with the payload is not physically consistent.
+        """
+        return replace(self, payloads=self.payloads + (as_payload(payload, "payload"),))
+
+    def without_payload(self, name: str) -> "Vehicle":
+        """A copy without the payload of that name.
+
+        Parameters
+        ----------
+        name : str
+            The payload's name.
+
+        Returns
+        -------
+        Vehicle
+            The vehicle without it.
+
+        Raises
+        ------
+        InputError
+            When no payload of that name is carried.
+        """
+        names = [p.name for p in self.payloads]
+        if name not in names:
+            raise InputError(f"vehicle {self.name!r}: no payload named {name!r} to remove; it "
+                             f"carries {names or 'none'}")
+        return replace(self, payloads=tuple(p for p in self.payloads if p.name != name))
 
     @property
     def r_G(self) -> npt.NDArray[np.float64]:
@@ -362,6 +452,10 @@ class Vehicle:
         ParameterError
             When ``p`` is not an admissible parameter vector.
         """
+        if self.payloads:
+            raise InputError(f"vehicle {self.name!r} carries payloads, so its parameters are the "
+                             "whole body's; use vehicle.airframe.with_parameters(p) for the "
+                             "airframe's")
         q = check_parameters(p, "p")
         return self.replace(**{n: float(q[IDX[n]]) for n in PARAM_NAMES})
 
@@ -372,16 +466,34 @@ class Vehicle:
         -------
         dict of str to Any
             {field: value}; ``rotor_positions`` and ``rotor_directions`` as lists,
-            ``rotor_model`` as its name (or None).
+            ``rotor_model`` as its name (or None), ``payloads`` as a list of dicts.
         """
         d = asdict(self)
         d["rotor_positions"] = [list(r) for r in self.rotor_positions]
         d["rotor_directions"] = list(self.rotor_directions)
         d["rotor_model"] = None if self.rotor_model is None else self.rotor_model.name
+        d["payloads"] = [p.as_dict() for p in self.payloads]
         return d
 
 
 FIELD_NAMES = tuple(f.name for f in fields(Vehicle))
+
+
+def _check_payloads(vehicle, where):
+    """Turn the payloads into a tuple of Payload (names unique) and check the whole body."""
+    loads = vehicle.payloads
+    if isinstance(loads, (str, bytes, dict, Payload)) or not hasattr(loads, "__iter__"):
+        raise InputError(where(f"payloads must be a sequence of Payload, got {loads!r}"))
+    loads = tuple(as_payload(p, where(f"payloads[{k}]")) for k, p in enumerate(loads))
+    names = [p.name for p in loads]
+    for name in names:
+        if names.count(name) > 1:
+            raise InputError(where(f"payloads: two payloads are named {name!r}; expected "
+                                   "unique names"))
+    object.__setattr__(vehicle, "payloads", loads)
+    if loads:
+        check_physically_consistent(vehicle.inertial_parameters(),
+                                    where(f"airframe with payloads {names}: pi"))
 
 
 def _check_rigid_body(vehicle, where):

@@ -25,6 +25,11 @@ __all__ = ["ROTOR_RADIUS", "read_run", "frame_times", "animate_run"]
 ROTOR_RADIUS = 0.3         # rotor disc radius as a fraction of the arm length (drawing only)
 
 
+def _older_column_sets(names):
+    """The column sets of older run folders: before the rotor columns, before the mass."""
+    return (names[:col.ROTOR_COMMAND.start], names[:col.MASS.start])
+
+
 def _text(path):
     """The UTF-8 text of a run file, or an InputError naming it."""
     try:
@@ -75,7 +80,7 @@ def read_table(path: Path) -> np.ndarray:
         except Exception as e:      # noqa: BLE001 - pyarrow raises many kinds on damage
             raise InputError(f"{path}: not a readable Parquet file ({type(e).__name__})") \
                 from None
-        if tuple(t.column_names) == names[:col.ROTOR_COMMAND.start]:  # before rotor columns
+        if tuple(t.column_names) in _older_column_sets(names):  # a folder from before the later columns
             names = tuple(t.column_names)
         missing = [n for n in names if n not in t.column_names]
         if missing:
@@ -89,7 +94,7 @@ def read_table(path: Path) -> np.ndarray:
     else:
         lines = _text(path).splitlines()
         header = lines[0].strip().split(",") if lines else []
-        if tuple(header) == names[:col.ROTOR_COMMAND.start]:    # a folder of before rotor columns
+        if tuple(header) in _older_column_sets(names):    # a folder from before the later columns
             names = tuple(header)
         if tuple(header) != names:
             raise InputError(f"{path}: unexpected columns (expected those of "

@@ -218,6 +218,14 @@ def plot_flight(result: Any, path: str | Path | None = None, name: str | None = 
             if np.any(result.r_hat):
                 ax["C"].plot([], [], color="0.3", ls="--", lw=1.2, label="true")
             ax["C"].set_ylabel("CoG offset (cm)")
+        mass = getattr(result, "mass", None)
+        if mass is not None and len(mass) and np.ptp(mass) > 0:
+            # payloads came or went: the whole body's mass on its own axis (kg)
+            host = ax["C" if show_cog else "E"]
+            twin = host.twinx()
+            twin.plot(t, mass, color="k", lw=1.2, ls=":")
+            twin.set_ylabel("mass (kg)")
+            host.plot([], [], color="k", lw=1.2, ls=":", label="mass (right axis)")
         spans = _intervals(disturbances)
         for key, a in ax.items():
             for k, (t0, t1) in enumerate(spans):

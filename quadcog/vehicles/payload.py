@@ -1,0 +1,163 @@
+"""A payload: a rigid body fastened to the vehicle (a parcel, a battery, a weight taped on).
+
+A payload is a solid homogeneous box with its edges along the body axes, or a point mass (a box
+of size zero). It is known by its ten inertial parameters about O (``inertial_parameters``, the
+order of ``quadcog.model.inertial_parameters.PI_NAMES``); because mass, first moment and inertia
+are integrals over the body, a vehicle carrying payloads has the sum of their pi and its own
+(``Vehicle.with_payload``), and the truth model flies that sum.
+"""
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from quadcog import validate
+from quadcog.errors import InputError, ParameterError
+from quadcog.model.inertial_parameters import placed
+from quadcog.model.parameters import LARGEST
+
+__all__ = ["Payload", "as_payload"]
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A rigid body carried by the vehicle. Units SI.
+
+    Parameters
+    ----------
+    mass : float
+        Its mass (kg), > 0.
+    position : (3,) tuple of float
+        Its centre (its CoG) from O in body axes (m).
+    size : (3,) tuple of float, default (0, 0, 0)
+        Edge lengths along body x, y, z (m), >= 0: a solid homogeneous box; all zero: a
+        point mass.
+    name : str, default "payload"
+        A label; scenarios attach, move and drop payloads by it.
+
+    Raises
+    ------
+    quadcog.InputError
+        A field of the wrong type or shape, naming it.
+    quadcog.ParameterError
+        A mass that is not > 0, an edge below 0 or a number beyond the model's scale.
+    """
+    mass: float
+    position: tuple[float, float, float]
+    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    name: str = "payload"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise InputError(f"payload name must be a non-empty string, got {self.name!r}")
+        where = f"payload {self.name!r}"
+        m = validate.real(self.mass, f"{where}: mass", lo=0.0, lo_open=True, hi=LARGEST,
+                         unit="kg", error=ParameterError)
+        r = validate.array(self.position, f"{where}: position", (3,),
+                           what="3 finite numbers (m, body axes)")
+        s = validate.array(self.size, f"{where}: size", (3,),
+                           what="3 edge lengths >= 0 (m)")
+        if not np.abs(r).max() <= LARGEST:
+            validate.fail(f"{where}: position", f"entries within +-{LARGEST:g} m", r.tolist(),
+                          ParameterError)
+        if not (s.min() >= 0 and s.max() <= LARGEST):
+            validate.fail(f"{where}: size", f"3 edge lengths in [0, {LARGEST:g}] m", s.tolist(),
+                          ParameterError)
+        object.__setattr__(self, "mass", m)
+        object.__setattr__(self, "position", tuple(float(v) for v in r))
+        object.__setattr__(self, "size", tuple(float(v) for v in s))
+
+    def inertia_about_centre(self) -> npt.NDArray[np.float64]:
+        """Its inertia about its own CoG, a solid homogeneous box's.
+
+        Returns
+        -------
+        (3, 3) numpy.ndarray
+            ``m / 12 diag(b^2 + c^2, a^2 + c^2, a^2 + b^2)`` (kg m^2) for edges a, b, c; zero for
+            a point mass.
+        """
+        a, b, c = self.size
+        return self.mass / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+
+    def inertial_parameters(self, positions: npt.ArrayLike | None = None) -> npt.NDArray[np.float64]:
+        """Its ten inertial parameters about O.
+
+        Parameters
+        ----------
+        positions : (N, 3) array_like, optional
+            Positions of its centre (m, body axes) to evaluate at instead of ``position``.
+
+        Returns
+        -------
+        (10,) or (N, 10) numpy.ndarray
+            ``[m, m x, m y, m z, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` (kg, kg m, kg m^2): the
+            inertia about its centre moved to O by the parallel-axis theorem
+            (``quadcog.model.inertial_parameters.placed``); one row per position when
+            ``positions`` is given.
+        """
+        if positions is None:
+            return placed(self.mass, self.inertia_about_centre(), [self.position])[0]
+        return placed(self.mass, self.inertia_about_centre(), positions)
+
+    def moved(self, position: npt.ArrayLike) -> "Payload":
+        """The same payload at another position.
+
+        Parameters
+        ----------
+        position : (3,) array_like
+            Its new centre from O in body axes (m).
+
+        Returns
+        -------
+        Payload
+            The moved payload (validated).
+        """
+        return Payload(self.mass, tuple(np.asarray(position, dtype=float).tolist()),
+                       self.size, self.name)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Its fields as plain Python values (for JSON and scenario files).
+
+        Returns
+        -------
+        dict of str to Any
+            ``{"name", "mass", "position", "size"}``, the vectors as lists.
+        """
+        return {"name": self.name, "mass": self.mass, "position": list(self.position),
+                "size": list(self.size)}
+
+
+def as_payload(value: Any, where: str = "payload") -> Payload:
+    """A Payload from a Payload or a table of its fields.
+
+    Parameters
+    ----------
+    value : Payload or dict
+        A Payload, or a dict with keys ``mass``, ``position`` and optionally ``size``, ``name``.
+    where : str, optional
+        Where the value came from (an argument or a scenario key), for the message.
+
+    Returns
+    -------
+    Payload
+        The checked payload.
+
+    Raises
+    ------
+    quadcog.InputError
+        A value that is neither, or a table with unknown or missing keys.
+    """
+    if isinstance(value, Payload):
+        return value
+    if not isinstance(value, dict):
+        validate.fail(where, "a quadcog Payload or a table with keys mass, position[, size, name]",
+                      value)
+    unknown = sorted(set(value) - {"mass", "position", "size", "name"})
+    missing = sorted({"mass", "position"} - set(value))
+    if unknown or missing:
+        raise InputError(f"{where}: " + "; ".join(
+            ([f"unknown key(s) {', '.join(map(repr, unknown))}"] if unknown else [])
+            + ([f"missing key(s) {', '.join(map(repr, missing))}"] if missing else []))
+            + "; expected keys mass (kg), position (m) and optionally size (m), name")
+    return Payload(**value)
