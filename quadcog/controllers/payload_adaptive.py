@@ -20,12 +20,12 @@ acceleration (F[d/dt y] = lam y - lam F[y]). With the known part ``k = Y(x, 0)[:
 (``composite.believed_input``). The filters start at rest, so ``z - Y_f theta`` carries the
 start transient ``-lam exp(-lam t) M nu(0)`` (the filter of d/dt (M nu) did not start at its
 signal). The composite law waits it out (its warm-up); a payload can tip a small vehicle over
-within that wait (the Crazyflie with the scaled parcel flips in 0.15 s), and a law that
-starts learning at once from a moving start drives m_hat to its bound. This law takes the
-transient out exactly instead. ``M nu(0) = M nu(t) - int_0^t M nu_dot``, and
-``M nu_dot = B_u U - D nu - Y(x, 0) pi`` is linear in pi with a known regressor, so with the
-integrals ``A = int_0^t (B_u U_a - D nu - k)`` and ``B_int = int_0^t Y_th(x, 0)`` (states
-that stop once the transient is below 1e-8):
+within that wait (the Crazyflie with the scaled parcel from t = 0 flips at 0.26 s with a
+warm-up of 5 / lam = 0.25 s), and a law that starts learning at once from a moving start
+drives m_hat to its bound. This law takes the transient out exactly instead:
+``M nu(0) = M nu(t) - int_0^t M nu_dot``, and ``M nu_dot = B_u U - D nu - Y(x, 0) pi`` is
+linear in pi with a known regressor, so with the integrals ``A = int_0^t (B_u U_a - D nu - k)``
+and ``B_int = int_0^t Y_th(x, 0)`` (states that stop once the transient is below 1e-8):
 
     M nu(0) = (W_th + B_int) theta + w - A,
     z + d (w - A) = (Y_f - d (W_th + B_int)) theta,      d = lam exp(-lam t),
