@@ -79,8 +79,23 @@ def _levels(step: ca.Function, constant: frozenset[int], slow: frozenset[int]) -
     return levels
 
 
+def _divisor_uses(step: ca.Function) -> dict[int, int]:
+    """How many divisions divide by each instruction's result: instruction -> count."""
+    made_by: dict[int, int] = {}       # work slot -> the instruction whose result it holds
+    uses: dict[int, int] = {}
+    for k in range(step.n_instructions()):
+        op, ins, outs = step.instruction_id(k), step.instruction_input(k), step.instruction_output(k)
+        if op == ca.OP_DIV:
+            d = made_by[ins[1]]
+            uses[d] = uses.get(d, 0) + 1
+        if op != ca.OP_OUTPUT:
+            made_by[outs[0]] = k
+    return uses
+
+
 def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
-                  slow: Sequence[int] = (), name: str = "qc_flight") -> str:
+                  slow: Sequence[int] = (), name: str = "qc_flight",
+                  reciprocals: bool = True) -> str:
     """C source of the single-flight loop of the SX Function ``step``.
 
     Parameters
@@ -93,6 +108,11 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
     slow : sequence of int
         The per-step inputs whose change sets off the instructions that depend only on them
         and the constant inputs.
+    reciprocals : bool
+        Divide by a divisor that is used more than once or is computed less often than the
+        division (once, or on a change of the slow inputs) through its reciprocal: ``a / d``
+        becomes ``a * (1 / d)``, with ``1 / d`` computed once where ``d`` is. It saves most
+        divisions of a step and changes a result by at most an ulp per such division.
     name : str
         The C function: ``long name(long start, long stop, double *X, const double *const
         *in, double *const *out)``. ``in[i]`` is input i (i >= 1): the constant ones one
@@ -130,6 +150,9 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
     calls: dict[str, int] = {}
     name_of: dict[int, str] = {}          # work slot -> the variable that holds it now
     code_var = None
+    uses = _divisor_uses(step) if reciprocals else {}
+    made_by: dict[int, int] = {}          # work slot -> the instruction of its value
+    inverted: set[int] = set()            # instructions whose reciprocal r<k> is declared
 
     def read(i: int, nz: int) -> str:
         if i == 0:
@@ -156,6 +179,13 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
             rhs = read(ins[0], ins[1])
         elif op == ca.OP_CONST:
             rhs = target.literal(step.instruction_constant(k))
+        elif op == ca.OP_DIV and _through_reciprocal(made_by[ins[1]], level, levels, uses):
+            d = made_by[ins[1]]
+            if d not in inverted:       # once, where the divisor is computed
+                inverted.add(d)
+                blocks[levels[d]].append(
+                    f"{'double ' if levels[d] == _STEP else ''}r{d} = {one} / v{d};")
+            rhs = f"{name_of[ins[0]]} * r{d}"
         else:
             form = sxc.template(op, target)
             if form is None:
@@ -168,10 +198,12 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
         declare = "double " if level == _STEP else ""
         blocks[level].append(f"{declare}{var} = {rhs};")
         name_of[outs[0]] = var
+        made_by[outs[0]] = k
     if code_var is None:
         code_var = zero
     persistent = [f"v{k}" for k, lv in enumerate(levels)
                   if lv != _STEP and step.instruction_id(k) != ca.OP_OUTPUT]
+    persistent += [f"r{k}" for k in sorted(inverted) if levels[k] != _STEP]
     decls = "".join(f"double {f}({', '.join(['double'] * n)});\n" for f, n in sorted(calls.items()))
     inputs = "".join(f"  const double *in{i} = in[{i}];\n" for i in range(1, n_in))
     outputs = "".join(f"  double *out{j} = out[{j}];\n" for j in range(1, n_out))
@@ -197,6 +229,11 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
   return stop;
 }}
 """
+
+
+def _through_reciprocal(d: int, level: int, levels: list[int], uses: dict[int, int]) -> bool:
+    """Whether a division (at ``level``) by instruction d's result goes through 1 / d."""
+    return d in uses and (uses[d] > 1 or levels[d] < level)
 
 
 class FlightKernel:
