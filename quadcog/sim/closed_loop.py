@@ -26,7 +26,7 @@ __all__ = ["CHUNK", "ACCUMULATORS", "SLOW_INPUTS", "closed_loop_step", "chunk_fu
 CHUNK = 1000          # steps per compiled call
 # the per-step inputs that stay the same for long runs of steps (they change only while the
 # CoG moves): the single-flight kernel reruns what depends only on them and P when they change
-SLOW_INPUTS = ("cog", "cog_scale")
+SLOW_INPUTS = ("cog", "cog_scale", "payload")
 
 
 def _step_symbols() -> dict[str, ca.SX]:

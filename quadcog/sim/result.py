@@ -214,8 +214,11 @@ def flight_metrics(e: npt.NDArray[np.float64], tail: npt.NDArray[Any],
     """
     n = e.size if diverged_index is None else diverged_index
     e, tail = e[:n], np.asarray(tail[:n], dtype=bool)
-    return metrics_from_sums(n, float(e @ e), float(e.max()) if n else float("nan"),
-                             int(tail.sum()), float(e[tail] @ e[tail]),
+    # numpy's pairwise sums, not e @ e: BLAS's dot wakes its threads for a long e (slow on a
+    # busy machine, and its sum then depends on the thread count)
+    sq = e * e
+    return metrics_from_sums(n, float(np.sum(sq)), float(e.max()) if n else float("nan"),
+                             int(np.count_nonzero(tail)), float(np.sum(sq[tail])),
                              float(e[-1]) if n else float("nan"), diverged_at, cause, limits)
 
 
