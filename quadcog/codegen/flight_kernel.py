@@ -22,7 +22,7 @@ The loop is compiled with the instruction set of ``quadcog.codegen.vector_kernel
 (its flags, ``-O3`` and without the vector kernel's ``-fno-builtin-sin``: here gcc may merge a
 sin and a cos of one angle into one sincos call).
 """
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 import ctypes
 import hashlib
 
@@ -333,15 +333,15 @@ class FlightRun:
 
     Parameters
     ----------
-    fn : ctypes function
-        The kernel's C function.
+    fn : callable
+        The kernel's C function (ctypes).
     X : numpy.ndarray
         The trajectory.
     inputs, outputs : list of numpy.ndarray
         The kernel's inputs 1 .. and outputs 1 ...
     """
 
-    def __init__(self, fn: ctypes._CFuncPtr, X: np.ndarray, inputs: list[np.ndarray],
+    def __init__(self, fn: Callable[..., int], X: np.ndarray, inputs: list[np.ndarray],
                  outputs: list[np.ndarray]) -> None:
         self._fn, self._keep = fn, (X, inputs, outputs)     # keep the arrays alive
         self._X = X.ctypes.data

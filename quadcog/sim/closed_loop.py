@@ -13,8 +13,8 @@ import casadi as ca
 from quadcog.codegen.compiled import cached_compile
 from quadcog.codegen.flight_kernel import FlightKernel
 from quadcog.codegen.vector_kernel import kernel_isa
-from quadcog.errors import CompileError, KernelError
 from quadcog.controllers.base import Controller
+from quadcog.errors import CompileError, KernelError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
 from quadcog.sim.divergence import Limits, divergence_code
 from quadcog.sim.plant import Actuation, rk4_step_expression
