@@ -12,7 +12,7 @@ __all__ = ["LAYERS"]
 LAYERS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("floor", "The floor: errors, defaults, checks",
      ("quadcog.errors", "quadcog.config", "quadcog.validate", "quadcog.paths", "quadcog.files",
-      "quadcog.kinds", "quadcog.interrupts", "quadcog.layers")),
+      "quadcog.kinds", "quadcog.interrupts", "quadcog.layers", "quadcog.numerics")),
     ("codegen", "codegen: compiled code", ("quadcog.codegen",)),
     ("model", "model: the generated functions", ("quadcog.model",)),
     ("vehicles", "vehicles", ("quadcog.vehicles",)),

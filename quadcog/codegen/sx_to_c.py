@@ -22,7 +22,7 @@ import numpy as np
 
 from quadcog.errors import QuadcogError
 
-__all__ = ["OPERATIONS", "SELECTS", "Target", "Walk", "op_name", "template", "walk"]
+__all__ = ["CALL", "OPERATIONS", "SELECTS", "Target", "Walk", "op_name", "template", "walk"]
 
 # operation -> C expression of the operands {0}, {1}; {one} and {zero} are the target's literals
 # of 1 and 0; {f} is the suffix of the math functions ("f" in float32: sinf, fminf).
@@ -61,7 +61,8 @@ SELECTS = {
     ca.OP_FMAX: "({1} != {1}) ? {0} : "
                 "((({0} > {1}) || ({0} != {0})) ? (({0} != {0}) ? {1} : {0}) : {1})",
 }
-_CALL = re.compile(r"^(\w+)\{f\}\((.*)\)$")
+# a template that is a call of a math function: its name and its arguments
+CALL = re.compile(r"^(\w+)\{f\}\((.*)\)$")
 
 
 class Target(NamedTuple):
@@ -195,7 +196,7 @@ def walk(fn: ca.Function, target: Target, read: Callable[[int, int], str],
                                    f"{k}) has no C form in quadcog.codegen.sx_to_c; rewrite the "
                                    "function without it, or add it to "
                                    "quadcog.codegen.sx_to_c.OPERATIONS")
-            call = _CALL.match(form)
+            call = CALL.match(form)
             if call:
                 calls[call.group(1)] = call.group(2).count(",") + 1
             rhs = form.format(*(f"w{n}" for n in ins), one=one, zero=zero, f=target.suffix)

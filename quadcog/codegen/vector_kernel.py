@@ -49,7 +49,7 @@ from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.errors import CompileError, InputError, KernelError, QuadcogWarning
 
-__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
+__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "TARGETS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
            "ISA_ENV", "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c",
            "kernel_for", "kernel_isa", "lanes_for", "vector_flags"]
 
@@ -102,8 +102,9 @@ def _literal32(v):
 
 # the largest double that rounds to a finite float (half an ulp above FLT_MAX rounds to inf)
 _FLOAT32_MAX = float(np.finfo(np.float32).max) * (1 + 2.0 ** -25)
-# exact literals, fmin/fmax as selects (a call would stop the vectorizer)
-_TARGETS = {"float64": sxc.Target(literal=_literal, suffix="", selects=True, error=KernelError),
+# how each precision writes C: exact literals, fmin/fmax as selects (a call would stop the
+# vectorizer); also the single-flight kernel's (quadcog.codegen.flight_kernel)
+TARGETS = {"float64": sxc.Target(literal=_literal, suffix="", selects=True, error=KernelError),
             "float32": sxc.Target(literal=_literal32, suffix="f", selects=True,
                                   error=KernelError)}
 
@@ -254,7 +255,7 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     nZ, nQ, nR = (step.nnz_in(i) for i in range(3))
     if step.nnz_out(0) != nZ or step.n_in() != 3 or step.n_out() != 1:
         raise KernelError(f"{step.name()}: expected step(Z, Q, row) -> Z_next of equal size")
-    target = _TARGETS[precision]
+    target = TARGETS[precision]
     inputs = (lambda nz: f"z[{nz * lanes}+j]", lambda nz: f"q[{nz * lanes}+j]",
               lambda nz: f"row[{nz}]")
     c = sxc.walk(step, target, read=lambda i, nz: inputs[i](nz),

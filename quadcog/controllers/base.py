@@ -13,7 +13,8 @@ its ``controller_model`` argument. Subclasses take ``vehicle`` and ``model`` as 
 parameters and their settings as keywords. ``quadcog.controllers.template`` states the
 interface a Python controller of your own implements; every Controller satisfies it.
 """
-from collections.abc import Sequence
+from collections import OrderedDict
+from collections.abc import Hashable, Sequence
 from typing import Any
 
 import casadi as ca
@@ -30,7 +31,32 @@ from quadcog.trajectories.analytic import REF_SIZE
 from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
-__all__ = ["Controller"]
+__all__ = ["Controller", "DESIGNS_KEPT"]
+
+# how many designs' law, Jacobian and cache key the process keeps (newest first out last): a
+# second Controller of the same class, settings and model then skips its symbolic build
+DESIGNS_KEPT = 16
+_designs_built: "OrderedDict[Hashable, dict[str, Any]]" = OrderedDict()
+
+
+def _frozen(value: Any) -> Hashable:
+    """A hashable stand-in of a constructor argument that is equal only for equal values;
+    TypeError for a kind it does not know (that design is then not kept)."""
+    if value is None or isinstance(value, (bool, int, str)):
+        return (type(value).__name__, value)
+    if isinstance(value, float):            # repr: -0.0 and 0.0 differ
+        return ("float", repr(float(value)))
+    if isinstance(value, np.ndarray):
+        return ("ndarray", value.dtype.str, value.shape, value.tobytes())
+    if isinstance(value, (list, tuple)):
+        return (type(value).__name__, tuple(_frozen(v) for v in value))
+    if isinstance(value, dict):
+        return ("dict", tuple(sorted((str(k), _frozen(v)) for k, v in value.items())))
+    if isinstance(value, Model):
+        return ("model", str(value.folder))
+    if isinstance(value, Vehicle):
+        return ("vehicle", value)
+    raise TypeError(type(value).__name__)
 
 
 class Controller:
@@ -182,14 +208,46 @@ class Controller:
             compose into bigger expressions.
         """
         if self._function is None:
-            t, x = ca.SX.sym("t"), ca.SX.sym("x", N_STATE)
-            ref, c = ca.SX.sym("ref", REF_SIZE), ca.SX.sym("c", self.n_state)
-            U, c_dot = self.expression(t, x, ref, c)
-            # the generated functions share trigonometry and I_G^{-1}: merge it once here
-            U, c_dot = ca.cse([ca.SX(U), ca.SX(c_dot) if self.n_state else ca.SX(0, 1)])
-            self._function = ca.Function(f"{self.name}_law", [t, x, ref, c], [U, c_dot],
-                                         ["t", "x", "ref", "c"], ["U", "c_dot"])
+            self._function = self._built("function", self._build_function)
         return self._function
+
+    def _build_function(self) -> ca.Function:
+        t, x = ca.SX.sym("t"), ca.SX.sym("x", N_STATE)
+        ref, c = ca.SX.sym("ref", REF_SIZE), ca.SX.sym("c", self.n_state)
+        U, c_dot = self.expression(t, x, ref, c)
+        # the generated functions share trigonometry and I_G^{-1}: merge it once here
+        U, c_dot = ca.cse([ca.SX(U), ca.SX(c_dot) if self.n_state else ca.SX(0, 1)])
+        return ca.Function(f"{self.name}_law", [t, x, ref, c], [U, c_dot],
+                           ["t", "x", "ref", "c"], ["U", "c_dot"])
+
+    def _design_key(self) -> Hashable | None:
+        """What determines this design: class, constructor arguments, model and folder; None
+        where that is not known (a class outside quadcog.controllers, whose expression may
+        read attributes set after construction, or an argument ``_frozen`` does not know)."""
+        if not type(self).__module__.startswith("quadcog.controllers."):
+            return None
+        args, kwargs = self._init_args
+        try:
+            return (type(self).__qualname__, type(self).__module__, _frozen(args),
+                    _frozen(kwargs), _frozen(self.vehicle), str(self.model.folder))
+        except TypeError:
+            return None
+
+    def _built(self, what: str, build: Any) -> Any:
+        """``build()``, kept for the designs of the same key (``DESIGNS_KEPT`` of them)."""
+        key = self._design_key()
+        if key is None:
+            return build()
+        kept = _designs_built.get(key)
+        if kept is None:
+            kept = _designs_built[key] = {}
+            while len(_designs_built) > DESIGNS_KEPT:
+                _designs_built.popitem(last=False)
+        else:
+            _designs_built.move_to_end(key)
+        if what not in kept:
+            kept[what] = build()
+        return kept[what]
 
     def compiled(self) -> FastCall:
         """The compiled law, allocation-free.
@@ -289,7 +347,8 @@ class Controller:
             Its class name and its law, serialized.
         """
         if self._cache_key is None:
-            self._cache_key = (type(self).__name__, self.function().serialize())
+            self._cache_key = self._built(
+                "cache_key", lambda: (type(self).__name__, self.function().serialize()))
         return self._cache_key
 
     def closed_loop_jacobian(self) -> ca.Function:
@@ -302,14 +361,16 @@ class Controller:
             truth dynamics without extra effects, c0 = ``initial_state()``.
         """
         if self._jacobian is None:
-            x, ref, p = ca.SX.sym("x", N_STATE), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("p", N_PARAM)
-            U, _ = self.function()(0.0, x, ref, self.initial_state())
-            f = self.model.casadi_function("truth_dynamics")
-            self._jacobian = ca.Function(
-                "closed_loop_jacobian", [x, ref, p],
-                [ca.jacobian(f(x, U, p, ca.DM.zeros(3), ca.DM.zeros(6)), x)],
-                ["x", "ref", "p"], ["A"])
+            self._jacobian = self._built("jacobian", self._build_jacobian)
         return self._jacobian
+
+    def _build_jacobian(self) -> ca.Function:
+        x, ref, p = ca.SX.sym("x", N_STATE), ca.SX.sym("ref", REF_SIZE), ca.SX.sym("p", N_PARAM)
+        U, _ = self.function()(0.0, x, ref, self.initial_state())
+        f = self.model.casadi_function("truth_dynamics")
+        return ca.Function("closed_loop_jacobian", [x, ref, p],
+                           [ca.jacobian(f(x, U, p, ca.DM.zeros(3), ca.DM.zeros(6)), x)],
+                           ["x", "ref", "p"], ["A"])
 
     def nominal_with_cog(self, r: ca.SX | npt.NDArray[np.float64] | Sequence[float]
                          ) -> ca.SX | npt.NDArray[np.float64]:

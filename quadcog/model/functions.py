@@ -72,7 +72,9 @@ class Model:
     def __init__(self, library: "_Library", folder: Path) -> None:
         self.folder = folder                # the generated/ folder this model was loaded from
         self._library = library             # the shared, lazily compiled functions
-        self._symbolic: dict[str, Any] = {}  # name -> casadi.Function (SX), for expressions
+        # name -> casadi.Function (SX), for expressions: shared by the Models of one folder
+        # (every controller design loads one; verified and loaded once per process)
+        self._symbolic: dict[str, Any] = library.symbolic
         self.backend = library.backend
         self._calls: dict[str, FastCall] = {}
         self._last_p: bytes | None = None
@@ -132,7 +134,7 @@ class Model:
         Returns
         -------
         casadi.Function
-            The SX Function, loaded once per Model.
+            The SX Function, loaded once per generated folder and process.
 
         Raises
         ------
@@ -141,7 +143,8 @@ class Model:
         """
         self._known(name)
         if name not in self._symbolic:
-            self._symbolic[name] = load_casadi_function(name, self.folder)
+            function = load_casadi_function(name, self.folder)
+            self._symbolic.setdefault(name, function)     # the first one, if two threads race
         return self._symbolic[name]
 
     def fast(self, name: str) -> FastCall:
@@ -623,6 +626,7 @@ class _Library:
                           QuadcogWarning, stacklevel=4)
             _warned_no_compiler = True
         self._functions: dict[str, Any] | None = None
+        self.symbolic: dict[str, Any] = {}     # Model.casadi_function's, shared
         self._lock = threading.Lock()
 
     def functions(self) -> dict[str, Any]:

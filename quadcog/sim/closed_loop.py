@@ -11,16 +11,22 @@ import itertools
 import casadi as ca
 
 from quadcog.codegen.compiled import cached_compile
+from quadcog.codegen.flight_kernel import FlightKernel
+from quadcog.codegen.vector_kernel import kernel_isa
 from quadcog.controllers.base import Controller
+from quadcog.errors import CompileError, KernelError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
 from quadcog.sim.divergence import Limits, divergence_code
 from quadcog.sim.plant import Actuation, rk4_step_expression
 from quadcog.sim.schedule import STEP_INPUTS, truth_parameters
 
-__all__ = ["CHUNK", "ACCUMULATORS", "closed_loop_step", "chunk_function", "monitored_step",
-           "chunk_of", "monitored_chunk_function", "packed"]
+__all__ = ["CHUNK", "ACCUMULATORS", "SLOW_INPUTS", "closed_loop_step", "chunk_function",
+           "flight_kernel", "monitored_step", "chunk_of", "monitored_chunk_function", "packed"]
 
 CHUNK = 1000          # steps per compiled call
+# the per-step inputs that stay the same for long runs of steps (they change only while the
+# CoG moves): the single-flight kernel reruns what depends only on them and P when they change
+SLOW_INPUTS = ("cog", "cog_scale", "payload")
 
 
 def _step_symbols() -> dict[str, ca.SX]:
@@ -99,6 +105,46 @@ def chunk_function(controller: Controller, actuation: Actuation, limits: Limits,
         return ca.Function("closed_loop_chunk", [X0, P] + per_step, [Xs, Us, codes],
                            ["X0", "P"] + [name for name, _ in STEP_INPUTS], ["X", "U", "code"])
     return cached_compile(("chunk", controller.cache_key(), actuation, limits, n), build)
+
+
+_flight_kernels: dict[Hashable, FlightKernel | None] = {}
+
+
+def flight_kernel(controller: Controller, actuation: Actuation, limits: Limits
+                  ) -> FlightKernel | None:
+    """The closed-loop step of one flight as a compiled C loop (built once per process).
+
+    ``quadcog.codegen.flight_kernel`` emits the loop from ``closed_loop_step``: the same
+    operations, rounded the same way, as the CasADi chunk of ``chunk_function``, with what
+    depends only on P run once and what depends only on P and the CoG profile
+    (``SLOW_INPUTS``) run again only where the profile changes.
+
+    Parameters
+    ----------
+    controller : Controller
+        The law (designed for its model already).
+    actuation : Actuation
+        The truth's rotors.
+    limits : Limits
+        The divergence limits.
+
+    Returns
+    -------
+    FlightKernel or None
+        Its inputs are (P, *STEP_INPUTS), its one per-step output U_applied; None without
+        a C compiler or where the loop does not build (the caller then runs
+        ``chunk_function``).
+    """
+    key = (controller.cache_key(), actuation, limits, kernel_isa())
+    if key not in _flight_kernels:
+        names = [name for name, _ in STEP_INPUTS]
+        try:
+            _flight_kernels[key] = FlightKernel(
+                closed_loop_step(controller, actuation, limits), constant=(1,),
+                slow=[2 + names.index(name) for name in SLOW_INPUTS])
+        except (KernelError, CompileError):
+            _flight_kernels[key] = None
+    return _flight_kernels[key]
 
 
 # accumulators of a monitored step, after X: sums over the counted samples

@@ -29,7 +29,7 @@ from quadcog.controllers.base import Controller
 from quadcog.errors import InputError, ReferenceWarning
 from quadcog.model.conventions import IDX, N_STATE, R_G
 from quadcog.model.functions import load
-from quadcog.sim.closed_loop import CHUNK, chunk_function
+from quadcog.sim.closed_loop import CHUNK, chunk_function, flight_kernel
 from quadcog.sim.divergence import (
     DivergenceCause,
     Limits,
@@ -50,7 +50,7 @@ from quadcog.sim.prepare import (
     start_at_reference,
 )
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
-from quadcog.sim.schedule import Schedule, truth_parameters
+from quadcog.sim.schedule import STEP_INPUTS, Schedule, truth_parameters
 from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.user_controller import user_call
 from quadcog.trajectories.feasibility import check_reference
@@ -165,6 +165,34 @@ def _check_reference(result: SimulationResult, schedule: Schedule, vehicle: Vehi
 
 
 def _run_compiled(setup, progress):
+    kernel = flight_kernel(setup.controller, setup.actuation, setup.limits)
+    if kernel is None:
+        return _run_chunks(setup, progress)
+    schedule, X0, n_steps = setup.schedule, setup.X0, setup.schedule.n_steps
+    X = np.empty((n_steps + 1, X0.size))
+    U = np.empty((n_steps + 1, 4))
+    codes = np.empty(n_steps)
+    X[0] = X0
+    run = kernel.bind(X, [np.ascontiguousarray(setup.P, dtype=float)]
+                      + [getattr(schedule, name) for name, _ in STEP_INPUTS], [U, codes])
+    # one call without a progress bar; with one, a call per CHUNK steps to report between
+    every = CHUNK if progress else n_steps
+    k = 0
+    while k < n_steps:
+        m = min(every, n_steps - k)
+        stop = run(k, k + m)
+        if stop < k + m:        # the step's divergence rule ran on samples k .. stop
+            return X[:stop + 1], U[:stop + 1], int(codes[stop])
+        k += m
+        if progress:
+            progress(k / n_steps)
+    U[n_steps] = U[n_steps - 1]
+    return X, U, 0
+
+
+def _run_chunks(setup, progress):
+    """The steps through CasADi's compiled chunks (``chunk_function``): where the C loop of
+    ``flight_kernel`` cannot be built (without a C compiler, CasADi's virtual machine)."""
     controller, P, schedule, X0 = setup.controller, setup.P, setup.schedule, setup.X0
     actuation, limits = setup.actuation, setup.limits
     chunk = chunk_function(controller, actuation, limits)

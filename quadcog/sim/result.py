@@ -7,6 +7,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import config
+from quadcog.numerics import row_norms
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -182,7 +183,7 @@ def position_errors(x: npt.NDArray[np.float64], ref: npt.NDArray[np.float64]
         |p - p_ref| (m); a diverged sample may overflow to inf, quietly.
     """
     with np.errstate(over="ignore", invalid="ignore"):
-        return np.linalg.norm(x[:, :3] - ref[:, :3], axis=1)
+        return row_norms(x[:, :3] - ref[:, :3])
 
 
 def flight_metrics(e: npt.NDArray[np.float64], tail: npt.NDArray[Any],
@@ -213,8 +214,11 @@ def flight_metrics(e: npt.NDArray[np.float64], tail: npt.NDArray[Any],
     """
     n = e.size if diverged_index is None else diverged_index
     e, tail = e[:n], np.asarray(tail[:n], dtype=bool)
-    return metrics_from_sums(n, float(e @ e), float(e.max()) if n else float("nan"),
-                             int(tail.sum()), float(e[tail] @ e[tail]),
+    # numpy's pairwise sums, not e @ e: BLAS's dot wakes its threads for a long e (slow on a
+    # busy machine, and its sum then depends on the thread count)
+    sq = e * e
+    return metrics_from_sums(n, float(np.sum(sq)), float(e.max()) if n else float("nan"),
+                             int(np.count_nonzero(tail)), float(np.sum(sq[tail])),
                              float(e[-1]) if n else float("nan"), diverged_at, cause, limits)
 
 

@@ -66,6 +66,9 @@ def _describe(trajectory):
 def _checked_reference(ref, t, trajectory):
     """``ref`` (N, 14) if every entry is finite and within +-REFERENCE_LIMIT, else InputError
     naming the trajectory, the first bad time and entry."""
+    # the common case without a temporary array: NaN fails both comparisons
+    if ref.size == 0 or (ref.max() <= REFERENCE_LIMIT and ref.min() >= -REFERENCE_LIMIT):
+        return ref
     with np.errstate(invalid="ignore"):
         bad = ~(np.abs(ref) <= REFERENCE_LIMIT)
     if bad.any():

@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import config
+from quadcog.numerics import row_norms
 from quadcog.trajectories.analytic import ACC, JERK
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -144,12 +145,15 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
     limits = reference_limits(vehicle, max_tilt)
     a, j = ref[:, ACC], ref[:, JERK]
     f = a + np.array([0.0, 0.0, vehicle.g])                     # specific thrust vector
-    size = np.linalg.norm(f, axis=1)
+    # row_norms and the sums written out: the bits of np.linalg.norm(., axis=1) and
+    # np.sum(., axis=1), in a fraction of their time (they loop per row of 3)
+    size = row_norms(f)
     safe = np.maximum(size, 1e-12)
     tilt = np.arccos(np.clip(f[:, 2] / safe, -1.0, 1.0))
-    along = np.sum(j * f, axis=1) / safe
-    j_perp = np.linalg.norm(j - along[:, None] * f / safe[:, None], axis=1)
+    along = (j[:, 0] * f[:, 0] + j[:, 1] * f[:, 1] + j[:, 2] * f[:, 2]) / safe
+    j_perp = row_norms(j - along[:, None] * f / safe[:, None])
     rate = j_perp / safe
+    a_size, j_size = row_norms(a).max(), row_norms(j).max()
     bad = {"thrust": size > limits.max_specific_thrust,
            "push": f[:, 2] <= 0,
            "tilt": tilt > limits.max_tilt,
@@ -160,7 +164,7 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
                      f"m/s^2)",
              "tilt": f"tilt of the thrust up to {math.degrees(tilt.max()):.3g} deg > "
                      f"{math.degrees(limits.max_tilt):.3g} deg",
-             "jerk": f"jerk {np.linalg.norm(j, axis=1).max():.3g} m/s^3 turns the thrust at "
+             "jerk": f"jerk {j_size:.3g} m/s^3 turns the thrust at "
                      f"up to {rate.max():.3g} rad/s > {limits.max_rate:.3g} rad/s"}
     any_bad = np.zeros(len(t), bool)
     for b in bad.values():
@@ -169,8 +173,7 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
     reason = "; ".join(words[k] for k, b in bad.items() if b.any()) or None
     return ReferenceCheck(
         feasible=not any_bad.any(),
-        max_acceleration=float(np.linalg.norm(a, axis=1).max()),
-        max_jerk=float(np.linalg.norm(j, axis=1).max()),
+        max_acceleration=float(a_size), max_jerk=float(j_size),
         max_specific_thrust=float(size.max()), min_vertical_thrust=float(f[:, 2].min()),
         max_tilt_deg=float(np.degrees(tilt.max())), max_rate=float(rate.max()),
         limits=limits, first_violation_t=first, reason=reason)
