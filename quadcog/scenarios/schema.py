@@ -6,6 +6,7 @@ from the constructors' annotations through the registries (``quadcog.trajectorie
 once. Each entry's check is a token of ``quadcog.scenarios.scenario``'s checker: a Python type,
 ``NUMBER`` or a string naming an array shape.
 """
+import functools
 import inspect
 from typing import Any
 
@@ -45,6 +46,7 @@ PAYLOAD = {"t": NUMBER, "action": str, "name": str, "mass": NUMBER, "position": 
 DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3"}
 
 
+@functools.lru_cache(maxsize=None)          # signatures do not change; sweeps ask per flight
 def _takes(cls: type, name: str) -> bool:
     """Whether ``cls``'s constructor (or a base's) has a parameter ``name``."""
     return any(name in inspect.signature(k.__dict__["__init__"]).parameters
