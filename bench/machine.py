@@ -13,8 +13,8 @@ import platform
 import time
 
 from quadcog.codegen.compiler import _compiler_identity, compile_library, find_compiler
-from quadcog.files import cpu_model
 import quadcog.codegen.vector_kernel as qk
+from quadcog.files import cpu_model
 
 __all__ = ["VECTOR_FEATURES", "fma_roofline", "loadavg", "machine"]
 

@@ -46,9 +46,13 @@ PAYLOAD = {"t": NUMBER, "action": str, "name": str, "mass": NUMBER, "position": 
 DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3"}
 
 
-@functools.lru_cache(maxsize=None)          # signatures do not change; sweeps ask per flight
 def _takes(cls: type, name: str) -> bool:
     """Whether ``cls``'s constructor (or a base's) has a parameter ``name``."""
+    return _takes_once(cls, name)
+
+
+@functools.lru_cache(maxsize=None)          # signatures do not change; sweeps ask per flight
+def _takes_once(cls: type, name: str) -> bool:
     return any(name in inspect.signature(k.__dict__["__init__"]).parameters
                for k in cls.__mro__ if "__init__" in k.__dict__)
 
