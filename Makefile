@@ -82,10 +82,12 @@ mutations: $(STAMP)
 	$(PY) bench/mutations.py $(MUTATIONS_ARGS)
 
 # The controllers as C99 modules (float32, double) in generated/embedded/, checked with strict
-# flags, run on a Cortex-M4 in QEMU; prints the cost table (needs $(ARM_PACKAGES)).
+# flags, run on a Cortex-M4 in QEMU; prints the cost table and writes it with the target-vs-host
+# differences to $(OUT)/embedded/costs.json (`python bench/publish.py embedded` puts them into
+# the docs); needs $(ARM_PACKAGES).
 ARM_PACKAGES := gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
 embedded: compile
-	$(PY) -m quadcog.embedded
+	$(PY) -m quadcog.embedded --out $(OUT)/embedded
 
 # The documentation site (MkDocs, Material, mkdocstrings) into $(OUT)/docs/; the reference pages
 # (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.

@@ -14,6 +14,7 @@ import time
 
 from quadcog.codegen.compiler import _compiler_identity, compile_library, find_compiler
 import quadcog.codegen.vector_kernel as qk
+from quadcog.files import cpu_model
 
 __all__ = ["VECTOR_FEATURES", "fma_roofline", "loadavg", "machine"]
 
@@ -37,16 +38,6 @@ def loadavg():
         return "unknown"
 
 
-def _cpu_model():
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith(("model name", "Model", "Hardware")):
-                return line.partition(":")[2].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
 def machine():
     """The machine, compiler and kernel build of this run.
 
@@ -60,7 +51,7 @@ def machine():
     feats = qk.cpu_features()
     cc = find_compiler()
     isa = qk.kernel_isa()
-    return {"cpu": _cpu_model(), "cores": os.cpu_count(), "machine": platform.machine(),
+    return {"cpu": cpu_model(), "cores": os.cpu_count(), "machine": platform.machine(),
             "features": " ".join(f for f in VECTOR_FEATURES if f in feats) or "none listed",
             "compiler": _compiler_identity(cc) if cc else "none", "isa": isa,
             "lanes": qk.lanes_for(isa),

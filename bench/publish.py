@@ -1,27 +1,51 @@
-"""Publish measured tables into the documentation pages: the block between
-``<!-- BEGIN <name> -->`` and ``<!-- END <name> -->`` of the block's page (``PAGES``) becomes
-the table of a file a command wrote, so the published numbers are copied from runs, never typed.
+"""Publish measured figures into the documentation pages, copied from the files that commands
+wrote, never typed:
 
-    python bench/publish.py bench  [FILE]   # default out/bench/results.md (make bench);
-                                            # also copies FILE to bench/results.md
-    python bench/publish.py paper  [FILE]   # default out/paper/readme_table.md (quadcog paper)
-    python bench/publish.py beyond [FILE]   # default out/paper/beyond/beyond.md (quadcog paper)
+- a table: the block between ``<!-- BEGIN <name> -->`` and ``<!-- END <name> -->`` of the page
+  ``PAGES[name]`` becomes the table of the file (a Markdown file's first table, a JSON file's
+  ``"table"``), and ``<!-- BEGIN <name>-machine -->`` the line that says where it ran;
+- a number in the prose of any page (README.md, docs/): ``<!-- value <name> <key> <format>
+  -->9.1e-13<!-- /value -->`` becomes the entry ``<key>`` of the JSON file (a ``/``-separated
+  path; list entries by index) in the Python format ``<format>`` (``.1e``, ``.0%``, ``d``;
+  ``.1f*100`` scales first: metres as centimetres). The page renders the number alone.
 
-tests/test_readme_numbers.py checks that the pages' blocks are those files' tables.
+Each file is also copied to ``COPIES[name]`` (tracked), which tests/test_readme_numbers.py
+checks every block and value against, so a page that disagrees with its command fails there.
+
+    python bench/publish.py bench    [FILE]   # default out/bench/results.md (make bench)
+    python bench/publish.py paper    [FILE]   # default out/paper/readme_table.md (quadcog paper)
+    python bench/publish.py beyond   [FILE]   # default out/paper/beyond/beyond.md (quadcog paper)
+    python bench/publish.py analysis [FILE]   # default out/analysis/analysis.json (quadcog analyze)
+    python bench/publish.py verify   [FILE]   # default out/report/verification.json (make report)
+    python bench/publish.py embedded [FILE]   # default out/embedded/costs.json (make embedded)
 """
+import json
 from pathlib import Path
 import re
 import shutil
 import sys
 
 ROOT = Path(__file__).resolve().parent.parent
-SOURCES = {"bench": ROOT / "out" / "bench" / "results.md",
-           "paper": ROOT / "out" / "paper" / "readme_table.md",
-           "beyond": ROOT / "out" / "paper" / "beyond" / "beyond.md"}
-# the page that holds each block
+OUT = ROOT / "out"
+SOURCES = {"bench": OUT / "bench" / "results.md",
+           "paper": OUT / "paper" / "readme_table.md",
+           "beyond": OUT / "paper" / "beyond" / "beyond.md",
+           "analysis": OUT / "analysis" / "analysis.json",
+           "verify": OUT / "report" / "verification.json",
+           "embedded": OUT / "embedded" / "costs.json"}
+# the page that holds each table block
 PAGES = {"bench": ROOT / "docs" / "performance.md",
          "paper": ROOT / "docs" / "tour" / "paper.md",
-         "beyond": ROOT / "docs" / "tour" / "beyond.md"}
+         "beyond": ROOT / "docs" / "tour" / "beyond.md",
+         "embedded": ROOT / "docs" / "tour" / "flight-controller.md"}
+# the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
+MEASURED = ROOT / "docs" / "measured"
+COPIES = {"bench": ROOT / "bench" / "results.md",
+          "analysis": MEASURED / "analysis.json",
+          "verify": MEASURED / "verification.json",
+          "embedded": MEASURED / "embedded.json"}
+VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
+                   r"(?P<text>[^<]*)<!-- /value -->")
 
 
 def table_of(text):
@@ -52,27 +76,87 @@ def machine_of(text):
     return ""
 
 
+def entry(data, key):
+    """The entry of JSON data at a ``/``-separated key (list entries by index)."""
+    for part in key.split("/"):
+        data = data[int(part)] if isinstance(data, list) else data[part]
+    return data
+
+
+def formatted(value, spec):
+    """``value`` in a Python format spec, ``SPEC*SCALE`` or ``SPEC/SCALE`` scaled first
+    (``.1f*100``: metres as centimetres), exponents as prose writes them (``1.8e-3``)."""
+    mo = re.fullmatch(r"(?P<spec>[^*/]*)(?:(?P<op>[*/])(?P<scale>[-\d.e]+))?", spec)
+    if mo.group("op"):
+        scale = float(mo.group("scale"))
+        value = value * scale if mo.group("op") == "*" else value / scale
+    return re.sub(r"e([+-])0*(\d)", lambda e: "e" + e.group(1).replace("+", "") + e.group(2),
+                  format(value, mo.group("spec")))
+
+
+def values(text, name, data):
+    """``text`` with every ``<!-- value name ... -->`` marker filled in from ``data``; and the
+    list of (key, shown, published) where the text showed another number."""
+    changed = []
+
+    def fill(mo):
+        if mo.group("name") != name:
+            return mo.group(0)
+        shown = formatted(entry(data, mo.group("key")), mo.group("format"))
+        if shown != mo.group("text"):
+            changed.append((mo.group("key"), mo.group("text"), shown))
+        return mo.group(0).replace(f"-->{mo.group('text')}<!--", f"-->{shown}<!--", 1)
+
+    return VALUE.sub(fill, text), changed
+
+
+def read(source):
+    """(table, machine line, JSON data or None) of a file a command wrote."""
+    text = Path(source).read_text()
+    if Path(source).suffix == ".json":
+        data = json.loads(text)
+        return data.get("table", ""), data.get("machine", ""), data
+    return table_of(text), machine_of(text), None
+
+
 def publish(name, source, readme=None):
     """Replace block ``name`` of ``readme`` (default: its page, ``PAGES[name]``) by the table
-    of ``source``."""
-    readme = Path(readme) if readme is not None else PAGES[name]
-    table = table_of(Path(source).read_text())
-    if not table:
-        raise SystemExit(f"{source}: no Markdown table")
-    text = readme.read_text()
-    block(text, name)                       # the markers must exist
-    text = re.sub(rf"(<!-- BEGIN {name} -->\n).*?(\n<!-- END {name} -->)",
-                  lambda mo: mo.group(1) + table + mo.group(2), text, flags=re.S)
-    if f"<!-- BEGIN {name}-machine -->" in text:   # the machine the figures came from
-        machine = machine_of(Path(source).read_text())
-        text = re.sub(rf"(<!-- BEGIN {name}-machine -->\n).*?(<!-- END {name}-machine -->)",
-                      lambda mo: mo.group(1) + machine + "\n" + mo.group(2), text, flags=re.S)
-    readme.write_text(text)
-    if name == "bench":
-        target = ROOT / "bench" / "results.md"
+    of ``source``, fill in the values of ``source`` on every page (with ``readme`` given: on
+    that page only) and copy ``source`` to ``COPIES[name]``."""
+    table, machine, data = read(source)
+    page = Path(readme) if readme is not None else PAGES.get(name)
+    if page is not None and (name in PAGES or f"<!-- BEGIN {name} -->" in page.read_text()):
+        table = table_of(table)
+        if not table:
+            raise SystemExit(f"{source}: no Markdown table")
+        text = page.read_text()
+        block(text, name)                       # the markers must exist
+        text = re.sub(rf"(<!-- BEGIN {name} -->\n).*?(\n<!-- END {name} -->)",
+                      lambda mo: mo.group(1) + table + mo.group(2), text, flags=re.S)
+        if f"<!-- BEGIN {name}-machine -->" in text:   # the machine the figures came from
+            text = re.sub(rf"(<!-- BEGIN {name}-machine -->\n).*?(<!-- END {name}-machine -->)",
+                          lambda mo: mo.group(1) + machine + "\n" + mo.group(2), text, flags=re.S)
+        page.write_text(text)
+        print(f"{page}: block {name} now holds the table of {source}")
+    if data is not None:
+        for each in [Path(readme)] if readme is not None else pages():
+            text, changed = values(each.read_text(), name, data)
+            if changed:
+                each.write_text(text)
+            for key, old, new in changed:
+                print(f"{each}: {name} {key}: {old} -> {new}")
+    if name in COPIES:
+        target = COPIES[name]
         if Path(source).resolve() != target.resolve():
+            target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(source, target)
-    print(f"{readme}: block {name} now holds the table of {source}")
+
+
+def pages():
+    """The pages that may hold values: those whose blocks the tests run."""
+    sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+    from tests.test_docs_examples import pages as docs_pages
+    return docs_pages()
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ import sys
 import tempfile
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]       # tests/: its conftest, as pytest has it
 
 from tests.test_docs_examples import blocks_of, pages, run_block  # noqa: E402
 

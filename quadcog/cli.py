@@ -348,7 +348,9 @@ def cmd_export(args: argparse.Namespace) -> None:
     if args.scenario is None:
         if args.overrides:
             raise QuadcogError("--set needs --scenario (the keys of a scenario file)")
-        paths = export_controller(args.controller, args.precision, _out_dir(args.out))
+        paths = export_controller(args.controller, args.precision, _out_dir(args.out),
+                                  command=f"quadcog export --controller {args.controller} "
+                                          f"--precision {args.precision} --out DIR")
     else:
         from quadcog.scenarios.scenario import load_scenario
         scenario = load_scenario(args.scenario, args.overrides)

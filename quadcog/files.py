@@ -15,6 +15,7 @@ import math
 import numbers
 import os
 from pathlib import Path
+import platform
 import signal
 import threading
 from types import TracebackType
@@ -26,7 +27,7 @@ import numpy.typing as npt
 from quadcog.errors import QuadcogError
 
 __all__ = ["CSV_BLOCK", "CSV_DECIMALS", "plain_value", "strict_json", "rounded", "write_csv",
-           "plot_text", "RunFiles", "atomic_write"]
+           "plot_text", "RunFiles", "atomic_write", "cpu_model", "run_stamp"]
 
 CSV_BLOCK = 1024            # rows formatted at a time
 CSV_DECIMALS = 10           # values are rounded to this many decimals ...
@@ -287,3 +288,35 @@ def atomic_write(path: str | os.PathLike[str], text: str) -> None:
     finally:
         with contextlib.suppress(OSError):
             tmp.unlink()
+
+
+def cpu_model() -> str:
+    """The CPU's model name, as /proc/cpuinfo gives it.
+
+    Returns
+    -------
+    str
+        E.g. "AMD EPYC 7763 64-Core Processor"; ``platform.processor()`` or the architecture
+        where there is no /proc/cpuinfo.
+    """
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith(("model name", "Model", "Hardware")):
+                return line.partition(":")[2].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def run_stamp() -> str:
+    """Where and when a run measured: the line a command writes beside its figures, which the
+    documentation copies with them (``bench/publish.py``).
+
+    Returns
+    -------
+    str
+        E.g. "on AMD EPYC 7763 64-Core Processor (x86_64), 2 cores, 2026-12-01".
+    """
+    import datetime
+    day = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d")
+    return f"on {cpu_model()} ({platform.machine()}), {os.cpu_count()} cores, {day}"

@@ -9,6 +9,7 @@ the settings are written once, in the constructors' signatures, and the scenario
 """
 from collections.abc import Sequence
 import enum
+import functools
 import typing
 from typing import Annotated, Any
 
@@ -82,6 +83,13 @@ def settings_of(owner: type, skip: Sequence[str] = ()) -> dict[str, Kind]:
     dict of str to Kind
         {name: kind} in signature order, the subclass's own settings first.
     """
+    return dict(_settings(owner, tuple(skip)))
+
+
+# a class's annotations do not change: read them once (a sweep validates thousands of
+# scenarios, and get_type_hints is most of that time)
+@functools.lru_cache(maxsize=None)
+def _settings(owner: type, skip: tuple[str, ...]) -> dict[str, Kind]:
     out: dict[str, Kind] = {}
     for klass in owner.__mro__:
         init = klass.__dict__.get("__init__")

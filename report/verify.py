@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 import quadcog
+from quadcog.files import run_stamp, strict_json
 from report.identities import SEED, run
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -81,6 +82,18 @@ def table(results, seed, backend, seconds):
     return "\n".join(lines) + "\n"
 
 
+def summary(results, points, seed, seconds):
+    """The run's figures as JSON data: each identity's error and bound, the largest error of
+    the "max" kind and where the run was made (``quadcog.files.run_stamp``)."""
+    errors = [r.value for r in results if not r.skipped and r.check.kind != "min"]
+    return {"machine": f"run {run_stamp()}", "points": points, "seed": seed,
+            "seconds": seconds, "n_identities": len(results),
+            "largest_error": max(errors), "all_ok": all(r.ok for r in results),
+            "identities": [{"identity": r.check.tex, "kind": r.check.kind, "value": r.value,
+                            "bound": r.check.bound, "ok": r.ok, "skipped": r.skipped}
+                           for r in results]}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m report.verify", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -97,6 +110,8 @@ def main(argv=None):
     seconds = time.perf_counter() - t0
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(table(results, args.seed, model.backend, seconds))
+    figures = args.out.with_suffix(".json")      # the same figures for the docs (bench/publish.py)
+    figures.write_text(strict_json(summary(results, args.points, args.seed, seconds)))
     failed = [r for r in results if not r.ok]
     for r in results:
         status = "skipped" if r.skipped else ("ok" if r.ok else "FAILED")

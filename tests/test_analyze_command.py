@@ -58,3 +58,25 @@ def test_failure_map_grid(analysis):
     for name in ("pd", "fl", "adaptive"):
         tail = fm[f"{name}_tail_rms"]
         assert np.isnan(tail).sum() == 8 and tail[1, 1] < 1e-6, name
+
+
+def test_the_docs_numbers_are_this_commands(analysis):
+    """The numbers docs/tour/analysis.md quotes from `quadcog analyze` (marked
+    ``<!-- value analysis ... -->``, bench/publish.py) that do not depend on the failure map's
+    grid and length are what this run prints: the margins, the zero dynamics, the Lyapunov
+    study. (The failure-map figures are checked against the published run in
+    tests/test_readme_numbers.py.)"""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("publish", ROOT / "bench" / "publish.py")
+    pub = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(pub)
+    _, a = analysis
+    page = (ROOT / "docs" / "tour" / "analysis.md").read_text()
+    checked = 0
+    for mo in pub.VALUE.finditer(page):
+        key = mo.group("key")
+        if mo.group("name") != "analysis" or key.split("/")[0] in ("failure_map", "machine"):
+            continue
+        assert pub.formatted(pub.entry(a, key), mo.group("format")) == mo.group("text"), key
+        checked += 1
+    assert checked >= 10

@@ -41,7 +41,7 @@ def _project_files():
     from pathlib import Path
     root = Path(__file__).resolve().parent.parent
     skip = {".git", ".venv", "out", "build", "dist", "__pycache__", ".pytest_cache", ".ruff_cache",
-            ".mypy_cache"}
+            ".mypy_cache", ".hypothesis"}
     paths = []
     for folder, dirs, files in os.walk(root):        # not into the skipped folders at all
         top = Path(folder) == root

@@ -98,3 +98,25 @@ def test_cost(runs):
     assert runs["adaptive", "float32"]["target"][2]["instructions_max"] <= 10000
     assert (runs["adaptive", "double"]["target"][2]["instructions_mean"]
             > 5 * runs["adaptive", "float32"]["target"][2]["instructions_mean"])
+
+
+def test_published_costs_are_these_runs(runs):
+    """The cost table of docs/tour/flight-controller.md (docs/measured/embedded.json, copied
+    from `make embedded` by bench/publish.py) is what these runs measure: sizes, stack and
+    the instruction counts, which QEMU's -icount makes exact on any host."""
+    import json
+    published = json.loads((Path(__file__).resolve().parent.parent / "docs" / "measured"
+                            / "embedded.json").read_text())
+    seen = set()
+    for row in published["rows"]:
+        r = runs[row["controller"], row["precision"]]
+        size, info = r["size"], r["target"][2]
+        measured = dict(flash=size["text"] + size["data"], ram=size["data"] + size["bss"],
+                        stack_static=size["stack"], stack_measured=info["stack_bytes"],
+                        instructions_mean=info["instructions_mean"],
+                        instructions_max=info["instructions_max"])
+        assert {k: row[k] for k in measured} == measured, (
+            f"{row['controller']} {row['precision']}: the published costs are not this run's; "
+            "run make embedded, then python bench/publish.py embedded")
+        seen.add((row["controller"], row["precision"]))
+    assert seen == set(runs)

@@ -1,5 +1,7 @@
 """generated/ is what derive/ produces, byte for byte, whatever the hash seed; the commands
-``python -m derive --if-stale`` and ``--check`` end to end (two derivations in all)."""
+``python -m derive --if-stale`` and ``--check`` end to end. One derivation in all: the
+``--if-stale`` run of a stale copy (in the background, from collection on), whose output is then
+what ``--check`` compares (its own derivation replaced by a copy of that one)."""
 import json
 import os
 from pathlib import Path
@@ -7,6 +9,7 @@ import shutil
 import subprocess
 import sys
 
+from conftest import background_dir, background_job, background_result
 import pytest
 
 from derive.compare import diff_trees, is_foreign
@@ -39,26 +42,52 @@ def test_if_stale_skips_a_fresh_folder(tmp_path):
     assert {p: p.stat().st_mtime_ns for p in fresh.rglob("*") if p.is_file()} == before
 
 
-@pytest.mark.slow              # one derivation (SymPy), about 5 s
-def test_if_stale_regenerates_to_generated(tmp_path):
+def _rederive():
+    """The one derivation: ``--if-stale`` of a stale copy, under another hash seed than the
+    default (generated/ was written under a random one)."""
+    stale = _stale_copy(background_dir("golden") / "gen")
+    return lambda: (_derive("--if-stale", "--out", stale, "--quiet", seed=4242), stale)
+
+
+background_job("golden: derive a stale copy", __file__, "rederived", _rederive, lane="derive")
+
+
+@pytest.fixture(scope="module")
+def rederived():
+    """(the finished --if-stale run, the folder it rewrote)."""
+    return background_result("golden: derive a stale copy")
+
+
+@pytest.mark.slow              # one derivation (SymPy), about 9 s of CPU
+def test_if_stale_regenerates_to_generated(rederived):
     """An edited file makes the folder stale; --if-stale derives it again, and the result is
-    generated/ byte for byte: generated/ is fresh."""
-    stale = _stale_copy(tmp_path / "gen")
-    res = _derive("--if-stale", "--out", stale, "--quiet", seed=1)
+    generated/ byte for byte: generated/ is fresh, whatever the hash seed."""
+    res, folder = rederived
     assert res.returncode == 0, res.stderr
-    diff = diff_trees(GENERATED, stale)
+    diff = diff_trees(GENERATED, folder)
     assert not diff, f"generated/ is stale; run `make derive`. Diff:\n{diff}"
 
 
-@pytest.mark.slow              # one derivation (SymPy), about 5 s
-def test_check_reports_a_stale_file_with_a_diff(tmp_path):
-    """--check (under another hash seed) writes nothing, exits 1 and shows a unified diff of
-    the one changed line and nothing else: the derivation does not depend on the seed."""
+@pytest.mark.slow
+def test_check_reports_a_stale_file_with_a_diff(rederived, tmp_path, monkeypatch, capsys):
+    """--check writes nothing, exits 1 and shows a unified diff of the one changed line and
+    nothing else. Its derivation is the one above (copied in place of a second run), so this
+    checks what --check does with a derivation: the comparison, the message, no writes."""
+    import derive.__main__ as cli
+    res, folder = rederived
+    assert res.returncode == 0, res.stderr
+    derived = []
+
+    def generate(out, echo):
+        derived.append(out)
+        shutil.copytree(folder, out, dirs_exist_ok=True)
+
+    monkeypatch.setattr(cli, "generate", generate)
     stale = _stale_copy(tmp_path / "gen")
     before = (stale / "report.tex").read_bytes()
-    res = _derive("--check", "--out", stale, "--quiet", seed=4242)
-    assert res.returncode == 1, (res.stdout, res.stderr)
-    diff = res.stderr
+    assert cli.main(["--check", "--out", str(stale), "--quiet"]) == 1
+    assert len(derived) == 1 and Path(derived[0]) != stale     # derived elsewhere
+    diff = capsys.readouterr().err
     assert "is stale; run `make derive`" in diff
     assert "-\\section{Kinematix}" in diff and "+\\section{Kinematics}" in diff
     changed = [line for line in diff.splitlines()

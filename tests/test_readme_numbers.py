@@ -64,3 +64,70 @@ def test_bench_figures_name_their_machine():
     machine = pub.block(page, "bench-machine")
     assert machine == pub.machine_of((ROOT / "bench" / "results.md").read_text())
     assert "cores" in machine and "20" in machine
+
+
+# -- numbers in the prose: <!-- value NAME KEY FORMAT -->...<!-- /value --> (bench/publish.py) --
+
+def _markers():
+    """(page, name, key, format, text) of every value marker of the pages the tests run."""
+    from test_docs_examples import pages
+    pub = _publish()
+    return [(page, mo.group("name"), mo.group("key"), mo.group("format"), mo.group("text"))
+            for page in pages() for mo in pub.VALUE.finditer(page.read_text())]
+
+
+def test_every_number_marked_in_the_prose_is_its_commands():
+    """Each number marked on a page is the entry of the file its command wrote (the tracked
+    copy, docs/measured/), in the marker's format: a number edited by hand, or a run
+    published without the pages, fails here."""
+    import json
+    pub = _publish()
+    markers = _markers()
+    assert {"analysis", "verify", "embedded"} <= {m[1] for m in markers} and len(markers) >= 25
+    wrong = []
+    for page, name, key, fmt, text in markers:
+        assert name in pub.COPIES, f"{page}: no published file for value {name!r}"
+        shown = pub.formatted(pub.entry(json.loads(pub.COPIES[name].read_text()), key), fmt)
+        if shown != text:
+            wrong.append(f"{page.name}: {name} {key}: the page says {text!r}, the run {shown!r}")
+    assert not wrong, ("\n".join(wrong) + "\n(after a new run: python bench/publish.py NAME)")
+
+
+def test_every_published_file_names_its_machine():
+    """The tracked copies say where and when they ran (the benchmark figures' machine), and
+    the pages show that line beside the figures."""
+    pub = _publish()
+    for name, copy in pub.COPIES.items():
+        _, machine, _ = pub.read(copy)
+        assert "cores" in machine and "20" in machine, (name, machine)
+    page = pub.PAGES["embedded"].read_text()
+    table, machine, _ = pub.read(pub.COPIES["embedded"])
+    assert pub.block(page, "embedded") == pub.table_of(table)
+    assert pub.block(page, "embedded-machine") == machine
+
+
+def test_publish_fills_in_the_values_of_a_run(tmp_path):
+    """publish() rewrites the text of each marker of its name (not of another name) from the
+    JSON a command wrote, formats and scales as the marker says, and copies the file."""
+    import json
+    pub = _publish()
+    src = tmp_path / "run.json"
+    src.write_text(json.dumps({"machine": "on a test machine, 2 cores, 2026-01-01",
+                               "a": {"b": [0.5, 0.0123]}, "n": 437, "e": 0.00181}))
+    page = tmp_path / "page.md"
+    page.write_text("x <!-- value run a/b/1 .2f*100 -->9.99<!-- /value --> cm, "
+                    "<!-- value run n d -->1<!-- /value --> of them, "
+                    "<!-- value run a/b/0 .0% -->?<!-- /value -->, "
+                    "<!-- value run e .1e -->0<!-- /value -->, "
+                    "<!-- value other n d -->7<!-- /value -->\n")
+    pub.COPIES["run"] = tmp_path / "copy" / "run.json"
+    try:
+        pub.publish("run", src, page)
+    finally:
+        del pub.COPIES["run"]
+    assert page.read_text() == ("x <!-- value run a/b/1 .2f*100 -->1.23<!-- /value --> cm, "
+                                "<!-- value run n d -->437<!-- /value --> of them, "
+                                "<!-- value run a/b/0 .0% -->50%<!-- /value -->, "
+                                "<!-- value run e .1e -->1.8e-3<!-- /value -->, "
+                                "<!-- value other n d -->7<!-- /value -->\n")
+    assert (tmp_path / "copy" / "run.json").read_text() == src.read_text()

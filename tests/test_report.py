@@ -127,6 +127,22 @@ def test_verification_values_are_the_run_values(model):
     assert r"\textbf{FAILED}" in verify.table([bad], 3, "c", 0.1)
 
 
+def test_verification_figures_for_the_docs(model):
+    """verification.json (what docs/tour/report.md quotes, through its tracked copy
+    docs/measured/verification.json) holds each identity's error, the largest of the "max"
+    kind and the machine; the published copy lists the identities there are now."""
+    import json
+    results = identities.run(5, seed=3, model=model)
+    data = verify.summary(results, 5, 3, 0.1)
+    errors = [r.value for r in results if not r.skipped and r.check.kind == "max"]
+    assert data["largest_error"] == max(errors) > 0
+    assert [i["identity"] for i in data["identities"]] == [c.tex for c in identities.CHECKS]
+    assert data["n_identities"] == len(identities.CHECKS) and "cores" in data["machine"]
+    published = json.loads((ROOT / "docs" / "measured" / "verification.json").read_text())
+    assert [i["identity"] for i in published["identities"]] == [c.tex for c in identities.CHECKS], (
+        "report/identities.py changed: make report && python bench/publish.py verify")
+
+
 def test_generated_report_has_no_run_numbers():
     """generated/report.tex is deterministic: the run's results are \\input from files."""
     text = REPORT.read_text()

@@ -185,3 +185,22 @@ def test_export_a_scenario_controller_with_your_own_vehicle_and_gains(tmp_path, 
     assert main(["export", "--controller", "pd", "--set", "vehicle.m=1", "--out",
                  str(tmp_path / "x")]) == 2
     assert "--set needs --scenario" in capsys.readouterr().err
+
+
+def test_the_exported_files_name_what_wrote_them(tmp_path):
+    """The first line of an exported file names its writer: the `quadcog export` command line,
+    the Python call, or `make embedded` for generated/embedded/ (not `make embedded` always)."""
+    from quadcog.embedded import export_controller
+    from quadcog.embedded.make_embedded import embedded_dir
+    assert main(["export", "--controller", "pd", "--precision", "double", "--out",
+                 str(tmp_path / "cli")]) == 0
+    export_controller("pd", "double", tmp_path / "py")
+    first = {where: {f: (tmp_path / where / f).read_text().splitlines()[0]
+                     for f in ("quadcog_pd.h", "quadcog_pd.c")} for where in ("cli", "py")}
+    for line in first["cli"].values():
+        assert line.startswith("/* DO NOT EDIT: written by `quadcog export --controller pd "
+                               "--precision double --out DIR` from"), line
+    for line in first["py"].values():
+        assert "written by `quadcog.embedded.export_controller('pd', 'double')`" in line, line
+    shipped = (embedded_dir() / "double" / "quadcog_pd.h").read_text().splitlines()[0]
+    assert "written by `make embedded`" in shipped and "quadcog export" not in shipped

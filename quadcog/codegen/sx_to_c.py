@@ -14,8 +14,8 @@ type, never as _Bool or int temporaries: a select vectorizes, and it is valid C9
 flight controller.
 """
 from collections.abc import Callable
+from dataclasses import dataclass
 import re
-from typing import NamedTuple
 
 import casadi as ca
 import numpy as np
@@ -65,7 +65,8 @@ SELECTS = {
 CALL = re.compile(r"^(\w+)\{f\}\((.*)\)$")
 
 
-class Target(NamedTuple):
+@dataclass(frozen=True)
+class Target:
     """What the C of one target differs in.
 
     Parameters
@@ -86,7 +87,8 @@ class Target(NamedTuple):
     error: type[QuadcogError] = QuadcogError
 
 
-class Walk(NamedTuple):
+@dataclass(frozen=True)
+class Walk:
     """The C of an SX Function.
 
     Parameters

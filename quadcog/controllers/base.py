@@ -15,6 +15,7 @@ interface a Python controller of your own implements; every Controller satisfies
 """
 from collections import OrderedDict
 from collections.abc import Hashable, Sequence
+import inspect
 from typing import Any
 
 import casadi as ca
@@ -64,10 +65,11 @@ class Controller:
 
     Parameters
     ----------
-    *args, **kwargs : Any
-        The constructor's arguments, kept to redesign the same controller for another model
-        (``for_vehicle``): ``vehicle`` and ``model`` as in ``__init__``, and a subclass's
-        settings as keywords.
+    vehicle : Vehicle, optional
+        The controller's model of the vehicle (default: the Hummingbird with r_G = 0).
+    model : quadcog.model.functions.Model, optional
+        The generated functions (default ``quadcog.load()``). These and a subclass's settings
+        are kept to redesign the same controller for another model (``for_vehicle``).
 
     Attributes
     ----------
@@ -390,3 +392,8 @@ class Controller:
             p = ca.SX(ca.DM(self.nominal))
             return ca.vertcat(p[:11], r)
         return with_cog(self.nominal, r)
+
+
+# inspect.signature (numpydoc) reads __new__ before __init__ when a class defines both: show
+# what a caller passes, __init__'s parameters, as griffe (the API pages) does
+Controller.__new__.__signature__ = inspect.signature(Controller.__init__)  # type: ignore[attr-defined]

@@ -16,14 +16,16 @@ from quadcog.embedded import target
 from quadcog.embedded.controller_export import render
 from quadcog.embedded.emit import PRECISIONS
 from quadcog.embedded.host import build_host_library
+from quadcog.files import atomic_write, run_stamp, strict_json
 from quadcog.paths import generated_dir
 
-__all__ = ["CONTROLLERS", "RECORDING", "embedded_dir", "command", "render_all", "check",
-           "write", "recording", "target_costs", "cost_table", "main"]
+__all__ = ["CONTROLLERS", "RECORDING", "embedded_dir", "COMMAND", "render_all", "check",
+           "write", "recording", "target_costs", "cost_table", "write_costs", "main"]
 
 # The paper's three laws; controllers added to CONTROLLERS later export the same way.
 CONTROLLERS = controller_names()
 RECORDING = ("fig6", 900, 2900)      # scenario, first and end step: 2 s around the CoG step
+COMMAND = "make embedded"            # what the committed modules name as their writer
 
 
 def embedded_dir() -> Path:
@@ -35,24 +37,6 @@ def embedded_dir() -> Path:
         ``generated/embedded/`` (``quadcog/_generated/embedded/`` when installed).
     """
     return Path(generated_dir()) / "embedded"
-
-
-def command(name: str, precision: str) -> str:
-    """The command a header names as the one that exported it.
-
-    Parameters
-    ----------
-    name : str
-        The controller's short name.
-    precision : str
-        'float32' or 'double'.
-
-    Returns
-    -------
-    str
-        The ``quadcog export`` command line.
-    """
-    return f"quadcog export --controller {name} --precision {precision} --out DIR"
 
 
 def render_all(names: Sequence[str] = CONTROLLERS) -> dict[str, str]:
@@ -72,7 +56,7 @@ def render_all(names: Sequence[str] = CONTROLLERS) -> dict[str, str]:
     for name in names:
         ctl = make_controller(name)
         for precision in PRECISIONS:
-            for fname, text in render(ctl, precision, name, command(name, precision)).items():
+            for fname, text in render(ctl, precision, name, COMMAND).items():
                 files[f"{precision}/{fname}"] = text
     return files
 
@@ -257,6 +241,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                     help="only compare generated/embedded/ with the exporter; write nothing")
     ap.add_argument("--no-target", action="store_true",
                     help="skip the Cortex-M4 build and the QEMU runs")
+    ap.add_argument("--out", type=Path, default=Path("out") / "embedded",
+                    help="folder for costs.json, the cost table and the target-vs-host "
+                         "differences (default out/embedded; bench/publish.py embedded copies "
+                         "them into the docs)")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     files = render_all()
@@ -298,4 +286,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     if rows[0]["calibration"][0] != rows[0]["calibration"][1]:
         print("the instruction count is not exact: the calibration loop was miscounted")
         bad += 1
+    write_costs(rows, args.out / "costs.json")
+    print(f"wrote {args.out / 'costs.json'}")
     return 1 if bad else 0
+
+
+def write_costs(rows: Sequence[dict[str, Any]], path: str | os.PathLike[str]) -> None:
+    """Write the target run's figures as JSON: the machine, the cost table (Markdown), each
+    row, and per precision the largest target-vs-host difference (the figures the docs quote).
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        The rows of ``target_costs``.
+    path : str or os.PathLike
+        The JSON file (its folder is created).
+    """
+    def largest(precision, key, composite):
+        return max(r[key] for r in rows if r["precision"] == precision
+                   and (r["controller"] == "composite") == composite)
+
+    summary = {
+        "machine": f"QEMU {target.BOARD} (-icount shift=0), run {run_stamp()}",
+        "table": cost_table(rows),
+        "rows": [{k: v for k, v in r.items()} for r in rows],
+        # composite has a tolerance of its own (its filters accumulate): apart from the others
+        "largest": {precision: {key: largest(precision, key, False)
+                                for key in ("max_U_diff", "max_c_diff", "rel_diff")}
+                    for precision in PRECISIONS},
+        "composite": {precision: {key: largest(precision, key, True)
+                                  for key in ("max_U_diff", "max_c_diff", "rel_diff")}
+                      for precision in PRECISIONS},
+    }
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, strict_json(summary))

@@ -18,7 +18,8 @@ with ``_`` for ``/`` and without ``^`` (``acceleration_x_m_s2``); a scalar signa
 component (``roll_rad``, ``battery_voltage_V``), a dimensionless one no unit
 (``motor_command_m1``). Time is ``t_s``.
 """
-from typing import Iterable, NamedTuple
+from dataclasses import dataclass
+from typing import Iterable
 
 __all__ = ["LOG_FORMATS", "SIGNALS", "SignalSpec", "TIME_COLUMN", "signal_columns",
            "table_columns", "unit_token"]
@@ -29,7 +30,8 @@ LOG_FORMATS = ("crazyflie-usd", "ulog", "csv", "parquet")
 TIME_COLUMN = "t_s"
 
 
-class SignalSpec(NamedTuple):
+@dataclass(frozen=True)
+class SignalSpec:
     """One standard signal: the shape of one sample, its unit, what it means, its components.
 
     Parameters

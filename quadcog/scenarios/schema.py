@@ -6,6 +6,7 @@ from the constructors' annotations through the registries (``quadcog.trajectorie
 once. Each entry's check is a token of ``quadcog.scenarios.scenario``'s checker: a Python type,
 ``NUMBER`` or a string naming an array shape.
 """
+import functools
 import inspect
 from typing import Any
 
@@ -47,6 +48,11 @@ DISTURBANCE = {"t": NUMBER, "duration": NUMBER, "force": "vec3", "moment": "vec3
 
 def _takes(cls: type, name: str) -> bool:
     """Whether ``cls``'s constructor (or a base's) has a parameter ``name``."""
+    return _takes_once(cls, name)
+
+
+@functools.lru_cache(maxsize=None)          # signatures do not change; sweeps ask per flight
+def _takes_once(cls: type, name: str) -> bool:
     return any(name in inspect.signature(k.__dict__["__init__"]).parameters
                for k in cls.__mro__ if "__init__" in k.__dict__)
 

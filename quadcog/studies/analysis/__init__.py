@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from quadcog import config
+from quadcog.files import run_stamp
 from quadcog.model.conventions import IDX
 from quadcog.studies.analysis.adaptive_design import design_checks, lyapunov_study, plot_lyapunov
 from quadcog.studies.analysis.analysis_files import write_json, write_latex, write_markdown
@@ -253,6 +254,7 @@ def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = Tr
         "timing": timing,
     }
     summary["seconds"] = time.perf_counter() - t0
+    summary["machine"] = f"run {run_stamp()}"          # the timings above came from it
     write_json(summary, out / "analysis.json")
     write_markdown(summary, out / "analysis.md")
     write_latex(summary, out / "report_fragment.tex")
