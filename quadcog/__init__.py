@@ -13,6 +13,7 @@ from quadcog.controllers import (
                                  Controller,
                                  FeedbackLinearization,
                                  FeedbackLinearizationIntegral,
+                                 PayloadAdaptive,
                                  make_controller,
 )
 from quadcog.errors import (
@@ -62,7 +63,7 @@ __all__ = [
     "Linearization", "Model",
     "load", "check_parameters", "inertia_about_cog", "with_cog", "CRAZYFLIE", "HUMMINGBIRD",
     "Vehicle", "default_parameters", "plus_layout", "x_layout", "AdaptiveFeedbackLinearization",
-    "CascadePD", "CompositeAdaptive", "Controller", "FeedbackLinearization",
+    "CascadePD", "CompositeAdaptive", "Controller", "FeedbackLinearization", "PayloadAdaptive",
     "FeedbackLinearizationIntegral", "make_controller", "TruthOptions", "Sensed", "Sensing",
     "Metrics", "SimulationResult", "BatchResult", "simulate_batch", "DivergenceCause", "Limits",
     "simulate", "sweep", "CogChange", "CogProfile", "Disturbance", "Circle", "Figure8",
