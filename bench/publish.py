@@ -6,6 +6,7 @@ the table of a file a command wrote, so the published numbers are copied from ru
                                             # also copies FILE to bench/results.md
     python bench/publish.py paper  [FILE]   # default out/paper/readme_table.md (quadcog paper)
     python bench/publish.py beyond [FILE]   # default out/paper/beyond/beyond.md (quadcog paper)
+    python bench/publish.py targets [FILE]  # default out/targets/targets.md (quadcog targets)
 
 tests/test_readme_numbers.py checks that the pages' blocks are those files' tables.
 """
@@ -17,11 +18,13 @@ import sys
 ROOT = Path(__file__).resolve().parent.parent
 SOURCES = {"bench": ROOT / "out" / "bench" / "results.md",
            "paper": ROOT / "out" / "paper" / "readme_table.md",
-           "beyond": ROOT / "out" / "paper" / "beyond" / "beyond.md"}
+           "beyond": ROOT / "out" / "paper" / "beyond" / "beyond.md",
+           "targets": ROOT / "out" / "targets" / "targets.md"}
 # the page that holds each block
 PAGES = {"bench": ROOT / "docs" / "performance.md",
          "paper": ROOT / "docs" / "tour" / "paper.md",
-         "beyond": ROOT / "docs" / "tour" / "beyond.md"}
+         "beyond": ROOT / "docs" / "tour" / "beyond.md",
+         "targets": ROOT / "docs" / "targets.md"}
 
 
 def table_of(text):
