@@ -8,7 +8,8 @@ generated functions (``parameters()``) and the mixer ``U = mixer() @ f`` from ro
 
 Three vehicles ship, nearly two orders of magnitude apart in mass: ``HUMMINGBIRD`` (AscTec
 Hummingbird, 0.68 kg, "+" layout, the default), ``CRAZYFLIE`` (Bitcraze Crazyflie 2.0, 27 g,
-"X" layout) and ``X500`` (Holybro X500 as in PX4's Gazebo model, 2 kg, "X" layout). Any planar layout of four rotors is data:
+"X" layout) and ``X500`` (Holybro X500 as in PX4's Gazebo model, 2 kg, "X" layout). Any
+planar layout of four rotors is data:
 ``Vehicle(..., rotor_positions=x_layout(0.225), rotor_directions=(1, -1, 1, -1), ...)``.
 
 Frames: body x forward, z up (thrust along +z at O), so a rotor at (x_i, y_i) with thrust f_i
