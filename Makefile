@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded docs clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded docs targets clean
 
 OUT ?= out
 
@@ -59,6 +59,12 @@ report: $(STAMP)
 
 analyze: compile
 	$(PY) -m quadcog analyze --out $(OUT)/analysis
+
+# The controllers' default settings on every preset against the targets (docs/targets.md):
+# about a minute and a half; the page's table is copied from the run.
+targets: compile
+	$(PY) -m quadcog targets --out $(OUT)/targets
+	$(PY) bench/publish.py targets $(OUT)/targets/targets.md
 
 test: $(STAMP)
 	$(PY) -m pytest

@@ -18,6 +18,7 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py analysis [FILE]   # default out/analysis/analysis.json (quadcog analyze)
     python bench/publish.py verify   [FILE]   # default out/report/verification.json (make report)
     python bench/publish.py embedded [FILE]   # default out/embedded/costs.json (make embedded)
+    python bench/publish.py targets  [FILE]   # default out/targets/targets.md (quadcog targets)
 """
 import json
 from pathlib import Path
@@ -32,12 +33,14 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            "beyond": OUT / "paper" / "beyond" / "beyond.md",
            "analysis": OUT / "analysis" / "analysis.json",
            "verify": OUT / "report" / "verification.json",
-           "embedded": OUT / "embedded" / "costs.json"}
+           "embedded": OUT / "embedded" / "costs.json",
+           "targets": OUT / "targets" / "targets.md"}
 # the page that holds each table block
 PAGES = {"bench": ROOT / "docs" / "performance.md",
          "paper": ROOT / "docs" / "tour" / "paper.md",
          "beyond": ROOT / "docs" / "tour" / "beyond.md",
-         "embedded": ROOT / "docs" / "tour" / "flight-controller.md"}
+         "embedded": ROOT / "docs" / "tour" / "flight-controller.md",
+         "targets": ROOT / "docs" / "targets.md"}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
 COPIES = {"bench": ROOT / "bench" / "results.md",

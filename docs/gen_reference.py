@@ -70,8 +70,8 @@ DISTURBANCE_MEANING = {"t": "start (s)", "duration": "length of the pulse (s)",
                        "moment": "moment (N m, body frame, 3 numbers)"}
 LIMITS_MEANING = {"max_position_error": "position error that counts as diverged (m)",
                   "max_tilt_deg": "|phi| or |theta| that counts as diverged (deg)"}
-VEHICLE_EXTRA = {"preset": "the vehicle to start from: \"hummingbird\" (default) or "
-                           "\"crazyflie\"; the other keys change its fields",
+VEHICLE_EXTRA = {"preset": "the vehicle to start from: \"hummingbird\" (default), "
+                           "\"crazyflie\" or \"x500\"; the other keys change its fields",
                  "identified": "JSON file of `quadcog identify --json`: its r_G becomes the CoG"}
 SWEEP_MEANING = {
     "name": "the sweep's name", "description": "free text (`quadcog sweeps` lists it)",
@@ -282,9 +282,7 @@ def scenario_keys_page() -> str:
         docs, defaults = parameter_docs(cls), _signature_defaults(cls)
         docs.setdefault("Q_scale", "the Lyapunov weight Q as a multiple of the identity")
         parts += [f"### `controller = \"{name}\"` (`quadcog.{cls.__name__}`)\n",
-                  _table([(f"`{k}`", _check_words(v), _value(defaults.get(k, 1.0)
-                                                              if k == "Q_scale" else
-                                                              defaults.get(k, "")),
+                  _table([(f"`{k}`", _check_words(v), _controller_default(k, defaults),
                            docs.get(k, "")) for k, v in keys.items()], head)]
     parts += ["## `[truth]`\n", "`quadcog.TruthOptions`; the limits and the time constant come "
               "from `[vehicle]`.\n", _table(_dataclass_rows(TruthOptions, schema.TRUTH), head)]
@@ -302,6 +300,18 @@ def _top_meaning(key: str) -> str:
         from quadcog.controllers.registry import controller_names
         return TOP_MEANING[key] + ": " + ", ".join(f'`"{n}"`' for n in controller_names())
     return TOP_MEANING[key]
+
+
+def _controller_default(key: str, defaults: dict[str, Any]) -> str:
+    """The default column of a controller setting: "from the vehicle" for those that
+    ``quadcog.controllers.design`` derives (their signature default is None or "default")."""
+    from quadcog.controllers.design import DERIVED_SETTINGS
+    if key == "Q_scale":
+        return _value(1.0)
+    default = defaults.get(key, "")
+    if key in DERIVED_SETTINGS and (default is None or default == "default"):
+        return "from the vehicle (`quadcog.controllers.design`)"
+    return _value(default)
 
 
 def _top_default(key: str, config: Any) -> str:

@@ -50,7 +50,7 @@ from quadcog.sim.sensing import Sensed, Sensing
 from quadcog.sim.timeline import CogChange, CogProfile, Disturbance
 from quadcog.sweeps import sweep
 from quadcog.trajectories.analytic import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
-from quadcog.vehicles import CRAZYFLIE, HUMMINGBIRD, Vehicle
+from quadcog.vehicles import CRAZYFLIE, HUMMINGBIRD, X500, Vehicle
 from quadcog.vehicles.vehicle import default_parameters, plus_layout, x_layout
 
 __version__ = "0.1.0"
@@ -61,7 +61,7 @@ __all__ = [
     "rotation_matrix", "CompileError", "EulerSingularityError", "GeneratedFilesError",
     "InputError", "ParameterError", "PhysicalConsistencyError", "QuadcogError", "QuadcogWarning",
     "Linearization", "Model",
-    "load", "check_parameters", "inertia_about_cog", "with_cog", "CRAZYFLIE", "HUMMINGBIRD",
+    "load", "check_parameters", "inertia_about_cog", "with_cog", "CRAZYFLIE", "HUMMINGBIRD", "X500",
     "Vehicle", "default_parameters", "plus_layout", "x_layout", "AdaptiveFeedbackLinearization",
     "CascadePD", "CompositeAdaptive", "Controller", "FeedbackLinearization", "PayloadAdaptive",
     "FeedbackLinearizationIntegral", "make_controller", "TruthOptions", "Sensed", "Sensing",

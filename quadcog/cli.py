@@ -21,7 +21,8 @@ from quadcog.errors import QuadcogError
 __all__ = ["SUBCOMMANDS", "parser", "main",
            "add_tour", "cmd_tour", "add_scenarios", "cmd_scenarios", "add_run", "cmd_run",
            "add_animate", "cmd_animate", "add_paper", "cmd_paper", "add_analyze", "cmd_analyze",
-           "add_export", "cmd_export", "add_sweep", "cmd_sweep", "add_identify", "cmd_identify"]
+           "add_export", "cmd_export", "add_sweep", "cmd_sweep", "add_identify", "cmd_identify",
+           "add_targets", "cmd_targets"]
 
 _Subparsers = argparse._SubParsersAction  # the type of ``add_subparsers()``: for the hints
 
@@ -464,9 +465,52 @@ def cmd_identify(args: argparse.Namespace) -> None:
         print(f"wrote {args.json}")
 
 
+def add_targets(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog targets`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
+    from quadcog.studies.targets import CASES, LAWS
+    from quadcog.vehicles.vehicle import PRESETS
+    p = sub.add_parser("targets", help="measure the controllers' default settings on every "
+                                       "preset vehicle against the targets (docs: Targets)",
+                       description="Fly every preset x law x case with the realistic truth and "
+                                   "sensing of the *-real scenarios and the defaults derived "
+                                   "for the vehicle; print the table and write targets.csv, "
+                                   "targets.json and targets.md.")
+    p.add_argument("--out", type=Path, default=Path("out/targets"),
+                   help="output folder (default: out/targets)")
+    p.add_argument("--vehicles", nargs="+", choices=tuple(PRESETS), default=tuple(PRESETS),
+                   help="preset names (default: all)")
+    p.add_argument("--laws", nargs="+", choices=LAWS, default=LAWS,
+                   help="controller short names (default: all)")
+    p.add_argument("--cases", nargs="+", choices=tuple(c.name for c in CASES), default=None,
+                   help="case names (default: all)")
+    p.set_defaults(func=cmd_targets)
+
+
+def cmd_targets(args: argparse.Namespace) -> None:
+    """Run `quadcog targets` (``quadcog.studies.targets``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+    from quadcog.studies.targets import CASES, markdown_table, run_targets, write_targets
+    cases = None if args.cases is None else [c for c in CASES if c.name in args.cases]
+    rows = run_targets(args.vehicles, args.laws, cases, progress=print)
+    print()
+    print(markdown_table(rows), end="")
+    print(f"written: {write_targets(rows, _out_dir(args.out))}")
+
+
 SUBCOMMANDS: list[Callable[[_Subparsers[argparse.ArgumentParser]], None]] = [
     add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
-    add_export, add_sweep, add_sweeps, add_identify]
+    add_export, add_sweep, add_sweeps, add_identify, add_targets]
 
 
 def _version() -> str:

@@ -158,8 +158,8 @@ def test_missing_signals_are_named():
     with pytest.raises(IdentificationError, match="regression.*velocity, roll, pitch, yaw, "
                                                   "body_rates"):
         identify(log, "crazyflie", method="regression")
-    with pytest.raises(IdentificationError, match="vehicle 'x500' is unknown"):
-        identify(log, "x500")
+    with pytest.raises(IdentificationError, match="vehicle 'x900' is unknown"):
+        identify(log, "x900")
     with pytest.raises(IdentificationError, match="method 'best' is unknown"):
         identify(log, "crazyflie", method="best")
     with pytest.raises(IdentificationError, match="no rotor_model"):

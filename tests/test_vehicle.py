@@ -172,7 +172,7 @@ def test_scenario_vehicle_and_controller_model():
     assert s.make_controller().vehicle == model
     assert s.truth == TruthOptions(motor_lag=True, rotor_saturation=True)
     with pytest.raises(ScenarioError, match="vehicle.preset': expected one of 'hummingbird'"):
-        parse(dict(data, vehicle={"preset": "x500"}), "my.toml")
+        parse(dict(data, vehicle={"preset": "x900"}), "my.toml")
     with pytest.raises(ScenarioError, match="my.toml: key 'vehicle': .*min_rotor_thrust"):
         parse(dict(data, vehicle={"min_rotor_thrust": -1.0}), "my.toml")
     with pytest.raises(ScenarioError, match="rotor_positions': expected an array of 4"):

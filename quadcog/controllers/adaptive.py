@@ -14,6 +14,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
+from quadcog.controllers.design import admissible_estimate_radius, design
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.shaping import kinematics
 from quadcog.errors import InputError
@@ -26,28 +27,6 @@ from quadcog.vehicles.vehicle import Vehicle
 __all__ = ["AdaptiveFeedbackLinearization", "admissible_estimate_radius"]
 
 
-def admissible_estimate_radius(vehicle: Vehicle, margin: float = 0.95) -> float:
-    """The radius of the ball of CoG estimates that keep the model's inertia admissible.
-
-    Any r_hat in this ball keeps the inertia about the estimated CoG positive definite
-    (m |r|^2 < min I suffices).
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-        The controller's model of the vehicle.
-    margin : float
-        Fraction of sqrt(min(Ixx, Iyy, Izz) / m) allowed, default 0.95.
-
-    Returns
-    -------
-    float
-        min(arm length, margin * sqrt(min(Ixx, Iyy, Izz) / m)) (m).
-    """
-    smallest = min(vehicle.Ixx, vehicle.Iyy, vehicle.Izz)
-    return float(min(vehicle.arm_length, margin * np.sqrt(smallest / vehicle.m)))
-
-
 class AdaptiveFeedbackLinearization(FeedbackLinearization):
     """Feedback linearization with an online estimate r_hat (m) of the CoG offset.
 
@@ -58,14 +37,17 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         starts at its r_G.
     model : quadcog.model.functions.Model, optional
         The generated functions (default ``quadcog.load()``).
-    gamma : float or (3,) sequence of float
-        Adaptation gain, a number or 3 numbers (diagonal of Gamma). The default 0.01 recovers
-        a [6, 6, 0] cm step at hover (3.7 cm tail RMS, estimates within 1 %); 0.03 leaves a
-        14 cm tail and 0.05 diverges (see README, "Choosing gamma").
+    gamma : float or (3,) sequence of float, optional
+        Adaptation gain, a number or 3 numbers (diagonal of Gamma). Default: from the vehicle
+        (``quadcog.controllers.design.adaptation_gain``: the same dimensionless learning rate
+        on every vehicle). The Hummingbird's 0.01 recovers a [6, 6, 0] cm step at hover
+        (3.7 cm tail RMS, estimates within 1 %); 0.03 leaves a 14 cm tail and 0.05 diverges
+        (see README, "Choosing gamma").
     Q : (8, 8) array_like, optional
         The positive definite matrix of the Lyapunov equation (default identity).
     projection_radius : float or None or "default"
-        Keep |r_hat| <= this radius (m) by projection. Default: the arm length, but never
+        Keep |r_hat| <= this radius (m) by projection. Default: from the vehicle, the arm
+        length (``design.PROJECTION_ARM_FRACTION`` of it), but never
         beyond 95 % of sqrt(min(Ixx, Iyy, Izz) / m), inside which every estimate keeps M_hat
         positive definite (9.6 cm for the default vehicle; beyond it M_hat turns singular and
         the law blows up). None switches projection off: the paper's law.
@@ -85,9 +67,11 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
     projection_radius: float | None
 
     def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
-                 gamma: NumberOrVec3 = 0.01, Q: npt.ArrayLike | None = None,
+                 gamma: NumberOrVec3 | None = None, Q: npt.ArrayLike | None = None,
                  projection_radius: NumberOrNone = "default", **kwargs: Any) -> None:
         super().__init__(vehicle, model, **kwargs)
+        if gamma is None:                   # from the vehicle (quadcog.controllers.design)
+            gamma = design(self.vehicle).gamma
         what = "a positive number or 3 positive numbers (the diagonal of Gamma)"
         if isinstance(gamma, (list, tuple, np.ndarray)):
             gains = validate.array(gamma, "gamma", (3,), what=what)
@@ -103,7 +87,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
                              f"{validate.plain(np.linalg.eigvalsh(0.5 * (Q + Q.T))[0])}")
         self.Q = Q
         if isinstance(projection_radius, str) and projection_radius == "default":
-            projection_radius = admissible_estimate_radius(self.vehicle)
+            projection_radius = design(self.vehicle).projection_radius
         elif projection_radius is not None:
             projection_radius = validate.positive(projection_radius, "projection_radius", "m")
         # a str other than "default" was refused by validate.positive above

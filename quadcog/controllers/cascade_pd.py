@@ -12,6 +12,7 @@ import numpy as np
 
 from quadcog import validate
 from quadcog.controllers.base import Controller
+from quadcog.controllers.design import design
 from quadcog.controllers.shaping import drag_over_mass, kinematics, tilt_limit, wrap_angle, yaw_rotation_T
 from quadcog.errors import InputError
 from quadcog.kinds import Number, Poles
@@ -39,13 +40,15 @@ class CascadePD(Controller):
         the hover moment.
     model : quadcog.model.functions.Model, optional
         The generated functions (default ``quadcog.load()``).
-    poles_z, poles_psi : sequence of float
-        2 real poles each (rad/s) of the height and yaw loops.
-    poles_x, poles_y : sequence of float
+    poles_z, poles_psi : sequence of float, optional
+        2 real poles each (rad/s) of the height and yaw loops. Default: from the vehicle
+        (``quadcog.controllers.design``; the Hummingbird's (-3, -4), (-4, -5)).
+    poles_x, poles_y : sequence of float, optional
         4 real poles each (rad/s) of the x-theta and y-phi chains: two slow for position, two
-        fast for attitude.
-    max_tilt : float
-        Clip on the commanded roll and pitch (rad), in (0, pi/2].
+        fast for attitude. Default: from the vehicle (the Hummingbird's (-2, -2.5, -10, -12)).
+    max_tilt : float, optional
+        Clip on the commanded roll and pitch (rad), in (0, pi/2]. Default: from the vehicle's
+        thrust-to-weight ratio (0.6 for the Hummingbird).
 
     Raises
     ------
@@ -56,10 +59,16 @@ class CascadePD(Controller):
     name = "cascade_pd"
 
     def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
-                 poles_z: Poles = (-3.0, -4.0), poles_psi: Poles = (-4.0, -5.0),
-                 poles_x: Poles = (-2.0, -2.5, -10.0, -12.0),
-                 poles_y: Poles = (-2.0, -2.5, -10.0, -12.0), max_tilt: Number = 0.6) -> None:
+                 poles_z: Poles | None = None, poles_psi: Poles | None = None,
+                 poles_x: Poles | None = None, poles_y: Poles | None = None,
+                 max_tilt: Number | None = None) -> None:
         super().__init__(vehicle, model)
+        d = design(self.vehicle)            # the settings not given follow from the vehicle
+        poles_z = d.poles_z if poles_z is None else poles_z
+        poles_psi = d.poles_psi if poles_psi is None else poles_psi
+        poles_x = d.poles_x if poles_x is None else poles_x
+        poles_y = d.poles_y if poles_y is None else poles_y
+        max_tilt = d.max_tilt if max_tilt is None else max_tilt
         self.poles = {"z": poles_z, "psi": poles_psi, "x": poles_x, "y": poles_y}
         self.max_tilt = tilt_limit(max_tilt)
         # designed at r_G = 0 (the loops decouple there); a CoG the model believes in enters

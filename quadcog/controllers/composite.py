@@ -51,6 +51,7 @@ import numpy.typing as npt
 from quadcog import validate
 from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization
 from quadcog.controllers.allocation import prioritized_input
+from quadcog.controllers.design import design
 from quadcog.kinds import Flag, Number, NumberOrVec3
 from quadcog.model.conventions import B_U, NU
 from quadcog.model.functions import Model
@@ -151,16 +152,21 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
         model's r_G).
     model : quadcog.model.functions.Model, optional
         The generated functions (default ``quadcog.load()``).
-    gamma : float or (3,) sequence of float
-        Tracking-error gain at P = k0 I (the paper's Gamma), default 0.01.
-    filter_rate : float
-        lam (1/s) of the filter F(s) = lam / (s + lam), default 20.
-    ls_gain : float
-        The least-squares weight (1/s) of the normalized prediction error, default 200.
-    forgetting : float
-        beta (1/s), default 8: data older than a few 1/beta no longer count.
-    covariance_bound : float
-        k0 (dimensionless, in the normalized units), default 1.
+    gamma : float or (3,) sequence of float, optional
+        Tracking-error gain at P = k0 I (the paper's Gamma). Default: from the vehicle, as
+        AdaptiveFeedbackLinearization (0.01 for the Hummingbird).
+    filter_rate : float, optional
+        lam (1/s) of the filter F(s) = lam / (s + lam). Default: from the vehicle
+        (``quadcog.controllers.design``), a quarter of the rotor bandwidth, at most twice the
+        attitude rate (20 for the Hummingbird).
+    ls_gain : float, optional
+        The least-squares weight (1/s) of the normalized prediction error. Default: from the
+        vehicle, 10 times its filter rate (200 for the Hummingbird).
+    forgetting : float, optional
+        beta (1/s): data older than a few 1/beta no longer count. Default: from the vehicle,
+        its filter rate / 2.5 (8 for the Hummingbird).
+    covariance_bound : float, optional
+        k0 (dimensionless, in the normalized units). Default: from the vehicle, 1.
     force_weight : float
         Weight of the three force rows against the moment rows, default 1.
     allocation : bool
@@ -187,16 +193,20 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
     name = "composite_adaptive"
 
     def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
-                 gamma: NumberOrVec3 = 0.01, filter_rate: Number = 20.0,
-                 ls_gain: Number = 200.0, forgetting: Number = 8.0,
-                 covariance_bound: Number = 1.0, force_weight: Number = 1.0,
+                 gamma: NumberOrVec3 | None = None, filter_rate: Number | None = None,
+                 ls_gain: Number | None = None, forgetting: Number | None = None,
+                 covariance_bound: Number | None = None, force_weight: Number = 1.0,
                  allocation: Flag = True, motor_lag: Flag = False,
                  warm_up: Number | None = None, **kwargs: Any) -> None:
         super().__init__(vehicle, model, gamma=gamma, **kwargs)
-        self.filter_rate = _positive("filter_rate", filter_rate)
-        self.ls_gain = _positive("ls_gain", ls_gain)
-        self.forgetting = _positive("forgetting", forgetting)
-        self.covariance_bound = _positive("covariance_bound", covariance_bound)
+        d = design(self.vehicle)            # the settings not given follow from the vehicle
+        self.filter_rate = _positive("filter_rate", d.filter_rate if filter_rate is None
+                                     else filter_rate)
+        self.ls_gain = _positive("ls_gain", d.ls_gain if ls_gain is None else ls_gain)
+        self.forgetting = _positive("forgetting", d.forgetting if forgetting is None
+                                    else forgetting)
+        self.covariance_bound = _positive("covariance_bound", d.covariance_bound
+                                          if covariance_bound is None else covariance_bound)
         self.force_weight = validate.nonnegative(force_weight, "force_weight")
         self.warm_up = (5.0 / self.filter_rate if warm_up is None
                         else validate.nonnegative(warm_up, "warm_up", "s"))

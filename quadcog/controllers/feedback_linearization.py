@@ -6,6 +6,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.controllers.base import Controller
+from quadcog.controllers.design import design
 from quadcog.controllers.shaping import (
     desired_tilt,
     drag_over_mass,
@@ -32,13 +33,17 @@ class FeedbackLinearization(Controller):
         The controller's model of the vehicle (default: the Hummingbird with r_G = 0).
     model : quadcog.model.functions.Model, optional
         The generated functions (default ``quadcog.load()``).
-    poles_z, poles_attitude, poles_psi : sequence of float
+    poles_z, poles_attitude, poles_psi : sequence of float, optional
         2 poles each (rad/s, real or a conjugate pair) for the linearized output errors
-        e_ddot + kd e_dot + kp e = 0 of z, of phi and theta, and of psi.
-    poles_position : sequence of float
-        2 poles (rad/s) of the outer x, y loop (slower than the attitude).
-    max_tilt : float
-        Clip on the commanded roll and pitch (rad), in (0, pi/2].
+        e_ddot + kd e_dot + kp e = 0 of z, of phi and theta, and of psi. Default: from the
+        vehicle (``quadcog.controllers.design``; the Hummingbird's (-3, -4), (-10, -12),
+        (-4, -5)).
+    poles_position : sequence of float, optional
+        2 poles (rad/s) of the outer x, y loop (slower than the attitude). Default: from the
+        vehicle (the Hummingbird's (-1.5, -2)).
+    max_tilt : float, optional
+        Clip on the commanded roll and pitch (rad), in (0, pi/2]. Default: from the vehicle's
+        thrust-to-weight ratio (0.6 for the Hummingbird).
 
     Raises
     ------
@@ -49,10 +54,16 @@ class FeedbackLinearization(Controller):
     name = "feedback_linearization"
 
     def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
-                 poles_z: Poles = (-3.0, -4.0), poles_attitude: Poles = (-10.0, -12.0),
-                 poles_psi: Poles = (-4.0, -5.0), poles_position: Poles = (-1.5, -2.0),
-                 max_tilt: Number = 0.6) -> None:
+                 poles_z: Poles | None = None, poles_attitude: Poles | None = None,
+                 poles_psi: Poles | None = None, poles_position: Poles | None = None,
+                 max_tilt: Number | None = None) -> None:
         super().__init__(vehicle, model)
+        d = design(self.vehicle)            # the settings not given follow from the vehicle
+        poles_z = d.poles_z if poles_z is None else poles_z
+        poles_attitude = d.poles_attitude if poles_attitude is None else poles_attitude
+        poles_psi = d.poles_psi if poles_psi is None else poles_psi
+        poles_position = d.poles_position if poles_position is None else poles_position
+        max_tilt = d.max_tilt if max_tilt is None else max_tilt
         kz = second_order_gains(poles_z, "poles_z")
         ka = second_order_gains(poles_attitude, "poles_attitude")
         kpsi = second_order_gains(poles_psi, "poles_psi")

@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
+from quadcog.controllers.design import design
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.kinds import Number
 from quadcog.model.functions import Model
@@ -38,10 +39,12 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
         The controller's model of the vehicle (default: the Hummingbird with r_G = 0).
     model : quadcog.model.functions.Model, optional
         The generated functions (default ``quadcog.load()``).
-    integral_pole : float
-        The third pole (1/s, negative) of each attitude row, default -4.
-    integral_limit : float
-        Clip of each integrator state (rad s), > 0, default 1.
+    integral_pole : float, optional
+        The third pole (1/s, negative) of each attitude row. Default: from the vehicle
+        (``quadcog.controllers.design``; -4 for the Hummingbird).
+    integral_limit : float, optional
+        Clip of each integrator state (rad s), > 0. Default: from the vehicle (1 for the
+        Hummingbird).
     **kwargs
         FeedbackLinearization's keywords (its attitude and yaw poles stay poles of the new
         rows).
@@ -56,9 +59,12 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
     n_state = 3
 
     def __init__(self, vehicle: Vehicle | None = None, model: Model | None = None, *,
-                 integral_pole: Number = -4.0, integral_limit: Number = 1.0,
+                 integral_pole: Number | None = None, integral_limit: Number | None = None,
                  **kwargs: Any) -> None:
         super().__init__(vehicle, model, **kwargs)
+        d = design(self.vehicle)            # the settings not given follow from the vehicle
+        integral_pole = d.integral_pole if integral_pole is None else integral_pole
+        integral_limit = d.integral_limit if integral_limit is None else integral_limit
         a = validate.real(integral_pole, "integral_pole", hi=0.0, hi_open=True, unit="1/s")
         limit = validate.positive(integral_limit, "integral_limit", "rad s")
         self.integral_pole, self.integral_limit = a, limit

@@ -23,12 +23,11 @@ Needs the velocity, the three Euler angles, the body rates and the rotor outputs
 """
 from collections.abc import Sequence
 from dataclasses import dataclass
-import inspect
 
 import numpy as np
 import numpy.typing as npt
 
-from quadcog.controllers.composite import CompositeAdaptive
+from quadcog.controllers.design import REFERENCE
 from quadcog.errors import IdentificationError
 from quadcog.identification.segments import (
     BLOCK_SECONDS,
@@ -54,8 +53,9 @@ from quadcog.vehicles.vehicle import Vehicle
 __all__ = ["FILTER_RATE", "WARM_UP", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT",
            "STATIC_MAX_TILT", "FlightEstimate", "static_balance", "regression", "missing_for"]
 
-# the composite law's filter rate lam (1/s): one definition, read from its signature
-FILTER_RATE = inspect.signature(CompositeAdaptive.__init__).parameters["filter_rate"].default
+# the composite law's filter rate lam (1/s) of its reference design (the Hummingbird's): one
+# definition, quadcog.controllers.design
+FILTER_RATE = REFERENCE.filter_rate
 WARM_UP = 5.0 / FILTER_RATE            # s: the filter's start-up term has decayed by e^-5
 STATIC_SIGNALS = ("position",)         # + the rotor model's signals
 REGRESSION_SIGNALS = ("position", "velocity", "roll", "pitch", "yaw", "body_rates")

@@ -6,8 +6,10 @@ constants, thrust limits, motor time constant). It gives the 14-entry parameter 
 generated functions (``parameters()``) and the mixer ``U = mixer() @ f`` from rotor thrusts
 ``f`` (N) to ``U = [U1 (N), U2, U3, U4 (N m, about O)]`` and back (``rotor_thrusts(U)``).
 
-Two vehicles ship: ``HUMMINGBIRD`` (AscTec Hummingbird, "+" layout, the default) and
-``CRAZYFLIE`` (Bitcraze Crazyflie 2.0, "X" layout). Any planar layout of four rotors is data:
+Three vehicles ship, nearly two orders of magnitude apart in mass: ``HUMMINGBIRD`` (AscTec
+Hummingbird, 0.68 kg, "+" layout, the default), ``CRAZYFLIE`` (Bitcraze Crazyflie 2.0, 27 g,
+"X" layout) and ``X500`` (Holybro X500 as in PX4's Gazebo model, 2 kg, "X" layout). Any
+planar layout of four rotors is data:
 ``Vehicle(..., rotor_positions=x_layout(0.225), rotor_directions=(1, -1, 1, -1), ...)``.
 
 Frames: body x forward, z up (thrust along +z at O), so a rotor at (x_i, y_i) with thrust f_i
@@ -30,7 +32,7 @@ from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.payload import Payload, as_payload
 from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
-__all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "PRESETS", "FIELD_NAMES", "N_ROTORS",
+__all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
            "plus_layout", "x_layout", "default_parameters"]
 
 N_ROTORS = 4
@@ -550,7 +552,33 @@ CRAZYFLIE = Vehicle(
     max_rotor_thrust=_CF_THRUST_CONSTANT * _CF_MAX_ROTOR_SPEED ** 2,    # 0.0879 N
     motor_time_constant=0.0125, rotor_model=CRAZYFLIE_BITCRAZE_VOLTAGE)
 
-PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE}
+# Holybro X500 as modelled in PX4's Gazebo (gz) simulation: PX4/PX4-gazebo-models,
+# models/x500_base/model.sdf (mass 2.0 kg, the diagonal inertia, rotor_0..3 at
+# (+-0.174, +-0.174) m) and models/x500/model.sdf (the MulticopterMotorModel plugins:
+# motorConstant 8.54858e-06 N/(rad/s)^2, momentConstant 0.016 m, maxRotVelocity 1000 rad/s,
+# timeConstantUp 0.0125 s; rotors 0 (front right) and 1 (back left) turn ccw, 2 (front
+# left) and 3 (back right) cw); the same files as PX4-Autopilot's
+# Tools/simulation/gz/models/x500*. Its frame is ours (x forward, y left, z up), so the rotor
+# order and positions are the model's; a ccw rotor (seen from above) has d_i = -1. The drag
+# coefficients are this project's choice, as for the Crazyflie: the Hummingbird's drag per
+# mass and per inertia.
+_X500_THRUST_CONSTANT = 8.54858e-06
+_X500_MAX_ROTOR_SPEED = 1000.0
+_X500_MASS, _X500_IXX = 2.0, 0.02166666666666667
+_DRAG_PER_MASS = HUMMINGBIRD.c_x / HUMMINGBIRD.m             # 1/s
+_RATE_DRAG_PER_INERTIA = HUMMINGBIRD.c_phi / HUMMINGBIRD.Ixx  # 1/s
+X500 = Vehicle(
+    name="Holybro X500 (PX4 gz)", m=_X500_MASS, g=9.81, Ixx=_X500_IXX, Iyy=_X500_IXX,
+    Izz=0.04000000000000001, c_x=_DRAG_PER_MASS * _X500_MASS, c_y=_DRAG_PER_MASS * _X500_MASS,
+    c_z=_DRAG_PER_MASS * _X500_MASS, c_phi=_RATE_DRAG_PER_INERTIA * _X500_IXX,
+    c_theta=_RATE_DRAG_PER_INERTIA * _X500_IXX, c_psi=_RATE_DRAG_PER_INERTIA * _X500_IXX,
+    rotor_positions=((0.174, -0.174), (-0.174, 0.174), (0.174, 0.174), (-0.174, -0.174)),
+    rotor_directions=(-1, -1, 1, 1), thrust_constant=_X500_THRUST_CONSTANT,
+    moment_constant=0.016,
+    max_rotor_thrust=_X500_THRUST_CONSTANT * _X500_MAX_ROTOR_SPEED ** 2,   # 8.55 N
+    motor_time_constant=0.0125)
+
+PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE, "x500": X500}
 
 
 def default_parameters(**overrides: float) -> npt.NDArray[np.float64]:
