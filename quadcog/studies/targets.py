@@ -246,8 +246,9 @@ def _step(vehicle: Vehicle) -> dict[str, Any]:
 # The parcel: picked up at PICK_UP, dropped at DROP, its mass a fraction of the vehicle's (30 %,
 # or a quarter of the thrust margin where that is less: the Crazyflie preset's rotors give only
 # 1.33 times its weight, the X500's 1.74 times, and the offset CoG needs rotor headroom too;
-# with a third of the margin the X500's rotors saturate and it diverges), a box at 3/4 of the arm out along x and 1/5 of it below O (on the
-# Hummingbird the whole body's CoG moves 2.9 cm off the axis).
+# with a third of the margin the X500's rotors saturate and it diverges), a box at 3/4 of the
+# arm out along x and 1/5 of it below O (on the Hummingbird the whole body's CoG moves 2.9 cm
+# off the axis).
 PICK_UP, DROP, SETTLE = 1.0, 5.0, 2.0       # s; the mass target holds SETTLE after each event
 PARCEL_FRACTION = 0.30
 
