@@ -292,10 +292,11 @@ def mass_error_at(when: float) -> Callable[[SimulationResult, Vehicle], float]:
         ``measure(result, vehicle) -> |m_hat / m - 1|`` (NaN when the flight ended before).
     """
     def measure(result: SimulationResult, vehicle: Vehicle) -> float:
-        if result.t[-1] < when - 1e-9 or result.controller_state is None:
+        state, mass = result.controller_state, result.mass
+        if result.t[-1] < when - 1e-9 or state is None or mass is None:
             return math.nan
         k = int(np.argmin(np.abs(result.t - when)))
-        return float(abs(result.controller_state[k, 3] / result.mass[k] - 1.0))
+        return float(abs(state[k, 3] / mass[k] - 1.0))
     return measure
 
 
