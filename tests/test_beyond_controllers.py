@@ -37,7 +37,7 @@ def _filtered_flight(model, ctl, r, dt, duration=0.4):
         zk, Yk, cd = (np.array(a) for a in f(x, U, c))
         out.append((zk.ravel(), Yk, M @ x[6:12]))
         c[3:27] += dt * cd.ravel()
-        x = np.array(plant(x, [], U, p, np.zeros(6), dt)[0]).ravel()
+        x = np.array(plant(x, [], U, p, np.zeros(10), np.zeros(3), np.zeros(6), dt)[0]).ravel()
     return [np.array(a) for a in zip(*out)]
 
 

@@ -180,8 +180,9 @@ def test_command_cannot_close_the_comment(pd, command, tmp_path):
     header = render(pd, "float32", "pd", command)["quadcog_pd.h"]
     ok, err = _syntax_ok(header, tmp_path)
     assert ok, err              # a closed comment would expose "#error" or "int x"
-    line = next(x for x in header.splitlines() if "exported by:" in x)
-    assert "*/" not in line and "/*" not in line.split("exported by:")[1]
+    line = next(x for x in header.splitlines() if "written by `" in x)
+    named = line.split("written by `", 1)[1].rsplit("` from the controllers", 1)[0]
+    assert "*/" not in named and "/*" not in named
 
 
 @settings(**dict(SETTINGS, max_examples=15))

@@ -65,10 +65,17 @@ def test_run_interrupted_mid_flight_leaves_the_previous_folder(tmp_path, sig, st
     out.mkdir()
     (out / "metrics.json").write_text('{"old": true}\n')
     (out / "trajectory.csv").write_text("old\n")
-    proc = _start("run", "fig3a", "--set", "duration=60", "--out", str(out))
-    time.sleep(2.5)                  # imports done, flying (60 s of flight takes longer)
+    # 300 s of flight take seconds even on the compiled kernel; signal once the progress bar
+    # shows the flight under way (a fixed sleep raced the kernel, which got faster)
+    proc = _start("run", "fig3a", "--set", "duration=300", "--out", str(out))
+    seen = ""
+    while "%" not in seen:
+        ch = proc.stderr.read(1)
+        assert ch, f"the run ended before its progress bar: {seen!r}"
+        seen += ch
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
+    err = seen + err
     assert proc.returncode == status, err
     assert err.strip().endswith("quadcog: interrupted") and "Traceback" not in err
     assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "trajectory.csv"]

@@ -90,8 +90,8 @@ def test_cli_identify_prints_and_writes(tmp_path, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["identify", "no/such/log"], "no/such/log: no such log file"),
     (["identify", str(DATA / "LICENSE")], "LICENSE"),
-    (["identify", str(DATA / "motor_data/normal_flight/E9_log00"), "--vehicle", "x500"],
-     "vehicle 'x500' is unknown"),
+    (["identify", str(DATA / "motor_data/normal_flight/E9_log00"), "--vehicle", "x900"],
+     "vehicle 'x900' is unknown"),
     (["identify", str(DATA / "motor_data/normal_flight/E9_log00"), "--method", "regression"],
      "needs pitch, body_rates"),
     # the PX4 sample climbs to 2 m and lands at once: no plateau to balance on

@@ -173,8 +173,11 @@ def test_export_a_scenario_controller_with_your_own_vehicle_and_gains(tmp_path, 
     sets = ["vehicle.m=0.8", "controller_params.gamma=0.02"]
     assert main(["export", "--scenario", "fig6", *[a for s in sets for a in ("--set", s)],
                  "--out", str(tmp_path / "cli")]) == 0
-    ctl = quadcog.AdaptiveFeedbackLinearization(vehicle=quadcog.HUMMINGBIRD.replace(m=0.8),
-                                                gamma=0.02)
+    # fig6 writes the paper's poles out (the defaults would follow the 0.8 kg vehicle)
+    ctl = quadcog.AdaptiveFeedbackLinearization(
+        vehicle=quadcog.HUMMINGBIRD.replace(m=0.8), gamma=0.02, poles_z=(-3.0, -4.0),
+        poles_attitude=(-10.0, -12.0), poles_psi=(-4.0, -5.0), poles_position=(-1.5, -2.0),
+        max_tilt=0.6)
     command = ("quadcog export --scenario fig6 --set vehicle.m=0.8 --set "
                "controller_params.gamma=0.02 --precision float32 --out DIR")
     export_controller(ctl, "float32", tmp_path / "py", name="adaptive", command=command)

@@ -203,7 +203,8 @@ def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | st
         model = ROTOR_MODELS[model]
     if not isinstance(model, RotorModel):
         raise IdentificationError(f"vehicle {vehicle.name!r} has no rotor_model, so motor "
-                                  "outputs cannot be turned into thrust; pass rotor_model=")
+                                  "outputs cannot be turned into thrust; pass rotor_model= (--rotor-model "
+                                  f"on the command line), one of {', '.join(ROTOR_MODELS)}")
     missing = [s for s in model.signals if not log.has(s)]
     if not missing:
         u = log.signal(model.signal)
