@@ -113,3 +113,38 @@ def pytest_sessionfinish(session):
         pool.shutdown(wait=True, cancel_futures=True)
     for folder in _DIRS:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def interrupt_mid_flight(argv, sig, *, group=False, **popen):
+    """Run ``argv`` with stderr on a terminal (so its progress bar draws as a user sees it),
+    send ``sig`` once the bar shows the work under way, and return (status, stderr with
+    newlines). A fixed sleep raced the compiled kernel, which flies 600 s in about a second;
+    on a pipe the bar prints only when done. ``group``: signal the process group (Ctrl-C)."""
+    import os
+    import pty
+    import select
+    import signal as _signal
+    import subprocess
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=slave, text=True, **popen)
+    os.close(slave)
+    seen, sent = b"", False
+    while True:
+        ready, _, _ = select.select([master], [], [], 120)
+        assert ready, f"no output for 120 s: {seen!r}"
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:                  # EIO: the child closed the terminal
+            chunk = b""
+        if not chunk:
+            break
+        seen += chunk
+        if not sent and b"%" in seen:
+            assert proc.poll() is None, f"the run ended before it could be interrupted: {seen!r}"
+            os.killpg(proc.pid, sig) if group else proc.send_signal(sig)
+            sent = True
+    os.close(master)
+    proc.communicate(timeout=60)
+    assert sent, f"the run showed no progress before it ended: {seen!r}"
+    assert sig in (_signal.SIGINT, _signal.SIGTERM)
+    return proc.returncode, seen.decode(errors="replace").replace("\r\n", "\n")

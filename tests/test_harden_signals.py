@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 
+from conftest import interrupt_mid_flight
 import pytest
 
 from quadcog.errors import Interrupted
@@ -65,19 +66,12 @@ def test_run_interrupted_mid_flight_leaves_the_previous_folder(tmp_path, sig, st
     out.mkdir()
     (out / "metrics.json").write_text('{"old": true}\n')
     (out / "trajectory.csv").write_text("old\n")
-    # 300 s of flight take seconds even on the compiled kernel; signal once the progress bar
-    # shows the flight under way (a fixed sleep raced the kernel, which got faster)
-    proc = _start("run", "fig3a", "--set", "duration=300", "--out", str(out))
-    seen = ""
-    while "%" not in seen:
-        ch = proc.stderr.read(1)
-        assert ch, f"the run ended before its progress bar: {seen!r}"
-        seen += ch
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
-    err = seen + err
-    assert proc.returncode == status, err
+    code, err = interrupt_mid_flight(
+        [sys.executable, "-m", "quadcog", "run", "fig3a", "--set", "duration=300", "--out",
+         str(out)], sig, cwd=ROOT)
+    assert code == status, err
     assert err.strip().endswith("quadcog: interrupted") and "Traceback" not in err
+    assert "\nquadcog: interrupted" in "\n" + err, err    # not run on after the bar
     assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "trajectory.csv"]
     assert (out / "metrics.json").read_text() == '{"old": true}\n'
 

@@ -6,11 +6,10 @@ import json
 import os
 from pathlib import Path
 import signal
-import subprocess
 import sys
-import time
 import tracemalloc
 
+from conftest import interrupt_mid_flight
 import numpy as np
 import pytest
 
@@ -118,16 +117,14 @@ def test_ctrl_c_gives_one_line_and_status_130(tmp_path):
     out.mkdir()
     for name in OUTPUT_FILES:
         (out / name).write_text(f"previous {name}")
-    proc = subprocess.Popen([sys.executable, "-m", "quadcog", "run", str(scenario), "--out",
-                             str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)),
-                            start_new_session=True)
-    time.sleep(3.0)
-    assert proc.poll() is None, "the run ended before it could be interrupted"
-    os.killpg(proc.pid, signal.SIGINT)
-    stdout, stderr = proc.communicate(timeout=120)
-    assert proc.returncode == 130, stderr
-    lines = [line for line in stderr.splitlines() if line.strip() and "[" not in line]
+    status, stderr = interrupt_mid_flight(
+        [sys.executable, "-m", "quadcog", "run", str(scenario), "--out", str(out)],
+        signal.SIGINT, group=True, env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        start_new_session=True)
+    assert status == 130, stderr
+    # the bar redraws with \r; what is left of each line after the last one is what shows
+    lines = [line.rsplit("\r", 1)[-1] for line in stderr.splitlines()]
+    lines = [line for line in lines if line.strip() and "[" not in line]
     assert lines == ["quadcog: interrupted"], stderr           # (the progress bar aside)
     assert "Traceback" not in stderr
     assert {p.name: p.read_text() for p in out.iterdir()} == {
