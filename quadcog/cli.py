@@ -562,16 +562,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _main(argv)
     except Interrupted as e:        # during parsing, or after a command's own handling
-        _say_interrupted()
+        print("quadcog: interrupted", file=sys.stderr)
         return e.status
     finally:
         restore_handlers(previous)
-
-
-def _say_interrupted():
-    from quadcog.viz.progress import end_open_lines
-    end_open_lines()                # a bar cut off mid-line: the message on a line of its own
-    print("quadcog: interrupted", file=sys.stderr)
 
 
 def _main(argv):
@@ -582,12 +576,12 @@ def _main(argv):
             warnings.showwarning = _show_warning      # one line, no source location
             args.func(args)
     except Interrupted as e:        # files being written were not committed
-        _say_interrupted()
+        print("quadcog: interrupted", file=sys.stderr)
         return e.status             # 128 + the signal, as shells report it: 130, 143
     except QuadcogError as e:
         from quadcog.interrupts import received
         if received() is not None:  # a signal inside compiled code, reported as a wrong input
-            _say_interrupted()
+            print("quadcog: interrupted", file=sys.stderr)
             return received().status
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2
@@ -595,7 +589,7 @@ def _main(argv):
         print(f"quadcog: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:       # Ctrl-C: files being written were not committed
-        _say_interrupted()
+        print("quadcog: interrupted", file=sys.stderr)
         return 130                  # 128 + SIGINT, as shells report it
     except (MemoryError, RecursionError) as e:
         print(f"quadcog: error: out of resources ({type(e).__name__}); the input is too large "
@@ -605,7 +599,7 @@ def _main(argv):
         from quadcog.interrupts import received
         interrupt = received()
         if interrupt is not None:   # the signal came out of compiled code as another error
-            _say_interrupted()
+            print("quadcog: interrupted", file=sys.stderr)
             return interrupt.status
         if os.environ.get("QUADCOG_TRACEBACK"):
             raise

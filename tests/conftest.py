@@ -123,28 +123,31 @@ def interrupt_mid_flight(argv, sig, *, group=False, **popen):
     import os
     import pty
     import select
-    import signal as _signal
     import subprocess
     master, slave = pty.openpty()
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=slave, text=True, **popen)
     os.close(slave)
     seen, sent = b"", False
-    while True:
-        ready, _, _ = select.select([master], [], [], 120)
-        assert ready, f"no output for 120 s: {seen!r}"
-        try:
-            chunk = os.read(master, 4096)
-        except OSError:                  # EIO: the child closed the terminal
-            chunk = b""
-        if not chunk:
-            break
-        seen += chunk
-        if not sent and b"%" in seen:
-            assert proc.poll() is None, f"the run ended before it could be interrupted: {seen!r}"
-            os.killpg(proc.pid, sig) if group else proc.send_signal(sig)
-            sent = True
-    os.close(master)
-    proc.communicate(timeout=60)
+    try:
+        while True:
+            ready, _, _ = select.select([master], [], [], 120)
+            assert ready, f"no output for 120 s: {seen!r}"
+            try:
+                chunk = os.read(master, 4096)
+            except OSError:              # EIO: the child closed the terminal
+                chunk = b""
+            if not chunk:
+                break
+            seen += chunk
+            if not sent and b"%" in seen:
+                assert proc.poll() is None, f"the run ended before it could be interrupted: {seen!r}"
+                os.killpg(proc.pid, sig) if group else proc.send_signal(sig)
+                sent = True
+        proc.communicate(timeout=60)
+    finally:                             # a failed assertion leaves no run behind
+        os.close(master)
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
     assert sent, f"the run showed no progress before it ended: {seen!r}"
-    assert sig in (_signal.SIGINT, _signal.SIGTERM)
     return proc.returncode, seen.decode(errors="replace").replace("\r\n", "\n")

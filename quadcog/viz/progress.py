@@ -3,22 +3,7 @@ import sys
 import time
 from typing import TextIO
 
-__all__ = ["ProgressBar", "end_open_lines"]
-
-# Bars whose last line has no newline yet: a message printed while one is open (an interrupt)
-# would run on after its percentage.
-_OPEN: "set[ProgressBar]" = set()
-
-
-def end_open_lines() -> None:
-    """End the line of every bar still drawing (before a message such as "interrupted")."""
-    for bar in list(_OPEN):
-        _OPEN.discard(bar)
-        try:
-            bar.stream.write("\n")
-            bar.stream.flush()
-        except (OSError, ValueError):           # a closed stream: nothing to end
-            pass
+__all__ = ["ProgressBar"]
 
 
 class ProgressBar:
@@ -56,7 +41,6 @@ class ProgressBar:
         n = int(self.width * min(max(fraction, 0.0), 1.0))
         self.stream.write(f"\r{self.label} [{'#' * n}{'.' * (self.width - n)}] "
                           f"{100 * fraction:5.1f}% {now - self._t0:6.1f} s")
-        _OPEN.add(self)
         self.stream.flush()
 
     def close(self) -> None:
@@ -66,5 +50,4 @@ class ProgressBar:
         self._live, self._last = True, 0.0
         self(self._fraction)
         self.stream.write("\n")
-        _OPEN.discard(self)
         self.stream.flush()

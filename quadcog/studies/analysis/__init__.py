@@ -237,9 +237,11 @@ def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = Tr
 
     t = time.perf_counter()
     bar = ProgressBar(f"analysis: failure map {grid}x{grid}") if progress else None
-    fm = failure_map(grid=grid, duration=duration, progress=bar)
-    if bar:
-        bar.close()
+    try:
+        fm = failure_map(grid=grid, duration=duration, progress=bar)
+    finally:                        # an interrupt's message then starts on a line of its own
+        if bar:
+            bar.close()
     fm["adaptive_vs_projection"] = adaptive_failures_vs_projection(fm)
     save_failure_map(fm, out / "failure_map.npz", out / "failure_map.json")
     plot_failure_map(fm, out / "failure_map.png")
