@@ -119,9 +119,9 @@ def bench_flight(repeat=15):
         setup = prepare_flight(ctl, "hover", 20.0, None, None, None, cog, (), None, None,
                                "compiled", None, None, True)
         t1 = time.perf_counter()
-        X, U, code = qf._run_compiled(setup, None)
+        X, U, e, code = qf._run_compiled(setup, None)
         t2 = time.perf_counter()
-        r = qf._result(setup, X, U, code, t2 - t1)
+        r = qf._result(setup, X, U, e, code, t2 - t1)
         t3 = time.perf_counter()
         qf._check_reference(r, setup.schedule, setup.vehicle, setup.limits)
         t4 = time.perf_counter()
@@ -141,9 +141,9 @@ def bench_flight(repeat=15):
     chunks = []
     for _ in range(max(3, repeat // 3)):
         t0 = time.perf_counter()
-        Xc, _, _ = qf._run_chunks(setup, None)
+        Xc, _, _, _ = qf._run_chunks(setup, None)
         chunks.append(time.perf_counter() - t0)
-    Xk, _, _ = qf._run_compiled(setup, None)
+    Xk, _, _, _ = qf._run_compiled(setup, None)
     diff = float(np.max(np.abs(Xk - Xc)))
     scenario = load_scenario("fig6")
     scenario.run()

@@ -33,7 +33,7 @@ def _fly(kernel, setup):
     X, U, codes = np.empty((n + 1, setup.X0.size)), np.empty((n, 4)), np.empty(n)
     X[0] = setup.X0
     stop = kernel.bind(X, [np.ascontiguousarray(setup.P)] + [getattr(s, k) for k in NAMES],
-                       [U, codes])(0, n)
+                       [U, np.empty(n), codes])(0, n)
     return X, U, codes, stop
 
 
@@ -46,7 +46,7 @@ def _casadi(setup):
     for k in range(n):
         out = step(X[k], setup.P, *[getattr(s, name)[k] for name in NAMES])
         X[k + 1] = np.array(out[0]).ravel()
-        if float(out[2]):
+        if float(out[3]):
             return X[:k + 1], k
     return X, n
 
@@ -76,7 +76,7 @@ def test_reciprocals_change_only_the_last_bits_and_so_does_simulate():
     X, _, _, _ = _fly(FlightKernel(step, constant=(1,), slow=SLOW), setup)
     oracle, _ = _casadi(setup)
     assert np.abs(X - oracle).max() < 1e-12
-    chunks, _, _ = qf._run_chunks(setup, None)       # CasADi's compiled mapaccum
+    chunks, _, _, _ = qf._run_chunks(setup, None)    # CasADi's compiled mapaccum
     assert np.abs(qf._run_compiled(setup, None)[0] - chunks).max() < 1e-12
 
 
@@ -99,13 +99,13 @@ def test_the_kernel_stops_at_the_first_diverged_sample_with_its_code():
     setup = _setup([], duration=2.0, x0=x0, limits=quadcog.Limits(max_tilt=0.3))
     oracle, k = _casadi(setup)
     assert k < setup.schedule.n_steps
-    X, U, code = qf._run_compiled(setup, None)
-    assert X.shape[0] == k + 1
+    X, U, e, code = qf._run_compiled(setup, None)
+    assert X.shape[0] == e.shape[0] == k + 1
     with np.errstate(invalid="ignore"):
         assert np.nanmax(np.abs(X[:k] - oracle[:k])) < 1e-9
     step = closed_loop_step(setup.controller, setup.actuation, setup.limits)
     assert code == int(float(step(X[k], setup.P, *[getattr(setup.schedule, n)[k]
-                                                   for n in NAMES])[2]))
+                                                   for n in NAMES])[3]))
 
 
 def test_the_kernel_refuses_a_step_of_another_form_and_wrong_arrays():
@@ -117,7 +117,7 @@ def test_the_kernel_refuses_a_step_of_another_form_and_wrong_arrays():
     kernel = FlightKernel(step, constant=(1,), slow=SLOW)
     with pytest.raises(KernelError, match="input 1"):
         kernel.bind(np.zeros((3, setup.X0.size)), [np.zeros(3)] + [np.zeros((2, 14))] * 8,
-                    [np.zeros((2, 4)), np.zeros(2)])
+                    [np.zeros((2, 4)), np.zeros(2), np.zeros(2)])
 
 
 def test_designs_kept_per_process_are_never_another_designs():

@@ -1,11 +1,13 @@
 """Allocation-free calls of a CasADi function through preallocated numpy buffers."""
+from collections import OrderedDict
+import threading
 from typing import Any
 
 import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["FastCall"]
+__all__ = ["FastCall", "evaluate"]
 
 
 class FastCall:
@@ -42,3 +44,83 @@ class FastCall:
     def __call__(self) -> list[npt.NDArray[Any]]:
         self._eval()
         return self.outputs
+
+
+class _Evaluator:
+    """A Function's buffers for ``evaluate``: dense inputs and outputs, sparse ones mapped
+    through their patterns."""
+
+    def __init__(self, function: ca.Function) -> None:
+        self.function = function           # kept: the cache is keyed by its id
+        self._in = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
+        self._out = [np.zeros(function.nnz_out(j)) for j in range(function.n_out())]
+        # (shape, rows, cols) of each entry of a sparse argument; None for a dense one
+        self._in_pattern = [self._pattern(function.sparsity_in(i)) for i in range(len(self._in))]
+        self._out_pattern = [self._pattern(function.sparsity_out(j))
+                             for j in range(len(self._out))]
+        self._buffer, self._eval = function.buffer()
+        for i, a in enumerate(self._in):
+            self._buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
+        for j, a in enumerate(self._out):
+            self._buffer.set_res(j, memoryview(a))  # type: ignore[call-arg, arg-type]
+
+    @staticmethod
+    def _pattern(sp: ca.Sparsity) -> tuple[tuple[int, int], Any, Any] | None:
+        if sp.is_dense():
+            return None
+        rows, cols = sp.get_triplet()
+        return (sp.size1(), sp.size2()), np.array(rows, dtype=int), np.array(cols, dtype=int)
+
+    def __call__(self, args: tuple[npt.ArrayLike, ...]) -> list[npt.NDArray[np.float64]]:
+        for buffer, a, pattern in zip(self._in, args, self._in_pattern):
+            if pattern is None:
+                buffer[:] = np.ravel(a, order="F")
+            else:
+                buffer[:] = np.asarray(a, dtype=float).reshape(pattern[0])[pattern[1], pattern[2]]
+        self._eval()
+        out = []
+        for flat, pattern, j in zip(self._out, self._out_pattern, range(len(self._out))):
+            shape = self.function.size_out(j)
+            if pattern is None:
+                out.append(flat.copy() if shape[1] == 1 else flat.reshape(shape, order="F").copy())
+            else:
+                dense = np.zeros(shape)
+                dense[pattern[1], pattern[2]] = flat
+                out.append(dense[:, 0] if shape[1] == 1 else dense)
+        return out
+
+
+# evaluators kept for ``evaluate``, by the Function's id (each holds its Function, so the id
+# stays its own), the most recent last
+_kept: "OrderedDict[int, _Evaluator]" = OrderedDict()
+_KEEP = 32
+_kept_lock = threading.Lock()
+
+
+def evaluate(function: ca.Function, *args: npt.ArrayLike) -> list[npt.NDArray[np.float64]]:
+    """One call of a CasADi Function with numpy inputs, through buffers kept for it.
+
+    A plain call from Python converts every argument and result to a DM (about 0.1 ms); this
+    writes into preallocated buffers. For the calls made once per flight on small inputs.
+
+    Parameters
+    ----------
+    function : casadi.Function
+        The Function (the last 32 used keep their buffers).
+    *args : array_like
+        Its inputs, each of the input's shape (or its entries in column-major order).
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Its outputs, dense: (rows,) for a column, (rows, cols) otherwise.
+    """
+    with _kept_lock:
+        kept = _kept.get(id(function))
+        if kept is None:
+            kept = _kept[id(function)] = _Evaluator(function)
+            if len(_kept) > _KEEP:
+                _kept.popitem(last=False)
+        else:
+            _kept.move_to_end(id(function))
+        return kept(args)

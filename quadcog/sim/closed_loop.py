@@ -50,10 +50,11 @@ def closed_loop_step(controller: Controller, actuation: Actuation, limits: Limit
     -------
     casadi.Function
         ``step(X, P, t, dt, ref, cog, cog_scale, payload, wrench, tail) -> (X_next, U_applied,
-        code)``:
+        position_error, code)``:
         P is the vehicle's parameter vector (14,), the per-step inputs are those of
-        ``STEP_INPUTS``; code is the divergence code of the sample at the start of the step
-        (X and the controller's input U there, with ref).
+        ``STEP_INPUTS``; position_error |p - p_ref| (m) and code, the divergence code, are
+        those of the sample at the start of the step (X and the controller's input U there,
+        with ref).
     """
     nc, nf = controller.n_state, actuation.n_rotor_states
     X, P = ca.SX.sym("X", N_STATE + nf + nc), ca.SX.sym("P", N_PARAM)
@@ -65,13 +66,15 @@ def closed_loop_step(controller: Controller, actuation: Actuation, limits: Limit
         s["dt"], actuation, s["payload"], P[R_G.start:R_G.stop])
     X_next = ca.vertcat(x_next, f_next,
                         controller.project(c + s["dt"] * c_dot) if nc else ca.SX(0, 1))
-    X_next, U_app = ca.cse([X_next, U_app])    # the RK4 stages share parameter-only terms
-    code = divergence_code(x, ca.norm_2(x[:3] - s["ref"][:3]), limits,
-                           ca.sum1(ca.fabs(ca.vertcat(f, c, U))))
+    e = ca.norm_2(x[:3] - s["ref"][:3])
+    code = divergence_code(x, e, limits, ca.sum1(ca.fabs(ca.vertcat(f, c, U))))
+    # one CSE over all outputs: the RK4 stages share parameter-only terms, and the code's U
+    # is the law's output (apart, the law ran twice per step)
+    X_next, U_app, e, code = ca.cse([X_next, U_app, e, code])
     names = [name for name, _ in STEP_INPUTS]
     return ca.Function("closed_loop_step", [X, P] + [s[n] for n in names],
-                       [X_next, U_app, code], ["X", "P"] + names,
-                       ["X_next", "U_applied", "code"])
+                       [X_next, U_app, e, code], ["X", "P"] + names,
+                       ["X_next", "U_applied", "position_error", "code"])
 
 
 def chunk_function(controller: Controller, actuation: Actuation, limits: Limits,
@@ -93,17 +96,18 @@ def chunk_function(controller: Controller, actuation: Actuation, limits: Limits,
     -------
     casadi.Function
         ``(X0, P, per-step inputs with n columns each) -> (X (nX x n), U (4 x n),
-        code (1 x n))``: X after each step, code of the sample before each
-        (``divergence_code``). P is shared by all steps.
+        position_error (1 x n), code (1 x n))``: X after each step, the position error and
+        the code (``divergence_code``) of the sample before each. P is shared by all steps.
     """
     def build():
         step = closed_loop_step(controller, actuation, limits)
         acc = step.mapaccum("closed_loop_steps", n)
         X0, P = ca.MX.sym("X0", step.size1_in(0)), ca.MX.sym("P", N_PARAM)
         per_step = [ca.MX.sym(name, rows, n) for name, rows in STEP_INPUTS]
-        Xs, Us, codes = acc(X0, ca.repmat(P, 1, n), *per_step)
-        return ca.Function("closed_loop_chunk", [X0, P] + per_step, [Xs, Us, codes],
-                           ["X0", "P"] + [name for name, _ in STEP_INPUTS], ["X", "U", "code"])
+        Xs, Us, es, codes = acc(X0, ca.repmat(P, 1, n), *per_step)
+        return ca.Function("closed_loop_chunk", [X0, P] + per_step, [Xs, Us, es, codes],
+                           ["X0", "P"] + [name for name, _ in STEP_INPUTS],
+                           ["X", "U", "position_error", "code"])
     return cached_compile(("chunk", controller.cache_key(), actuation, limits, n), build)
 
 
@@ -131,7 +135,8 @@ def flight_kernel(controller: Controller, actuation: Actuation, limits: Limits
     Returns
     -------
     FlightKernel or None
-        Its inputs are (P, *STEP_INPUTS), its one per-step output U_applied; None without
+        Its inputs are (P, *STEP_INPUTS), its per-step outputs U_applied and
+        position_error (then the code); None without
         a C compiler or where the loop does not build (the caller then runs
         ``chunk_function``).
     """
@@ -179,8 +184,7 @@ def monitored_step(controller: Controller, actuation: Actuation, limits: Limits
     Z, P = ca.SX.sym("Z", nX + len(ACCUMULATORS)), ca.SX.sym("P", N_PARAM)
     s = _step_symbols()
     X, a = Z[:nX], dict(zip(ACCUMULATORS, ca.vertsplit(Z[nX:])))
-    X_next, _, code = step(X, P, *[s[name] for name, _ in STEP_INPUTS])
-    e = ca.norm_2(X[:3] - s["ref"][:3])
+    X_next, _, e, code = step(X, P, *[s[name] for name, _ in STEP_INPUTS])
     real = s["dt"] > 0
     counted = ca.vertcat(
         a["sum_sq"] + real * e ** 2, ca.if_else(real, ca.fmax(a["max"], e), a["max"]),

@@ -9,6 +9,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import config, validate
+from quadcog.codegen.fastcall import evaluate
 from quadcog.errors import EulerSingularityError
 from quadcog.model.conventions import N_STATE
 
@@ -180,9 +181,11 @@ def first_divergence(x: npt.NDArray[np.float64], position_error: npt.ArrayLike, 
     if n == 0:
         return None, None
     rest = np.zeros(n) if rest is None else np.asarray(rest, dtype=float).reshape(n)
-    rule = divergence_rule(limits)
-    codes = np.array((rule if n == 1 else rule.map(n))(
-        x.T, np.asarray(position_error, dtype=float)[None, :], rest[None, :])).ravel()
+    e = np.asarray(position_error, dtype=float).reshape(n)
+    if n == 1:          # one sample (a run's start and end) without DM conversions
+        codes = evaluate(divergence_rule(limits), x[0], e, rest)[0]
+    else:
+        codes = np.array(divergence_rule(limits).map(n)(x.T, e[None, :], rest[None, :])).ravel()
     hit = np.flatnonzero(codes)
     if not hit.size:
         return None, None

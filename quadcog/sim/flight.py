@@ -143,11 +143,11 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
                            disturbances, truth, x0, path, limits, progress, check_dt, payloads)
     t0 = time.perf_counter()
     if setup.path == "compiled":
-        X, U, code = _run_compiled(setup, progress)
+        X, U, e, code = _run_compiled(setup, progress)
     else:
-        X, U, code = _run_python(setup, progress)
+        X, U, e, code = _run_python(setup, progress)
     elapsed = time.perf_counter() - t0
-    result = _result(setup, X, U, code, elapsed)
+    result = _result(setup, X, U, e, code, elapsed)
     _check_reference(result, setup.schedule, setup.vehicle, setup.limits)
     return result
 
@@ -156,7 +156,8 @@ def _check_reference(result: SimulationResult, schedule: Schedule, vehicle: Vehi
                      limits: Limits) -> None:
     """Metrics entry ``reference`` and a ReferenceWarning when the reference asks for more
     acceleration or jerk than the vehicle can give (quadcog.trajectories.feasibility)."""
-    check = check_reference(schedule.t, schedule.ref, vehicle, limits.max_tilt)
+    check = check_reference(schedule.t, schedule.ref, vehicle, limits.max_tilt,
+                            schedule.constant_reference)
     result.metrics.reference = check.as_dict()
     if not check.feasible:
         warnings.warn(f"the reference asks for more than the vehicle ({vehicle.name}) can "
@@ -171,10 +172,11 @@ def _run_compiled(setup, progress):
     schedule, X0, n_steps = setup.schedule, setup.X0, setup.schedule.n_steps
     X = np.empty((n_steps + 1, X0.size))
     U = np.empty((n_steps + 1, 4))
+    e = np.empty(n_steps + 1)           # the last sample's is _result's
     codes = np.empty(n_steps)
     X[0] = X0
     run = kernel.bind(X, [np.ascontiguousarray(setup.P, dtype=float)]
-                      + [getattr(schedule, name) for name, _ in STEP_INPUTS], [U, codes])
+                      + [getattr(schedule, name) for name, _ in STEP_INPUTS], [U, e, codes])
     # one call without a progress bar; with one, a call per CHUNK steps to report between
     every = CHUNK if progress else n_steps
     k = 0
@@ -182,12 +184,19 @@ def _run_compiled(setup, progress):
         m = min(every, n_steps - k)
         stop = run(k, k + m)
         if stop < k + m:        # the step's divergence rule ran on samples k .. stop
-            return X[:stop + 1], U[:stop + 1], int(codes[stop])
+            return X[:stop + 1], U[:stop + 1], e[:stop + 1], int(codes[stop])
         k += m
         if progress:
             progress(k / n_steps)
     U[n_steps] = U[n_steps - 1]
-    return X, U, 0
+    return X, U, _last_error(e, X, schedule), 0
+
+
+def _last_error(e, X, schedule):
+    """e with its last entry, the final sample's position error, which no step computed."""
+    n = X.shape[0]
+    e[n - 1:n] = position_errors(X[n - 1:n], schedule.ref[n - 1:n])
+    return e[:n]
 
 
 def _run_chunks(setup, progress):
@@ -202,6 +211,7 @@ def _run_chunks(setup, progress):
     # the compiled function reads the schedule and writes X and U in place, without copies.
     X = np.empty((padded.n_steps + 1, X0.size))
     U = np.empty((padded.n_steps + 1, 4))
+    e = np.empty(padded.n_steps + 1)
     codes = np.empty(padded.n_steps)
     X[0] = X0
     P = np.ascontiguousarray(P, dtype=float)
@@ -214,7 +224,8 @@ def _run_chunks(setup, progress):
             buf.set_arg(2 + i, memoryview(a))
         buf.set_res(0, memoryview(X[k + 1:k + 1 + CHUNK]))
         buf.set_res(1, memoryview(U[k:k + CHUNK]))
-        buf.set_res(2, memoryview(codes[k:k + CHUNK]))
+        buf.set_res(2, memoryview(e[k:k + CHUNK]))
+        buf.set_res(3, memoryview(codes[k:k + CHUNK]))
         evaluate()
         m = min(CHUNK, n_steps - k)
         # the step's divergence rule ran on samples k .. k + m - 1; the next chunk (or the
@@ -222,12 +233,12 @@ def _run_chunks(setup, progress):
         hit = np.flatnonzero(codes[k:k + m])
         if hit.size:
             stop = k + int(hit[0])
-            return X[:stop + 1], U[:stop + 1], int(codes[stop])
+            return X[:stop + 1], U[:stop + 1], e[:stop + 1], int(codes[stop])
         k += m
         if progress:
             progress(k / n_steps)
     U[n_steps] = U[n_steps - 1]
-    return X[:n_steps + 1], U[:n_steps + 1], 0
+    return X[:n_steps + 1], U[:n_steps + 1], _last_error(e, X[:n_steps + 1], schedule), 0
 
 
 def _run_python(setup, progress):
@@ -285,7 +296,8 @@ def _run_python(setup, progress):
             rule_rest[0] = magnitude(X[k, N_STATE:]) + magnitude(pU)
             rule.eval()
             if code[0]:
-                return X[:k + 1], U[:k + 1], int(code[0])
+                return X[:k + 1], U[:k + 1], position_errors(X[:k + 1], s.ref[:k + 1]), \
+                    int(code[0])
             X[k + 1, :N_STATE] = x_next
             X[k + 1, N_STATE:ic] = f_next
             if nc:
@@ -295,11 +307,12 @@ def _run_python(setup, progress):
     U[n_steps] = U[n_steps - 1]
     if progress:
         progress(1.0)
-    return X, U, 0
+    return X, U, position_errors(X, s.ref), 0
 
 
-def _result(setup, X, U, code, elapsed):
-    """The SimulationResult of samples X (n, .) and applied inputs U (n, 4). Both loops stop
+def _result(setup, X, U, e, code, elapsed):
+    """The SimulationResult of samples X (n, .), applied inputs U (n, 4) and position errors
+    e (n,). The loops stop
     at the first diverged sample, with its divergence code (0: none); the final sample of a
     finished run, which no step has checked, is checked here with the same rule."""
     controller, schedule, P, limits = setup.controller, setup.schedule, setup.P, setup.limits
@@ -308,11 +321,13 @@ def _result(setup, X, U, code, elapsed):
     t, ref = schedule.t[:n], schedule.ref[:n]
     # the whole body's mass and CoG: the airframe at its CoG profile with the payloads
     load = schedule.payload[:n]
-    mass, r_G = body_mass_and_cog(P[IDX["m"]], schedule.r_G(P[R_G])[:n],
-                                  load[:, PI_INDEX["m"], None],
-                                  load[:, [PI_INDEX[f"m{a}_G"] for a in "xyz"]])
-    mass = mass[:, 0]
-    e = position_errors(X, ref)
+    if load.any():
+        mass, r_G = body_mass_and_cog(P[IDX["m"]], schedule.r_G(P[R_G])[:n],
+                                      load[:, PI_INDEX["m"], None],
+                                      load[:, [PI_INDEX[f"m{a}_G"] for a in "xyz"]])
+        mass = mass[:, 0]
+    else:       # nothing on board: what body_mass_and_cog gives then (m + 0, r + 0)
+        mass, r_G = np.full(n, P[IDX["m"]] + 0.0), schedule.r_G(P[R_G])[:n] + 0.0
     if code:
         idx, cause = n - 1, DivergenceCause(code)
     else:

@@ -14,6 +14,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import config, validate
+from quadcog.codegen.fastcall import evaluate
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import IDX, N_STATE, R_G, rotation_matrix
@@ -310,7 +311,7 @@ def check_step_size(controller: Controller | None, x0: npt.NDArray[np.float64],
                          f"{RK4_LIMIT * actuation.time_constant:.3g} s")
     if controller is None:
         return
-    lam = np.linalg.eigvals(np.array(controller.closed_loop_jacobian()(x0, ref0, P)))
+    lam = np.linalg.eigvals(evaluate(controller.closed_loop_jacobian(), x0, ref0, P)[0])
     fastest = float(np.max(np.abs(lam)))
     if fastest * dt > RK4_LIMIT:
         raise InputError(f"dt = {dt} s is too large: the closed loop has an eigenvalue of "
@@ -444,6 +445,8 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile) -> None:
     quadcog.PhysicalConsistencyError
         Naming the event after which the whole body is not physically consistent.
     """
+    if not loads.events:
+        return
     airframe = vehicle.airframe.inertial_parameters()
     for i, e in enumerate(loads.events):
         for when in sorted({e.t, e.t + e.ramp}):

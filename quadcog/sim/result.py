@@ -7,7 +7,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import config
-from quadcog.numerics import row_norms
+from quadcog.numerics import row_distances
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -182,8 +182,7 @@ def position_errors(x: npt.NDArray[np.float64], ref: npt.NDArray[np.float64]
     (N,) numpy.ndarray
         |p - p_ref| (m); a diverged sample may overflow to inf, quietly.
     """
-    with np.errstate(over="ignore", invalid="ignore"):
-        return row_norms(x[:, :3] - ref[:, :3])
+    return row_distances(x, ref)
 
 
 def flight_metrics(e: npt.NDArray[np.float64], tail: npt.NDArray[Any],

@@ -118,6 +118,8 @@ class Schedule:
         Disturbance force (N, ground axes) and moment (N m, body axes).
     tail : (N,) numpy.ndarray
         1.0 where the sample counts for the tail metrics.
+    constant_reference : bool
+        Every reference row is the same (the trajectory says so: ``Trajectory.constant``).
     """
     t: np.ndarray
     dt: np.ndarray
@@ -127,6 +129,7 @@ class Schedule:
     payload: np.ndarray
     wrench: np.ndarray
     tail: np.ndarray
+    constant_reference: bool = False
 
     @classmethod
     def build(cls, trajectory: Trajectory, duration: float, dt: float,
@@ -167,7 +170,8 @@ class Schedule:
                       payload=(payloads.sample(t) if payloads else np.zeros((n + 1, N_PI))),
                       wrench=wrench_table(disturbances, t),
                       tail=(t >= tail_start(duration) - 1e-12).astype(float))
-        return cls(**{k: np.ascontiguousarray(v, dtype=float) for k, v in arrays.items()})
+        return cls(**{k: np.ascontiguousarray(v, dtype=float) for k, v in arrays.items()},
+                   constant_reference=trajectory.constant)
 
     @property
     def n_steps(self) -> int:
@@ -187,7 +191,10 @@ class Schedule:
         (N, 3) numpy.ndarray
             r_G (m) at every sample.
         """
-        return cog_at(np.asarray(r_vehicle, float)[None, :], self.cog_scale[:, None], self.cog)
+        r = np.asarray(r_vehicle, float)[None, :]
+        if (self.cog_scale == 1.0).all():     # a single flight's: 1 * r is r, one pass fewer
+            return r + self.cog
+        return cog_at(r, self.cog_scale[:, None], self.cog)
 
     def padded(self, multiple: int) -> "Schedule":
         """A schedule whose step count is a multiple of ``multiple``.
@@ -214,7 +221,7 @@ class Schedule:
             out[name] = np.ascontiguousarray(np.concatenate([a, np.repeat(a[-1:], n_pad, 0)]))
         out["dt"][self.t.size - 1:] = 0.0
         out["tail"][self.t.size:] = 0.0
-        return Schedule(**out)
+        return Schedule(**out, constant_reference=self.constant_reference)
 
     def rows(self, start: int, stop: int, *extra: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Steps start .. stop - 1 as one C-contiguous array of rows.

@@ -114,14 +114,23 @@ class CogProfile:
         prev = np.zeros(3)
         for c in self.changes:
             target = np.array(c.r)
+            active = _suffix(t >= c.t)
             if c.ramp > 0:
-                s = np.clip((t - c.t) / c.ramp, 0.0, 1.0)
-            else:
-                s = (t >= c.t).astype(float)
-            active = t >= c.t
-            r[active] = prev + s[active, None] * (target - prev)
+                s = np.clip((t[active] - c.t) / c.ramp, 0.0, 1.0)
+                r[active] = prev + s[:, None] * (target - prev)
+            else:       # s = 1 on every active row: one row, the same bits
+                r[active] = prev + 1.0 * (target - prev)
             prev = target
         return r
+
+
+def _suffix(mask: npt.NDArray[np.bool_]) -> slice | npt.NDArray[np.bool_]:
+    """``mask`` as the slice of its rows where it is a run to the end (times in order: a
+    slice assigns rows many times faster than a mask), else ``mask``."""
+    first = int(np.argmax(mask)) if mask.size else 0
+    if mask.size and mask[first] and mask[first:].all():
+        return slice(first, None)
+    return mask if mask.any() else slice(0, 0)
 
 
 @dataclass(frozen=True)

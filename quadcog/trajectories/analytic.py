@@ -8,7 +8,7 @@ command. ``quadcog.trajectories.template`` states that interface as a Protocol.
 from collections.abc import Callable
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -87,6 +87,8 @@ class Trajectory:
     """
 
     yaw: float = 0.0
+    # every row the same at every time (a hover): the checks of a run's rows need only one
+    constant: ClassVar[bool] = False
     # what a subclass implements (an annotation only: the base class defines no such method)
     _pvaj: Callable[[npt.NDArray[np.float64]], tuple[npt.NDArray[np.float64], ...]]
 
@@ -111,9 +113,21 @@ class Trajectory:
         """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         with np.errstate(over="ignore", invalid="ignore"):
-            p, v, a, j = self._pvaj(t)
-            yaw = np.full((t.size, 1), float(self.yaw))
-            ref = np.hstack([p, v, a, j, yaw, np.zeros((t.size, 1))])
+            # one array, no hstack of copies: the parts constant in time (broadcast views,
+            # stride 0) go into one row that fills every row at once; a column block is a
+            # strided copy, several times slower
+            row = np.zeros(REF_SIZE)
+            row[YAW] = float(self.yaw)
+            varying = []
+            for part, cols in zip(self._pvaj(t), (POS, VEL, ACC, JERK)):
+                if t.size and part.strides[0] == 0:
+                    row[cols] = part[0]
+                else:
+                    varying.append((cols, part))
+            ref = np.empty((t.size, REF_SIZE))
+            ref[:] = row
+            for cols, part in varying:
+                ref[:, cols] = part
         return _checked_reference(ref, t, self)
 
     def __call__(self, t: float) -> npt.NDArray[np.float64]:
@@ -155,14 +169,16 @@ class Hover(Trajectory):
     """
     position: Vec3 = (0.0, 0.0, 1.0)
     yaw: Number = 0.0
+    constant: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         self.position = _vec3("hover position", self.position)
         self.yaw = _angle("hover yaw", self.yaw)
 
     def _pvaj(self, t):
-        p = np.tile(self.position, (t.size, 1))
-        return p, np.zeros_like(p), np.zeros_like(p), np.zeros_like(p)
+        p = np.broadcast_to(np.asarray(self.position, float), (t.size, 3))
+        zero = np.broadcast_to(0.0, (t.size, 3))
+        return p, zero, zero, zero
 
 
 @dataclass

@@ -122,7 +122,7 @@ def reference_limits(vehicle: Vehicle, max_tilt: float | None = None) -> Referen
 
 
 def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], vehicle: Vehicle,
-                    max_tilt: float | None = None) -> ReferenceCheck:
+                    max_tilt: float | None = None, constant: bool = False) -> ReferenceCheck:
     """Check reference rows against what a vehicle can follow.
 
     Parameters
@@ -136,6 +136,8 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
         The vehicle that is to follow them.
     max_tilt : float, optional
         Largest tilt of the thrust (rad); default as ``reference_limits``.
+    constant : bool
+        The rows are all the same (``Trajectory.constant``): only the first is checked.
 
     Returns
     -------
@@ -144,6 +146,8 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
     """
     limits = reference_limits(vehicle, max_tilt)
     a, j = ref[:, ACC], ref[:, JERK]
+    if constant:        # every row the same (a hover): the first says it all
+        a, j, t = a[:1], j[:1], t[:1]
     f = a + np.array([0.0, 0.0, vehicle.g])                     # specific thrust vector
     # row_norms and the sums written out: the bits of np.linalg.norm(., axis=1) and
     # np.sum(., axis=1), in a fraction of their time (they loop per row of 3)

@@ -3,6 +3,7 @@
 The scenario schema (``[trajectory] kind = ...``), ``--set trajectory.*``, sweep keys,
 ``quadcog.simulate(trajectory="circle")`` and the studies take the kinds from here.
 """
+import functools
 import inspect
 
 from quadcog import validate
@@ -41,9 +42,14 @@ def default_kinds() -> tuple[str, ...]:
     tuple of str
         E.g. ('hover', 'circle', 'figure8', 'helix'); 'waypoints' needs its points.
     """
-    return tuple(name for name, cls in TRAJECTORIES.items()
-                 if all(p.default is not inspect.Parameter.empty
-                        for p in inspect.signature(cls).parameters.values()))
+    return tuple(name for name, cls in TRAJECTORIES.items() if _all_defaults(cls))
+
+
+@functools.lru_cache(maxsize=None)
+def _all_defaults(cls: type) -> bool:
+    # a class's signature does not change; reading it costs more than sampling a hover
+    return all(p.default is not inspect.Parameter.empty
+               for p in inspect.signature(cls).parameters.values())
 
 
 def trajectory_settings(kind: str) -> dict[str, Kind]:
