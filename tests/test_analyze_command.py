@@ -77,6 +77,12 @@ def test_the_docs_numbers_are_this_commands(analysis):
         key = mo.group("key")
         if mo.group("name") != "analysis" or key.split("/")[0] in ("failure_map", "machine"):
             continue
-        assert pub.formatted(pub.entry(a, key), mo.group("format")) == mo.group("text"), key
+        value, text = pub.entry(a, key), mo.group("text")
+        if key.endswith("max_error_vs_analytic"):
+            # an ODE solver's error against the closed form (about 1e-9): its leading digit
+            # moves with the machine's libm, so it is held to a factor of 2, not a digit
+            assert float(text) / 2 <= value <= 2 * float(text), (key, value, text)
+        else:
+            assert pub.formatted(value, mo.group("format")) == text, key
         checked += 1
     assert checked >= 10

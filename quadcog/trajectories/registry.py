@@ -3,7 +3,6 @@
 The scenario schema (``[trajectory] kind = ...``), ``--set trajectory.*``, sweep keys,
 ``quadcog.simulate(trajectory="circle")`` and the studies take the kinds from here.
 """
-import functools
 import inspect
 
 from quadcog import validate
@@ -45,11 +44,15 @@ def default_kinds() -> tuple[str, ...]:
     return tuple(name for name, cls in TRAJECTORIES.items() if _all_defaults(cls))
 
 
-@functools.lru_cache(maxsize=None)
+_ALL_DEFAULTS: dict[type, bool] = {}
+
+
 def _all_defaults(cls: type) -> bool:
     # a class's signature does not change; reading it costs more than sampling a hover
-    return all(p.default is not inspect.Parameter.empty
-               for p in inspect.signature(cls).parameters.values())
+    if cls not in _ALL_DEFAULTS:
+        _ALL_DEFAULTS[cls] = all(p.default is not inspect.Parameter.empty
+                                 for p in inspect.signature(cls).parameters.values())
+    return _ALL_DEFAULTS[cls]
 
 
 def trajectory_settings(kind: str) -> dict[str, Kind]:

@@ -1,0 +1,80 @@
+"""The shortcuts of the single flight's set-up and results against the general forms they
+stand for: each would be wrong in a way these catch (a sparse output read as dense, a hover
+check that misses a bad row, CoG rows of unsorted times, a position error off in its bits)."""
+import casadi as ca
+import numpy as np
+import pytest
+
+import quadcog
+from quadcog.codegen.fastcall import evaluate
+from quadcog.numerics import row_distances, row_norms
+from quadcog.sim.timeline import CogProfile
+from quadcog.trajectories.feasibility import check_reference
+
+
+def test_evaluate_matches_a_plain_call_with_sparse_and_matrix_arguments():
+    x, M = ca.SX.sym("x", 3), ca.SX.sym("M", 2, 2)
+    jac = ca.jacobian(ca.vertcat(x[0] * x[1], ca.sin(x[2]), M[0, 1] * x[0]), x)  # sparse
+    f = ca.Function("f", [x, M], [jac, M @ M, ca.sumsqr(x)])
+    rng = np.random.default_rng(3)
+    for _ in range(3):                         # kept buffers: later calls see new inputs
+        xv, Mv = rng.normal(size=3), rng.normal(size=(2, 2))
+        got = evaluate(f, xv, Mv)
+        want = [np.array(o) for o in f(xv, Mv)]
+        assert f.nnz_out(0) < 9
+        assert np.array_equal(got[0], want[0])
+        assert np.array_equal(got[1], want[1])
+        assert got[2].shape == (1,) and got[2][0] == want[2].item()
+
+
+def test_hover_is_the_one_constant_trajectory_and_its_check_equals_the_full_one():
+    assert quadcog.Hover.constant and not quadcog.Circle.constant
+    t = np.arange(2001) * 1e-3
+    ref = quadcog.Hover(position=(1.0, -2.0, 3.0), yaw=0.4).sample(t)
+    assert (ref == ref[0]).all() and ref[0, 12] == 0.4
+    full = check_reference(t, ref, quadcog.HUMMINGBIRD)
+    assert check_reference(t, ref, quadcog.HUMMINGBIRD, constant=True) == full
+    # the shortcut is only taken when asked: a bad row in a non-constant reference is found
+    ref[1500, 6] = 1e3
+    bad = check_reference(t, ref, quadcog.HUMMINGBIRD)
+    assert not bad.feasible and bad.first_violation_t == pytest.approx(1.5)
+
+
+def test_a_sampled_reference_equals_its_parts_side_by_side():
+    t = np.linspace(0.0, 7.0, 701)
+    for trajectory in (quadcog.Circle(), quadcog.Figure8(), quadcog.Helix(), quadcog.Hover()):
+        p, v, a, j = trajectory._pvaj(t)
+        want = np.hstack([np.broadcast_to(part, (t.size, 3)) for part in (p, v, a, j)]
+                         + [np.full((t.size, 1), trajectory.yaw), np.zeros((t.size, 1))])
+        assert trajectory.sample(t).tobytes() == want.tobytes(), trajectory
+
+
+def test_cog_rows_are_the_same_for_times_in_and_out_of_order():
+    profile = CogProfile([(0.5, (0.02, -0.01, 0.0), 0.0), (1.0, (0.0, 0.03, 0.01), 0.4)])
+    t = np.linspace(0.0, 2.0, 401)
+    r = profile.sample(t)
+    assert np.array_equal(r[t < 0.5], np.zeros(((t < 0.5).sum(), 3)))
+    assert np.allclose(r[(t >= 0.5) & (t < 1.0)], (0.02, -0.01, 0.0), atol=0, rtol=0)
+    assert np.array_equal(r[t >= 1.4], np.tile((0.0, 0.03, 0.01), ((t >= 1.4).sum(), 1)))
+    mid = np.flatnonzero(np.isclose(t, 1.2))[0]
+    assert r[mid] == pytest.approx([0.01, 0.01, 0.005])
+    order = np.random.default_rng(0).permutation(t.size)
+    assert np.array_equal(profile.sample(t[order]), r[order])
+    assert profile.sample(np.array([])).shape == (0, 3)
+
+
+def test_row_distances_round_as_the_norms_of_the_differences():
+    rng = np.random.default_rng(1)
+    a = rng.normal(size=(500, 15)) * rng.choice([1e-3, 1.0, 1e200], size=(500, 1))
+    b = rng.normal(size=(500, 14))
+    assert row_distances(a, b).tobytes() == row_norms(a[:, :3] - b[:, :3]).tobytes()
+    assert np.isinf(row_distances(a, b)).any()       # 1e200 squared overflows, quietly
+
+
+def test_a_flight_reports_the_position_errors_its_samples_have():
+    res = quadcog.simulate(quadcog.CascadePD(), trajectory="circle", duration=1.0,
+                           cog=[(0.2, (0.03, 0.0, 0.0), 0.0)])
+    e = np.sqrt(((res.x[:, :3] - res.ref[:, :3]) ** 2).sum(axis=1))
+    rms = np.sqrt(np.mean(e ** 2))
+    assert res.metrics.rms_position_error == pytest.approx(rms, rel=1e-12)
+    assert res.metrics.final_position_error == pytest.approx(e[-1], rel=1e-12)
