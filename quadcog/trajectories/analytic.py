@@ -120,7 +120,8 @@ class Trajectory:
             row[YAW] = float(self.yaw)
             varying = []
             for part, cols in zip(self._pvaj(t), (POS, VEL, ACC, JERK)):
-                if t.size and part.strides[0] == 0:
+                part = np.asarray(part, dtype=float)    # a subclass may give lists
+                if t.size and part.ndim == 2 and part.strides[0] == 0:
                     row[cols] = part[0]
                 else:
                     varying.append((cols, part))
