@@ -22,6 +22,7 @@ from quadcog.kinds import NumberOrNone, NumberOrVec3
 from quadcog.model.conventions import B_U, NU
 from quadcog.model.functions import Model
 from quadcog.model.parameters import LARGEST
+from quadcog.numerics import exact_lyapunov
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["AdaptiveFeedbackLinearization", "admissible_estimate_radius"]
@@ -94,8 +95,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         self.projection_radius = projection_radius
         self.A_error = np.block([[np.zeros((4, 4)), np.eye(4)],
                                  [-np.diag(self.kp), -np.diag(self.kd)]])
-        from scipy.linalg import solve_continuous_lyapunov  # here: slow to import
-        self.P = solve_continuous_lyapunov(self.A_error.T, -Q)
+        self.P = exact_lyapunov(self.A_error, Q, "A_error")   # the same bits everywhere
 
     def initial_state(self) -> npt.NDArray[np.float64]:
         """r_hat at t = 0: the CoG of the controller's model (zero unless it believes one).

@@ -15,7 +15,6 @@ exactly what the rotors deliver (no clipping happens downstream while the thrust
 feasible).
 """
 import casadi as ca
-import numpy as np
 
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -49,7 +48,7 @@ def prioritized_input(U: ca.SX, vehicle: Vehicle) -> ca.SX:
     casadi.SX
         U itself when feasible, else [U1, s_rp U2, s_rp U3, s_y U4] (4x1).
     """
-    inv = ca.DM(np.linalg.inv(vehicle.mixer()))
+    inv = ca.DM(vehicle.mixer_inverse())
     lower, upper = vehicle.min_rotor_thrust, vehicle.max_rotor_thrust
     f_T = inv[:, 0] * U[0]
     f_rp = inv[:, 1:3] @ U[1:3]

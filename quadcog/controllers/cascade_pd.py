@@ -14,11 +14,12 @@ from quadcog import validate
 from quadcog.controllers.base import Controller
 from quadcog.controllers.design import design
 from quadcog.controllers.shaping import drag_over_mass, kinematics, tilt_limit, wrap_angle, yaw_rotation_T
-from quadcog.errors import InputError
+from quadcog.errors import InputError, ParameterError
 from quadcog.kinds import Number, Poles
 from quadcog.model.conventions import IDX, N_STATE
 from quadcog.model.functions import Model
 from quadcog.model.parameters import with_cog
+from quadcog.numerics import exact_place
 from quadcog.trajectories.analytic import ACC, POS, VEL, YAW, YAW_RATE
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -77,7 +78,6 @@ class CascadePD(Controller):
         p = with_cog(self.nominal, np.zeros(3))
         A, B = self.model.linearization(np.zeros(N_STATE), [self.hover_input[0], 0, 0, 0], p)
         self.A, self.B = A, B
-        from scipy.signal import place_poles  # here: scipy.signal takes a second to import
         self.gains = {}
         K = np.zeros((4, 12))
         for loop, (states, inp) in LOOPS.items():
@@ -88,16 +88,24 @@ class CascadePD(Controller):
             real_poles = poles.real
             Ai = A[np.ix_(states, states)]
             Bi = B[np.ix_(states, [inp])]
-            try:
-                k = place_poles(Ai, Bi, real_poles).gain_matrix.ravel()
-            except ValueError as e:     # e.g. a pole repeated on this single-input chain
+            # distinct poles: a repeated one makes a Jordan block, whose eigenvalues a rounding
+            # error of eps moves by eps^(1/multiplicity)
+            if len(set(real_poles.tolist())) < len(real_poles):
+                raise InputError(f"poles_{loop}: expected poles that can be placed on a "
+                                 f"single-input chain (distinct poles; a repeated pole makes "
+                                 f"the closed loop's eigenvalues sensitive to rounding), got "
+                                 f"{validate.plain(self.poles[loop])}")
+            try:                        # exact arithmetic: the same gains on every machine
+                k = exact_place(Ai, Bi, real_poles, f"poles_{loop}")
+            except ParameterError as e:
                 raise InputError(f"poles_{loop}: expected poles that can be placed on a "
                                  f"single-input chain ({e}), got "
                                  f"{validate.plain(self.poles[loop])}") from None
             self.gains[loop] = k
             K[inp, states] = k
         self.K = K
-        self.closed_loop_eigenvalues = np.linalg.eigvals(A - B @ K)
+        # sorted: LAPACK's order differs between machines
+        self.closed_loop_eigenvalues = np.sort(np.linalg.eigvals(A - B @ K))
         chosen = np.sort(np.concatenate([np.asarray(v, float) for v in self.poles.values()]))
         got = np.sort(self.closed_loop_eigenvalues.real)
         if np.max(np.abs(got - chosen)) > 1e-6 * np.max(np.abs(chosen)) or \

@@ -138,7 +138,7 @@ def believed_input(U: ca.SX, f_hat: ca.SX, vehicle: Vehicle, allocation: bool,
         U = prioritized_input(U, vehicle)
     if not motor_lag:
         return U, U, ca.SX(0, 1)
-    f_cmd = ca.DM(np.linalg.inv(vehicle.mixer())) @ U
+    f_cmd = ca.DM(vehicle.mixer_inverse()) @ U
     return ca.DM(vehicle.mixer()) @ f_hat, U, (f_cmd - f_hat) / vehicle.motor_time_constant
 
 

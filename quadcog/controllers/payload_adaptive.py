@@ -122,6 +122,7 @@ from quadcog.kinds import Flag, Number, Vector
 from quadcog.model.conventions import B_U, IDX, NU
 from quadcog.model.functions import Model
 from quadcog.model.inertial_parameters import inertial_arguments, pseudo_inertia
+from quadcog.numerics import exact_inverse, exact_lyapunov
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["PayloadAdaptive", "N_THETA", "consistency_excess"]
@@ -260,7 +261,7 @@ class PayloadAdaptive(FeedbackLinearization):
         pi, _, _ = inertial_arguments(self.nominal, "the controller model's parameters")
         self.inertia = pi[N_THETA:]          # I_O entries of pi, held
         # Sigma_O = tr(I_O)/2 I - I_O: the pseudo-inertia's second-moment block
-        self.sigma_inverse = np.linalg.inv(pseudo_inertia(pi)[:3, :3])
+        self.sigma_inverse = exact_inverse(pseudo_inertia(pi)[:3, :3], "Sigma_O")
         m0, l, mg = v.m, v.arm_length, v.m * v.g
         self.parameter_scale = np.r_[m0, [m0 * l] * 3]
         self.row_scale = np.r_[[1.0 / mg] * 3, [1.0 / (mg * l)] * 3]
@@ -268,8 +269,7 @@ class PayloadAdaptive(FeedbackLinearization):
         # the cone in normalized units: b^T Q_n b <= (1 - delta) a, b = h / (m0 l), a = m / m0
         self.cone = m0 * l * l * self.sigma_inverse
         A = np.block([[np.zeros((4, 4)), np.eye(4)], [-np.diag(self.kp), -np.diag(self.kd)]])
-        from scipy.linalg import solve_continuous_lyapunov  # here: slow to import
-        self.P = solve_continuous_lyapunov(A.T, -np.eye(8))
+        self.P = exact_lyapunov(A, np.eye(8), "the error dynamics")   # the same bits everywhere
 
     def initial_state(self) -> npt.NDArray[np.float64]:
         """The controller state at t = 0.

@@ -20,9 +20,9 @@ __all__ = ["PRECISIONS", "C_TYPE", "DOUBLE_DIGITS", "literal", "target", "body"]
 
 PRECISIONS = ("double", "float32")
 C_TYPE = {"double": "double", "float32": "float"}
-# significant digits of the double constants: gains come out of LAPACK (pole placement, the
-# Lyapunov equation), whose last bit may differ between CPUs; 15 digits keep the file the same
-# everywhere and change no result by more than 1e-15 relative.
+# significant digits of the double constants. The gains, the mixer's inverse and the Lyapunov
+# matrix are computed in exact arithmetic (quadcog.numerics), so they are the same bits on
+# every CPU; 15 digits keep the text short and change no result by more than 1e-15 relative.
 DOUBLE_DIGITS = 15
 
 

@@ -353,7 +353,7 @@ def _result(setup, X, U, e, code, elapsed):
         metrics.r_hat_final = X[last, N_STATE + nf:N_STATE + 3 + nf].tolist()
         metrics.r_G_final = r_G[last].tolist()
     name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))
-    inverse = np.linalg.inv(setup.actuation.mixer_matrix()).T
+    inverse = setup.actuation.mixer_inverse().T
     thrust = (X[:keep, N_STATE:N_STATE + nf].copy() if nf else
               np.clip(U[:keep] @ inverse, setup.actuation.lower, setup.actuation.upper))
     Xk, tk, refk, Uk = X[:keep], t[:keep], ref[:keep], U[:keep]

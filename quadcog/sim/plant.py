@@ -18,6 +18,7 @@ from quadcog.errors import InputError
 from quadcog.model.conventions import IDX, N_PARAM, N_STATE, R_G, hover_trim
 from quadcog.model.functions import Model
 from quadcog.model.inertial_parameters import PI_NAMES
+from quadcog.numerics import exact_inverse
 from quadcog.vehicles.vehicle import N_ROTORS, Vehicle
 
 __all__ = ["TruthOptions", "Actuation", "PI_INDEX", "body_mass_and_cog", "truth_arguments", "rk4_step_expression",
@@ -126,6 +127,16 @@ class Actuation:
         """
         return np.array(self.mixer).reshape(4, 4)
 
+    def mixer_inverse(self) -> npt.NDArray[np.float64]:
+        """The inverse of the mixer, correctly rounded (``numerics.exact_inverse``).
+
+        Returns
+        -------
+        (4, 4) numpy.ndarray
+            f = mixer_inverse @ U (rotor thrusts in N from N, N m).
+        """
+        return exact_inverse(self.mixer_matrix(), "the mixer")
+
     def rotor_command(self, U: _Matrix) -> _Matrix:
         """Rotor thrusts for input U: inverse mixer, then the limits.
 
@@ -141,7 +152,7 @@ class Actuation:
         (4,) casadi.SX or casadi.DM
             Rotor thrusts (N).
         """
-        f = ca.DM(np.linalg.inv(self.mixer_matrix())) @ U
+        f = ca.DM(self.mixer_inverse()) @ U
         clipped = ca.fmax(f, self.lower)
         if not np.isinf(self.upper):
             clipped = ca.fmin(clipped, self.upper)
@@ -162,7 +173,7 @@ class Actuation:
             Rotor thrusts (N), within the limits.
         """
         U = np.asarray(U, dtype=float)
-        f = np.linalg.solve(self.mixer_matrix(), U.T).T
+        f = U @ self.mixer_inverse().T
         return np.clip(f, self.lower, self.upper)
 
 

@@ -28,6 +28,7 @@ from quadcog.errors import InputError, ParameterError
 from quadcog.model.conventions import IDX, PARAM_NAMES, R_G, hover_trim
 from quadcog.model.inertial_parameters import check_physically_consistent, from_inertial_parameters, inertial_parameters
 from quadcog.model.parameters import check_parameters
+from quadcog.numerics import exact_inverse
 from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.payload import Payload, as_payload
 from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
@@ -337,6 +338,19 @@ class Vehicle:
         return np.vstack([np.ones(N_ROTORS), pos[:, 1], -pos[:, 0],
                           self.moment_constant * np.asarray(self.rotor_directions, float)])
 
+    def mixer_inverse(self) -> npt.NDArray[np.float64]:
+        """The inverse of the mixer, from the input to rotor thrusts, ``f = B^-1 @ U``.
+
+        Each entry is the nearest float to the exact inverse's (``numerics.exact_inverse``),
+        so generated code and compiled kernels carry the same constants on every machine.
+
+        Returns
+        -------
+        (4, 4) numpy.ndarray
+            Columns per input [U1 (N), U2, U3, U4 (N m)], rows per rotor thrust (N).
+        """
+        return exact_inverse(self.mixer(), "the mixer")
+
     def rotor_thrusts(self, U: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """The rotor thrusts that produce ``U``: the inverse of the mixer.
 
@@ -360,7 +374,7 @@ class Vehicle:
         U = array(U, "U", what="4 rows [U1 (N), U2, U3, U4 (N m)] of finite numbers")
         if U.shape[:1] != (4,):
             raise InputError(f"U must have 4 rows [U1, U2, U3, U4], got shape {U.shape}")
-        return np.asarray(np.linalg.solve(self.mixer(), U), dtype=np.float64)
+        return np.asarray(self.mixer_inverse() @ U, dtype=np.float64)
 
     def rotor_speeds(self, f: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Rotor speeds of rotor thrusts: sqrt(f / thrust_constant).

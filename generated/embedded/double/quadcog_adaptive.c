@@ -1064,7 +1064,7 @@ void quadcog_adaptive_step(const qc_real x[12], const qc_real ref[14], qc_real c
     w47 = w47 * w41;
     w88 = w47 * w13;
     w63 = w63 + w88;
-    w88 = 4.16666666666664e-3;
+    w88 = 4.16666666666667e-3;
     w40 = w88 * w40;
     w109 = 2.29166666666667e-2;
     w52 = w109 * w52;

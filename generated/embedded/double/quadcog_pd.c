@@ -52,8 +52,8 @@ void quadcog_pd_step(const qc_real x[12], const qc_real ref[14], qc_real c[],
     w2 = w2 * w7;
     w0 = w0 - w2;
     U[0] = w0;
-    w0 = 1.54087197231833;
-    w2 = -4.28134556574921e-1;
+    w0 = 1.54087197231834;
+    w2 = -4.28134556574923e-1;
     w7 = x[5];
     w3 = cos(w7);
     w14 = x[1];
@@ -67,7 +67,7 @@ void quadcog_pd_step(const qc_real x[12], const qc_real ref[14], qc_real c[],
     w18 = w16 * w17;
     w15 = w15 - w18;
     w2 = w2 * w15;
-    w15 = -4.40713677934903e-1;
+    w15 = -4.40713677934905e-1;
     w18 = w13 * w3;
     w19 = w9 * w16;
     w20 = w19 * w11;
@@ -137,12 +137,12 @@ void quadcog_pd_step(const qc_real x[12], const qc_real ref[14], qc_real c[],
     w12 = w12 * w10;
     w6 = w6 + w12;
     w6 = w6 / w1;
-    w1 = 4.28134556574921e-1;
+    w1 = 4.28134556574923e-1;
     w17 = w3 * w17;
     w14 = w16 * w14;
     w17 = w17 + w14;
     w1 = w1 * w17;
-    w17 = 4.40713677934903e-1;
+    w17 = 4.40713677934905e-1;
     w3 = w3 * w4;
     w16 = w16 * w20;
     w3 = w3 + w16;
