@@ -216,6 +216,17 @@ def _key(A: npt.NDArray[np.float64]) -> _Rows:
     return tuple(map(tuple, A.tolist()))
 
 
+def _float(v: Fraction, name: str) -> float:
+    """The nearest float, or a ParameterError where the exact answer is beyond floats."""
+    try:
+        return float(v)
+    except OverflowError:
+        raise ParameterError(f"{name}: the solution has an entry of about 10^"
+                             f"{len(str(abs(v.numerator))) - len(str(v.denominator))}, beyond "
+                             f"the largest float (1.8e308); expected inputs whose solution is "
+                             f"finite") from None
+
+
 def _fractions(rows: _Rows) -> list[list[Fraction]]:
     return [[Fraction(v) for v in row] for row in rows]
 
@@ -251,7 +262,7 @@ def _solve(M: _Rows, rhs: _Rows, name: str) -> list[list[float]]:
         x = _gauss_jordan(_fractions(M), _fractions(rhs), name)
     except ParameterError as e:
         raise ParameterError(f"{e}: {name} = {[list(r) for r in M]}") from None
-    return [[float(v) for v in row] for row in x]
+    return [[_float(v, name) for v in row] for row in x]
 
 
 @lru_cache(maxsize=64)
@@ -270,7 +281,7 @@ def _lyapunov(A: _Rows, Q: _Rows, name: str) -> list[list[float]]:
             for r, i in enumerate(g):
                 for c, j in enumerate(h):
                     P[i][j] = block[r][c]
-    return [[float(v) for v in row] for row in P]
+    return [[_float(v, what) for v in row] for row in P]
 
 
 def _decoupled_groups(A: _Rows) -> list[list[int]]:
@@ -343,4 +354,4 @@ def _place(A: _Rows, b: tuple[float, ...], poles: tuple[float, ...], name: str
         c = coef[n - m]
         k = [ki + c * ri for ki, ri in zip(k, row)]
         row = [sum((row[r] * a[r][j] for r in range(n)), Fraction(0)) for j in range(n)]
-    return [float(v) for v in k]
+    return [_float(v, name) for v in k]

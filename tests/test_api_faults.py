@@ -34,6 +34,9 @@ NAN = float("nan")
     (lambda: CascadePD(poles_x=(-3, -3, -3, -3)),
      r"^poles_x: expected poles that can be placed on a single-input chain"),
     (lambda: CascadePD(poles_x=(-1 + 1j, -1 - 1j, -3, -4)), r"^poles_x: expected 4 real"),
+    (lambda: CascadePD(poles_z=(-1e300, -2e300)),
+     r"^poles_z: expected poles that can be placed on a single-input chain \(poles_z: the "
+     r"solution has an entry of about 10\^600"),
     (lambda: AdaptiveFeedbackLinearization(gamma=[0.01, 0.01]),
      r"^gamma: expected a positive number or 3 positive numbers .*, got shape \(2,\)"),
     (lambda: AdaptiveFeedbackLinearization(gamma="fast"), r"^gamma: expected a positive number"),

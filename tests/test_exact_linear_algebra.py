@@ -128,6 +128,9 @@ def test_errors_name_what_is_wrong():
         exact_place(np.zeros((2, 2)), [1, 0], [-1, -2], "poles_x")
     with pytest.raises(ParameterError, match=r"^poles_z: expected 2 finite real poles"):
         exact_place(np.zeros((2, 2)), [0, 1], [-1, np.inf], "poles_z")
+    with pytest.raises(ParameterError, match=r"^poles_z: the solution has an entry of about "
+                                             r"10\^600, beyond the largest float"):
+        exact_place([[0.0, 1.0], [0.0, 0.0]], [0, 1], [-1e300, -2e300], "poles_z")
     with pytest.raises(ParameterError, match="Lyapunov equation of A.*singular"):
         exact_lyapunov(np.zeros((2, 2)), np.eye(2))
     with pytest.raises(ParameterError, match=r"Q must have the shape of A \(2, 2\)"):
