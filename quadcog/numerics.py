@@ -1,11 +1,12 @@
-"""Numerical helpers of the floor: fast forms that round exactly as numpy's general ones."""
+"""Numerical helpers of the floor: fast forms that round exactly as numpy's general ones, and
+exact linear algebra for the small matrices whose answers reach generated code."""
 from fractions import Fraction
 from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
 
-from .errors import ParameterError
+from quadcog.errors import ParameterError
 
 __all__ = ["row_norms", "row_distances", "exact_inverse", "exact_solve", "exact_lyapunov",
            "exact_place"]
@@ -59,7 +60,6 @@ def row_distances(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]
         for c in d:
             c *= c
         return _norms(*d)
-
 
 
 # Exact linear algebra. LAPACK's and BLAS's answers move in the last bits with the kernel the
