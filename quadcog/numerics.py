@@ -123,8 +123,7 @@ def exact_solve(M: npt.ArrayLike, rhs: npt.ArrayLike, name: str = "matrix"
         raise ParameterError(f"the right-hand side for {name} must be {len(A)} rows of finite "
                              f"numbers, got shape {b.shape}")
     cols = b.reshape(len(A), -1)
-    x = _solve(_key(A), _key(cols), name)
-    return np.array([[float(v) for v in row] for row in x]).reshape(b.shape)
+    return np.array(_solve(_key(A), _key(cols), name)).reshape(b.shape)
 
 
 def exact_lyapunov(A: npt.ArrayLike, Q: npt.ArrayLike, name: str = "A"
@@ -132,12 +131,13 @@ def exact_lyapunov(A: npt.ArrayLike, Q: npt.ArrayLike, name: str = "A"
     """The P of ``A^T P + P A + Q = 0``, each entry the exact solution's nearest float.
 
     The same equation as ``scipy.linalg.solve_continuous_lyapunov(A.T, -Q)``, solved in
-    rationals as n^2 linear equations in the entries of P.
+    rationals: for each pair of the groups of states that A does not couple, the block of P
+    from its own small Sylvester equation (n^2 unknowns at once where A couples all states).
 
     Parameters
     ----------
     A : (n, n) array_like
-        A square matrix of finite floats (n at most 8 or so: n^2 unknowns).
+        A square matrix of finite floats (small: a block of g coupled states costs (g^2)^3).
     Q : (n, n) array_like
         The right-hand side, finite floats.
     name : str, optional
@@ -333,11 +333,10 @@ def _place(A: _Rows, b: tuple[float, ...], poles: tuple[float, ...], name: str
     cols = [[Fraction(v) for v in b]]
     for _ in range(n - 1):
         cols.append(times(a, cols[-1]))
-    C = [[cols[j][i] for j in range(n)] for i in range(n)]
-    # the last row of C^-1: solve C^T w = e_n
+    # the last row w of C^-1: C^T w = e_n, and the rows of C^T are those columns
     e_n = [[Fraction(int(i == n - 1))] for i in range(n)]
     try:
-        w = [v[0] for v in _gauss_jordan([list(r) for r in zip(*C)], e_n, "C")]
+        w = [v[0] for v in _gauss_jordan(cols, e_n, "C")]
     except ParameterError:
         raise ParameterError(f"{name}: the system is not controllable from its input (its "
                              "controllability matrix is singular); no gains place its poles"
