@@ -10,13 +10,14 @@ import ctypes
 import os
 from pathlib import Path
 import platform
+import subprocess
 import time
 
 from quadcog.codegen.compiler import _compiler_identity, compile_library, find_compiler
 import quadcog.codegen.vector_kernel as qk
 from quadcog.files import cpu_model
 
-__all__ = ["VECTOR_FEATURES", "fma_roofline", "loadavg", "machine"]
+__all__ = ["VECTOR_FEATURES", "cpu_identity", "fma_roofline", "loadavg", "machine"]
 
 # the /proc/cpuinfo flags that matter to the kernel (the rest are not vector features)
 VECTOR_FEATURES = ("sse2", "sse4_2", "avx", "avx2", "fma", "avx512f", "avx512dq", "avx512vl",
@@ -38,20 +39,63 @@ def loadavg():
         return "unknown"
 
 
+def cpu_identity(cc=None):
+    """What tells two CPUs of one model name apart: /proc/cpuinfo's vendor, family, model and
+    stepping and the clock it lists, and the target gcc reads ``-march=native`` as.
+
+    Parameters
+    ----------
+    cc : str, optional
+        The C compiler (default ``find_compiler()``); asked only when it is gcc.
+
+    Returns
+    -------
+    str
+        E.g. "AuthenticAMD family 26 model 2 stepping 1, 2596 MHz listed; gcc -march=native:
+        znver3"; the parts that cannot be read are left out ("unknown" when none can).
+    """
+    info = {}
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            key, _, value = line.partition(":")
+            info.setdefault(key.strip(), value.strip())
+    except OSError:
+        pass
+    parts = []
+    if "cpu family" in info:
+        parts.append(f"{info.get('vendor_id', '')} family {info['cpu family']} model "
+                     f"{info.get('model', '?')} stepping {info.get('stepping', '?')}".strip())
+    if "cpu MHz" in info:
+        parts.append(f"{float(info['cpu MHz']):.0f} MHz listed")
+    cc = find_compiler() if cc is None else cc
+    if cc:
+        try:
+            out = subprocess.run([cc, "-march=native", "-Q", "--help=target"],
+                                 capture_output=True, text=True, timeout=30).stdout
+            march = [ln.split()[-1] for ln in out.splitlines()
+                     if ln.strip().startswith("-march=") and len(ln.split()) > 1]
+            if march:
+                parts.append(f"gcc -march=native: {march[0]}")
+        except (OSError, subprocess.SubprocessError):
+            pass
+    return "; ".join(parts) or "unknown"
+
+
 def machine():
     """The machine, compiler and kernel build of this run.
 
     Returns
     -------
     dict
-        cpu (model name), cores (os.cpu_count), features (the VECTOR_FEATURES it has, space
+        cpu (model name), identity (``cpu_identity``), cores (os.cpu_count), features (the VECTOR_FEATURES it has, space
         separated), compiler (first line of ``cc --version``), isa (``kernel_isa()``), lanes
         (flights per float64 block), flags (the kernel's compiler flags).
     """
     feats = qk.cpu_features()
     cc = find_compiler()
     isa = qk.kernel_isa()
-    return {"cpu": cpu_model(), "cores": os.cpu_count(), "machine": platform.machine(),
+    return {"cpu": cpu_model(), "identity": cpu_identity(cc), "cores": os.cpu_count(),
+            "machine": platform.machine(),
             "features": " ".join(f for f in VECTOR_FEATURES if f in feats) or "none listed",
             "compiler": _compiler_identity(cc) if cc else "none", "isa": isa,
             "lanes": qk.lanes_for(isa),

@@ -577,7 +577,8 @@ def main():
     load_before = loadavg()
     print(f"quadcog bench on {m['cpu']} ({m['machine']}), {m['cores']} cores, CasADi "
           f"{ca.__version__}, Python {platform.python_version()}; load {load_before}")
-    record("machine: CPU", m["cpu"], "", "", "", f"{m['machine']}, {m['cores']} cores")
+    record("machine: CPU", m["cpu"], "", "", "",
+           f"{m['machine']}, {m['cores']} cores; {m['identity']}")
     record("machine: vector features", m["features"], "", "", "", "/proc/cpuinfo flags")
     record("machine: compiler", m["compiler"], "", "", "", "")
     record("machine: batch kernel build", m["isa"], "", "", "",
