@@ -43,7 +43,7 @@ def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
                  "bench_scale", "bench_crazyflow", "bench_isa",
                  "bench_float32"):
         monkeypatch.setattr(run, name, lambda *args: None)
-    monkeypatch.setattr(run, "bench_flight", lambda: (None, None))
+    monkeypatch.setattr(run, "bench_flight", lambda: (None, None, 0.015))
     monkeypatch.setattr(run, "bench_batch", lambda n: (1.0, 1.0))
     monkeypatch.setattr(run, "rows", [("a measurement", "1.5", "s", "", "", "")])
     monkeypatch.setattr(run, "ROOT", tmp_path)
