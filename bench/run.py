@@ -241,8 +241,9 @@ def bench_op_estimate(ctl, measured_step):
     record("step: estimate from op counts", f"{estimate * 1e9:.0f}", "ns")
     record("step: measured (flight / 20000)", f"{measured_step * 1e9:.0f}", "ns",
            f"{measured_step / estimate:.2f}x estimate", "",
-           "not a bound (the roofline rows are); the counts are the SX step's; the flight kernel runs fewer per step (what depends "
-           "only on P and the CoG profile hoisted, shared divisors inverted once)")
+           "not a bound (the roofline rows are); the counts are the SX step's; the flight "
+           "kernel runs fewer per step (what depends only on P and the CoG profile hoisted, "
+           "shared divisors inverted once)")
 
 
 def _batch_vehicles(n_flights, seed=1):
