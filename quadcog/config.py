@@ -16,6 +16,8 @@ Keys:
 - ``metrics.tail_fraction``: the tail metrics cover this last fraction of the run.
 - ``simulate.max_steps``: runs of more steps (duration / dt) are refused before anything is
   allocated (``quadcog.validate.BYTES_PER_STEP`` per step; ``quadcog.validate.step_count``).
+- ``progress.log_every``: on a log or a pipe (not a terminal), progress printers write a line
+  every this many seconds (s): the progress bar and a sweep's flight counter.
 """
 from typing import Any
 
@@ -29,6 +31,7 @@ _FACTORY: dict[str, Any] = {
     "simulate.max_steps": 10_000_000,
     # `quadcog run` writes trajectory.csv every this many seconds unless --every or --full-rate
     "run.sample_period": 0.01,
+    "progress.log_every": 5.0,
 }
 
 defaults: dict[str, Any] = dict(_FACTORY)

@@ -25,7 +25,7 @@ def test_a_log_gets_a_line_every_log_every_seconds_then_the_final_one(monkeypatc
     clock = Clock()
     monkeypatch.setattr(progress.time, "perf_counter", clock)
     log = io.StringIO()                      # not a terminal
-    bar = ProgressBar("run", stream=log, log_every=10.0)
+    bar = ProgressBar("run", stream=log, log_every=10.0)          # 5 s by default
     for k in range(1, 101):                  # 100 updates, 1 s apart
         clock.t = float(k)
         bar(k / 200)
@@ -73,3 +73,9 @@ def test_a_closed_bar_that_was_never_called_prints_nothing():
 def test_log_every_must_be_positive(bad):
     with pytest.raises(InputError, match="log_every"):
         ProgressBar("run", log_every=bad)
+
+
+def test_the_default_interval_is_the_config_entry(monkeypatch):
+    from quadcog import config
+    monkeypatch.setitem(config.defaults, "progress.log_every", 2.5)
+    assert ProgressBar("run").log_every == 2.5

@@ -19,7 +19,7 @@ from typing import Any, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
-from quadcog import validate
+from quadcog import config, validate
 from quadcog.errors import QuadcogError, SchedulerError, SizeError
 from quadcog.files import atomic_write
 from quadcog.interrupts import die_with_parent
@@ -51,16 +51,17 @@ class Progress:
         Flights already done (resumed chunks).
     stream : file-like, optional
         Where to write (default: stderr).
-    every : float
-        Seconds between lines when the stream is not a terminal [s].
+    every : float, optional
+        Seconds between lines when the stream is not a terminal [s] (default
+        ``config.defaults["progress.log_every"]``).
     """
 
     def __init__(self, label: str, total: int, done: int = 0, stream: TextIO | None = None,
-                 every: float = 5.0) -> None:
+                 every: float | None = None) -> None:
         self.label, self.total, self.done = label, total, done
         self.stream = stream or sys.stderr
         self._start_done, self._t0 = done, time.perf_counter()
-        self._last, self._every = -1e9, every
+        self._last, self._every = -1e9, config.get("progress.log_every", every)
         self._live = getattr(self.stream, "isatty", lambda: False)()
 
     def __call__(self, n_new: int) -> None:

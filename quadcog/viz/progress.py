@@ -3,6 +3,7 @@ import sys
 import time
 from typing import TextIO
 
+from quadcog import config
 from quadcog.validate import positive
 
 __all__ = ["ProgressBar"]
@@ -24,14 +25,16 @@ class ProgressBar:
         Where to print (default ``sys.stderr``).
     width : int
         Characters of the bar.
-    log_every : float
-        Seconds between the lines written to a stream that is not a terminal (> 0).
+    log_every : float, optional
+        Seconds between the lines written to a stream that is not a terminal (> 0; default
+        ``config.defaults["progress.log_every"]``).
     """
 
     def __init__(self, label: str, stream: TextIO | None = None, width: int = 30,
-                 log_every: float = 10.0) -> None:
+                 log_every: float | None = None) -> None:
         self.label, self.stream, self.width = label, stream or sys.stderr, width
-        self.log_every = positive(log_every, "ProgressBar: log_every", "s")
+        self.log_every = positive(config.get("progress.log_every", log_every),
+                                  "ProgressBar: log_every", "s")
         self._last = 0.0
         self._t0 = time.perf_counter()
         self._live = getattr(self.stream, "isatty", lambda: False)()
