@@ -228,3 +228,28 @@ def test_parcel_picked_up_and_dropped(scenario, extra):
     for t_event, t_next in ((2.0, 12.0), (12.0, np.inf)):
         settled = (res.t >= t_event + 2.0) & (res.t < t_next)
         assert err[settled].max() <= 0.03, (scenario, t_event, err[settled].max())
+
+
+def test_consistency_excess_against_the_pseudo_inertia():
+    """Below 1 exactly where the pseudo-inertia J of (m, r_G, I_O) is positive definite
+    (an independent check: J's eigenvalues), and bad input named."""
+    from quadcog.errors import InputError, PhysicalConsistencyError
+    from quadcog.model.inertial_parameters import inertial_parameters
+    rng = np.random.default_rng(7)
+    I_O = np.diag([HUMMINGBIRD.Ixx, HUMMINGBIRD.Iyy, HUMMINGBIRD.Izz])
+    sides = set()
+    for _ in range(200):
+        m, r = rng.uniform(0.1, 2.0), rng.normal(0.0, 0.05, 3)
+        excess = consistency_excess(m, r, I_O)
+        J = pseudo_inertia(inertial_parameters(m, r, I_O))
+        if abs(excess - 1) > 1e-6:
+            assert (excess < 1) == (np.linalg.eigvalsh(J)[0] > 0), (m, r, excess)
+            sides.add(excess < 1)
+    assert sides == {True, False}          # both sides of the rim were drawn
+    with pytest.raises(PhysicalConsistencyError, match="triangle"):
+        consistency_excess(1.0, [0, 0, 0.01], np.diag([1.0, 1.0, 2.0]))   # Sigma singular
+    for args, name in (((-1.0, [0, 0, 0], I_O), "m"), ((1.0, [0, 0], I_O), "r_G"),
+                       ((1.0, [0, 0, np.nan], I_O), "r_G"),
+                       ((1.0, [0, 0, 0], [[1, 0.5, 0], [0, 1, 0], [0, 0, 1]]), "I_O")):
+        with pytest.raises(InputError, match=f"consistency_excess: {name}"):
+            consistency_excess(*args)

@@ -118,10 +118,11 @@ from quadcog import validate
 from quadcog.controllers.composite import believed_input
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.shaping import kinematics
+from quadcog.errors import PhysicalConsistencyError
 from quadcog.kinds import Flag, Number, Vector
 from quadcog.model.conventions import B_U, IDX, NU
 from quadcog.model.functions import Model
-from quadcog.model.inertial_parameters import inertial_arguments, pseudo_inertia
+from quadcog.model.inertial_parameters import inertial_arguments, pseudo_inertia, symmetric_inertia
 from quadcog.numerics import exact_inverse, exact_lyapunov
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -152,7 +153,8 @@ def consistency_excess(m: float, r_G: npt.ArrayLike, I_O: npt.ArrayLike) -> floa
     r_G : (3,) array_like
         CoG from O (m).
     I_O : (3, 3) array_like
-        Inertia about O (kg m^2).
+        Inertia about O (kg m^2), symmetric, with its principal values meeting the strict
+        triangle inequalities (``Sigma_O`` positive definite).
 
     Returns
     -------
@@ -160,10 +162,26 @@ def consistency_excess(m: float, r_G: npt.ArrayLike, I_O: npt.ArrayLike) -> floa
         ``m r^T Sigma_O^-1 r`` with ``Sigma_O = tr(I_O)/2 I - I_O``: below 1 exactly when the
         pseudo-inertia is positive definite (``PayloadAdaptive`` keeps it at most
         1 - consistency_margin).
+
+    Raises
+    ------
+    InputError
+        ``m`` not a finite number > 0, ``r_G`` not 3 finite numbers, ``I_O`` not a
+        symmetric 3x3 matrix of finite numbers.
+    PhysicalConsistencyError
+        ``Sigma_O`` is not positive definite: no mass distribution has the inertia I_O about
+        O, so no (m, r_G) is consistent with it.
     """
-    I = np.asarray(I_O, dtype=float)
-    r = np.asarray(r_G, dtype=float)
+    m = validate.positive(m, "consistency_excess: m", "kg")
+    r = validate.vector(r_G, "consistency_excess: r_G", 3)
+    I = symmetric_inertia(I_O, "consistency_excess: I_O")
     Sigma = 0.5 * np.trace(I) * np.eye(3) - I
+    lowest = float(np.linalg.eigvalsh(Sigma)[0])
+    if not lowest > 0:
+        raise PhysicalConsistencyError(
+            f"consistency_excess: I_O = {validate.plain(I.tolist())} kg m^2 has "
+            f"Sigma_O = tr(I_O)/2 - I_O with smallest eigenvalue {lowest:.6g} kg m^2; expected "
+            f"> 0 (its principal inertias must meet the strict triangle inequalities)")
     return float(m * r @ np.linalg.solve(Sigma, r))
 
 

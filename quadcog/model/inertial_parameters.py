@@ -34,7 +34,7 @@ from quadcog.validate import array, plain, positive, real, vector
 __all__ = ["PI_NAMES", "N_PI", "TOLERANCE", "inertial_parameters", "from_inertial_parameters",
            "inertial_arguments", "parallel_axis", "point_mass", "box", "combine",
            "pseudo_inertia", "inertia_about_cog", "is_physically_consistent",
-           "check_physically_consistent", "placed"]
+           "check_physically_consistent", "placed", "symmetric_inertia"]
 
 PI_NAMES = CONTRACT.vectors["pi"]
 N_PI = len(PI_NAMES)
@@ -61,7 +61,26 @@ def _inertia_matrix(pi: np.ndarray) -> np.ndarray:
     return I
 
 
-def _symmetric(value: ArrayLike, where: str) -> np.ndarray:
+def symmetric_inertia(value: ArrayLike, where: str) -> np.ndarray:
+    """A 3x3 inertia matrix checked to be real, finite and symmetric (to 1e-12 relative).
+
+    Parameters
+    ----------
+    value : (3, 3) array_like
+        The inertia matrix (kg m^2).
+    where : str
+        Where it came from (an argument, a scenario key), put first in the message.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        Its symmetric part, float64.
+
+    Raises
+    ------
+    InputError
+        Not a (3, 3) matrix of finite real numbers, or not symmetric.
+    """
     I = array(value, where, (3, 3))
     if not np.allclose(I, I.T, rtol=1e-12, atol=0):
         raise InputError(f"{where}: expected a symmetric 3x3 inertia matrix (kg m^2), got "
@@ -103,7 +122,7 @@ def inertial_parameters(m: float, r_G: ArrayLike, I_O: ArrayLike,
     """
     m = real(m, f"{where}: m", unit="kg")
     r = vector(r_G, f"{where}: r_G", 3)
-    I = _symmetric(I_O, f"{where}: I_O")
+    I = symmetric_inertia(I_O, f"{where}: I_O")
     pi = np.empty(N_PI)
     pi[_M] = m
     pi[_H] = m * r
@@ -194,7 +213,7 @@ def parallel_axis(I_G: ArrayLike, m: float, r: ArrayLike) -> np.ndarray:
     numpy.ndarray, shape (3, 3)
         Inertia about O (kg m^2).
     """
-    I_G = _symmetric(I_G, "parallel_axis: I_G")
+    I_G = symmetric_inertia(I_G, "parallel_axis: I_G")
     m = real(m, "parallel_axis: m", lo=0.0, unit="kg")
     r = vector(r, "parallel_axis: r", 3)
     return I_G + _shift(m, r)
@@ -415,7 +434,7 @@ def placed(m: float, I_G: ArrayLike, positions: ArrayLike) -> np.ndarray:
         parallel-axis theorem).
     """
     m = positive(m, "placed: m", unit="kg")
-    I_G = _symmetric(I_G, "placed: I_G")
+    I_G = symmetric_inertia(I_G, "placed: I_G")
     r = array(positions, "placed: positions", (None, 3))
     out = np.empty((r.shape[0], N_PI))
     out[:, _M] = m
