@@ -10,6 +10,22 @@ import numpy.typing as npt
 __all__ = ["FastCall", "evaluate"]
 
 
+def _bound_buffers(function: ca.Function) -> tuple[list[npt.NDArray[np.float64]],
+                                                  list[npt.NDArray[np.float64]], Any, Any]:
+    """Zeroed flat arrays, one per input and per output (their nonzeros), bound to the
+    Function's call buffer: (inputs, outputs, buffer, its evaluator)."""
+    ins = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
+    outs = [np.zeros(function.nnz_out(j)) for j in range(function.n_out())]
+    buffer, evaluator = function.buffer()
+    # casadi's signatures list a size that its SWIG typemap takes from the buffer itself,
+    # and numpy's stubs do not declare ndarray a Buffer: both are false alarms
+    for i, a in enumerate(ins):
+        buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
+    for j, a in enumerate(outs):
+        buffer.set_res(j, memoryview(a))  # type: ignore[call-arg, arg-type]
+    return ins, outs, buffer, evaluator
+
+
 class FastCall:
     """Preallocated single-call wrapper around a CasADi Function.
 
@@ -26,19 +42,11 @@ class FastCall:
 
     def __init__(self, function: ca.Function) -> None:
         self.function = function
-        self.inputs = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
-        self._flat_out = [np.zeros(function.nnz_out(j)) for j in range(function.n_out())]
+        self.inputs, self._flat_out, self._buffer, self._eval = _bound_buffers(function)
         self.outputs: list[npt.NDArray[np.float64]] = []
         for j, flat in enumerate(self._flat_out):
             shape = function.size_out(j)
             self.outputs.append(flat if shape[1] == 1 else flat.reshape(shape, order="F"))
-        self._buffer, self._eval = function.buffer()
-        # casadi's signatures list a size that its SWIG typemap takes from the buffer itself,
-        # and numpy's stubs do not declare ndarray a Buffer: both are false alarms
-        for i, a in enumerate(self.inputs):
-            self._buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
-        for j, a in enumerate(self._flat_out):
-            self._buffer.set_res(j, memoryview(a))  # type: ignore[call-arg, arg-type]
         self.eval = self._eval          # the raw evaluator, for the tightest loops
 
     def __call__(self) -> list[npt.NDArray[Any]]:
@@ -52,17 +60,11 @@ class _Evaluator:
 
     def __init__(self, function: ca.Function) -> None:
         self.function = function           # kept: the cache is keyed by its id
-        self._in = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
-        self._out = [np.zeros(function.nnz_out(j)) for j in range(function.n_out())]
+        self._in, self._out, self._buffer, self._eval = _bound_buffers(function)
         # (shape, rows, cols) of each entry of a sparse argument; None for a dense one
         self._in_pattern = [self._pattern(function.sparsity_in(i)) for i in range(len(self._in))]
         self._out_pattern = [self._pattern(function.sparsity_out(j))
                              for j in range(len(self._out))]
-        self._buffer, self._eval = function.buffer()
-        for i, a in enumerate(self._in):
-            self._buffer.set_arg(i, memoryview(a))  # type: ignore[call-arg, arg-type]
-        for j, a in enumerate(self._out):
-            self._buffer.set_res(j, memoryview(a))  # type: ignore[call-arg, arg-type]
 
     @staticmethod
     def _pattern(sp: ca.Sparsity) -> tuple[tuple[int, int], Any, Any] | None:
