@@ -78,3 +78,18 @@ def test_a_flight_reports_the_position_errors_its_samples_have():
     rms = np.sqrt(np.mean(e ** 2))
     assert res.metrics.rms_position_error == pytest.approx(rms, rel=1e-12)
     assert res.metrics.final_position_error == pytest.approx(e[-1], rel=1e-12)
+
+
+def test_fastcall_refuses_a_sparse_matrix_output_by_name():
+    """A sparse matrix output has no view of its shape: a typed error naming it, not numpy's
+    reshape error; ``evaluate`` gives it dense."""
+    from quadcog.codegen.fastcall import FastCall
+    from quadcog.errors import InputError
+    x = ca.SX.sym("x", 2)
+    f = ca.Function("f", [x], [ca.diag(x)], ["x"], ["D"])
+    with pytest.raises(InputError, match=r"'f' output 0 \(D\) is a sparse 2x2"):
+        FastCall(f)
+    assert np.array_equal(evaluate(f, [1.0, 2.0])[0], np.diag([1.0, 2.0]))
+    call = FastCall(ca.Function("g", [x], [ca.densify(ca.diag(x))]))
+    call.inputs[0][:] = [1.0, 2.0]
+    assert np.array_equal(call()[0], np.diag([1.0, 2.0]))

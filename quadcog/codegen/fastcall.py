@@ -7,6 +7,8 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from quadcog.errors import InputError
+
 __all__ = ["FastCall", "evaluate"]
 
 
@@ -37,10 +39,25 @@ class FastCall:
     Parameters
     ----------
     function : casadi.Function
-        The Function to call (compiled or VM).
+        The Function to call (compiled or VM). Its matrix outputs must be dense (a sparse
+        one has no view of its shape: ``evaluate`` densifies it, or ``ca.densify`` the
+        Function's outputs).
+
+    Raises
+    ------
+    InputError
+        A matrix output of ``function`` is sparse.
     """
 
     def __init__(self, function: ca.Function) -> None:
+        for j in range(function.n_out()):
+            sp = function.sparsity_out(j)
+            if sp.size2() > 1 and not sp.is_dense():
+                raise InputError(
+                    f"FastCall: function {function.name()!r} output {j} "
+                    f"({function.name_out(j)}) is a sparse {sp.size1()}x{sp.size2()} matrix "
+                    f"with {sp.nnz()} nonzeros; expected dense matrix outputs (use "
+                    f"quadcog.codegen.fastcall.evaluate, or ca.densify the outputs)")
         self.function = function
         self.inputs, self._flat_out, self._buffer, self._eval = _bound_buffers(function)
         self.outputs: list[npt.NDArray[np.float64]] = []
