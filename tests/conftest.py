@@ -115,6 +115,16 @@ def pytest_sessionfinish(session):
         shutil.rmtree(folder, ignore_errors=True)
 
 
+def default_sigint():
+    """``preexec_fn`` of a child that a test interrupts: SIGINT at its default, as a terminal
+    user's process has it. A shell without job control starts a background job (``cmd &``
+    in a script, a CI runner) with SIGINT ignored, the child would inherit that, and Python
+    keeps an inherited ignore until the program installs a handler, so an early Ctrl-C would
+    be lost and the test would depend on how pytest was started."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def interrupt_mid_flight(argv, sig, *, group=False, **popen):
     """Run ``argv`` with stderr on a terminal (so its progress bar draws as a user sees it),
     send ``sig`` once the bar shows the work under way, and return (status, stderr with
@@ -125,7 +135,8 @@ def interrupt_mid_flight(argv, sig, *, group=False, **popen):
     import select
     import subprocess
     master, slave = pty.openpty()
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=slave, text=True, **popen)
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=slave, text=True,
+                            preexec_fn=default_sigint, **popen)
     os.close(slave)
     seen, sent = b"", False
     try:

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+from conftest import default_sigint
 import numpy as np
 import pytest
 
@@ -166,7 +167,7 @@ def test_killed_build_is_cleaned_up_by_the_next(tmp_path):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     for sig in (signal.SIGKILL, signal.SIGINT):
         proc = subprocess.Popen([sys.executable, "-c", code], env=env, stderr=subprocess.PIPE,
-                                start_new_session=True)
+                                start_new_session=True, preexec_fn=default_sigint)
         deadline = time.time() + 60
         while not _build_folders(cache) and time.time() < deadline:
             time.sleep(0.05)

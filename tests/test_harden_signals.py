@@ -9,7 +9,7 @@ import subprocess
 import sys
 import time
 
-from conftest import interrupt_mid_flight
+from conftest import default_sigint, interrupt_mid_flight
 import pytest
 
 from quadcog.errors import Interrupted
@@ -21,7 +21,8 @@ FINAL = {"metrics.json", "vehicle.json", "trajectory.csv", "flight.png"}
 
 def _start(*args, **kw):
     return subprocess.Popen([sys.executable, "-m", "quadcog", *args], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=default_sigint, **kw)
 
 
 def _children(pid):
