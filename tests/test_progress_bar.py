@@ -1,11 +1,12 @@
-"""The progress bar on a terminal and on a log: a long run's log shows how far it got."""
+"""The progress bar and the counter on a terminal and on a log: a long run's log shows how far
+it got."""
 import io
 
 import pytest
 
 from quadcog.errors import InputError
 import quadcog.viz.progress as progress
-from quadcog.viz.progress import ProgressBar
+from quadcog.viz.progress import ProgressBar, ProgressCounter
 
 
 class Clock:
@@ -79,3 +80,30 @@ def test_the_default_interval_is_the_config_entry(monkeypatch):
     from quadcog import config
     monkeypatch.setitem(config.defaults, "progress.log_every", 2.5)
     assert ProgressBar("run").log_every == 2.5
+
+
+def test_the_counter_on_a_log_first_line_at_once_then_every_log_every_then_done(monkeypatch):
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    log = io.StringIO()
+    count = ProgressCounter("sweep s", total=100, done=20, stream=log, log_every=5.0)
+    for k in range(1, 81):                   # one flight a second after the 20 resumed
+        clock.t = float(k)
+        count(1)
+    lines = log.getvalue().strip("\n").split("\n")
+    # at 1 s, then 6, 11, ..., 76 s (16 lines), and the final one at 80 s
+    assert len(lines) == 17, lines
+    assert lines[0] == "sweep s: 21/100 flights (21 %), 1.0 flights/s, 79 s left"
+    assert lines[-1] == "sweep s: 100/100 flights (100 %), 1.0 flights/s"
+
+
+def test_the_counter_on_a_terminal_ends_its_line_when_done(monkeypatch):
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    tty = Tty()
+    count = ProgressCounter("sweep s", total=3, stream=tty)
+    for k in range(1, 4):
+        clock.t = float(k)
+        count(1)
+    out = tty.getvalue()
+    assert out.count("\r") == 3 and out.endswith("\n") and out.count("\n") == 1, out

@@ -14,12 +14,12 @@ import os
 from pathlib import Path
 import sys
 import time
-from typing import Any, TextIO
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from quadcog import config, validate
+from quadcog import validate
 from quadcog.errors import QuadcogError, SchedulerError, SizeError
 from quadcog.files import atomic_write
 from quadcog.interrupts import die_with_parent
@@ -28,57 +28,14 @@ from quadcog.sweeps.flights import make_job, run_chunk
 from quadcog.sweeps.integrity import SweepLock, chunk_metadata, columns_of_table, verify_chunk
 from quadcog.sweeps.scheduler import probe_scheduler
 from quadcog.sweeps.spec import Sweep, SweepError, from_dict, load_sweep
+from quadcog.viz.progress import ProgressCounter
 
-__all__ = ["CHUNK_FOLDER", "MANIFEST", "Progress", "ChunkStore", "SweepResult", "sweep",
+__all__ = ["CHUNK_FOLDER", "MANIFEST", "ChunkStore", "SweepResult", "sweep",
            "run_cli"]
 
 CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"
 MAX_WORKERS = 256           # processes: more than any machine this runs on gives a benefit
-
-
-class Progress:
-    """``done/total flights (percent), rate, time left`` on stderr: live on a terminal, every
-    few seconds (and at the end) in a log. Call it with the number of flights just done.
-
-    Parameters
-    ----------
-    label : str
-        What the line starts with.
-    total : int
-        Flights in the sweep.
-    done : int
-        Flights already done (resumed chunks).
-    stream : file-like, optional
-        Where to write (default: stderr).
-    every : float, optional
-        Seconds between lines when the stream is not a terminal [s] (default
-        ``config.defaults["progress.log_every"]``).
-    """
-
-    def __init__(self, label: str, total: int, done: int = 0, stream: TextIO | None = None,
-                 every: float | None = None) -> None:
-        self.label, self.total, self.done = label, total, done
-        self.stream = stream or sys.stderr
-        self._start_done, self._t0 = done, time.perf_counter()
-        self._last, self._every = -1e9, config.get("progress.log_every", every)
-        self._live = getattr(self.stream, "isatty", lambda: False)()
-
-    def __call__(self, n_new: int) -> None:
-        self.done += n_new
-        now = time.perf_counter()
-        if self.done < self.total and now - self._last < (0.2 if self._live else self._every):
-            return
-        self._last = now
-        rate = (self.done - self._start_done) / max(now - self._t0, 1e-9)
-        left = (self.total - self.done) / rate if rate > 0 else float("inf")
-        text = (f"{self.label}: {self.done}/{self.total} flights "
-                f"({100 * self.done / max(self.total, 1):.0f} %), {rate:.1f} flights/s"
-                + (f", {left:.0f} s left" if self.done < self.total and np.isfinite(left) else ""))
-        self.stream.write(("\r" + text + " " * 8) if self._live else text + "\n")
-        if self._live and self.done >= self.total:
-            self.stream.write("\n")
-        self.stream.flush()
 
 
 class ChunkStore:
@@ -449,7 +406,7 @@ def _run(s, out, workers, scheduler, progress, plots, say, t0):
     if callable(progress):
         report = progress
     elif progress:
-        report = Progress(f"sweep {s.name}", len(s.flights), done_flights)
+        report = ProgressCounter(f"sweep {s.name}", len(s.flights), done_flights)
         if done_flights:
             print(f"sweep {s.name}: resuming, {len(chunks) - len(pending)} of {len(chunks)} "
                   f"chunks already in {out} (verified)", file=sys.stderr)
