@@ -70,14 +70,17 @@ test: $(STAMP)
 	$(PY) -m pytest
 
 # Timing tables (no assertions); writes out/bench/results.md (`python bench/publish.py bench`
-# copies it into README.md and bench/results.md).
+# copies it into docs/performance.md and bench/results.md).
 bench: compile
 	$(PY) bench/run.py
 
-# The peers of `make bench` (absent ones are reported absent): torch's CPU build first (a plain
-# torch requirement pulls a CUDA build), then the bench extra (RotorPy, crazyflow on JAX).
+# The peers of `make bench` (absent ones are reported absent): torch's CPU build first, then
+# the bench extra (RotorPy, crazyflow on JAX). From PyPI a plain torch is a CUDA build of
+# several GB; where no CPU build of torch 2.13.0 is at hand (pip says which file it took), take
+# PyTorch's CPU index: make bench-peers TORCH_PIP_ARGS='--index-url https://download.pytorch.org/whl/cpu'
+TORCH_PIP_ARGS ?=
 bench-peers: $(STAMP)
-	$(PY) -m pip install torch==2.13.0
+	$(PY) -m pip install $(TORCH_PIP_ARGS) torch==2.13.0
 	$(PY) -m pip install -e '.[bench]'
 
 # Would the tests catch wrong physics? Each deliberate mistake (bench/mutations.py --list) is

@@ -2,7 +2,9 @@
 
     python bench/precision.py [--flights N] [--out out/bench/precision.md]
 
-Tables (Markdown, printed and written to ``--out``):
+Tables (Markdown, printed and written to ``--out``, and each to its own file beside it,
+``precision-float32.md``, ``precision-isa.md`` and ``precision-fma.md``, which
+``python bench/publish.py precision-float32`` etc. copy into docs/performance.md):
 
 1. float32 against float64 (both the vector kernel): every shipped scenario flown as a batch
    of one, and a Monte-Carlo sweep (fig6, the adaptive controller, the CoG step drawn uniformly
@@ -27,10 +29,11 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import quadcog.codegen.vector_kernel as qk
+from quadcog.files import run_stamp
 from quadcog.scenarios.lookup import scenario_names
 from quadcog.scenarios.scenario import load_scenario
 from quadcog.sim.timeline import CogProfile
-from quadcog.sweeps.flights import METRICS, _controllers, fly_group
+from quadcog.sweeps.flights import CONTROLLERS_BY_GROUP, METRICS, fly_group
 
 CONTINUOUS = METRICS[:4]          # the four position-error metrics (m)
 
@@ -50,7 +53,7 @@ def absdiff(a, b):
 
 
 def fly(scenarios, precision="float64"):
-    _controllers.clear()
+    CONTROLLERS_BY_GROUP.clear()
     return fly_group("precision-bench", scenarios, threads=2, precision=precision)
 
 
@@ -150,6 +153,14 @@ def main():
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)
     print(f"written to {args.out}")
+    stamp = (f"Measured by `python bench/precision.py --flights {args.flights}` {run_stamp()}, "
+             f"native build {native}.")
+    for name, title, tab in (("float32", "float32 against float64", t32),
+                             ("isa", "portable against native", tisa),
+                             ("fma", "FMA contraction", tfma)):
+        part = args.out.parent / f"precision-{name}.md"
+        part.write_text(f"# {title}\n\n{stamp}\n\n{tab}\n")
+        print(f"written to {part}")
 
 
 if __name__ == "__main__":

@@ -19,6 +19,9 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py verify   [FILE]   # default out/report/verification.json (make report)
     python bench/publish.py embedded [FILE]   # default out/embedded/costs.json (make embedded)
     python bench/publish.py targets  [FILE]   # default out/targets/targets.md (quadcog targets)
+    python bench/publish.py precision-float32 [FILE]   # out/bench/precision-float32.md,
+    python bench/publish.py precision-isa     [FILE]   # ... -isa.md and -fma.md
+    python bench/publish.py precision-fma     [FILE]   # (python bench/precision.py)
 """
 import json
 from pathlib import Path
@@ -34,19 +37,23 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            "analysis": OUT / "analysis" / "analysis.json",
            "verify": OUT / "report" / "verification.json",
            "embedded": OUT / "embedded" / "costs.json",
-           "targets": OUT / "targets" / "targets.md"}
+           "targets": OUT / "targets" / "targets.md",
+           **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
+              for p in ("float32", "isa", "fma")}}
 # the page that holds each table block
 PAGES = {"bench": ROOT / "docs" / "performance.md",
          "paper": ROOT / "docs" / "tour" / "paper.md",
          "beyond": ROOT / "docs" / "tour" / "beyond.md",
          "embedded": ROOT / "docs" / "tour" / "flight-controller.md",
-         "targets": ROOT / "docs" / "targets.md"}
+         "targets": ROOT / "docs" / "targets.md",
+         **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
 COPIES = {"bench": ROOT / "bench" / "results.md",
           "analysis": MEASURED / "analysis.json",
           "verify": MEASURED / "verification.json",
-          "embedded": MEASURED / "embedded.json"}
+          "embedded": MEASURED / "embedded.json",
+          **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")}}
 VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
                    r"(?P<text>[^<]*)<!-- /value -->")
 
@@ -115,6 +122,9 @@ def values(text, name, data):
 
 def read(source):
     """(table, machine line, JSON data or None) of a file a command wrote."""
+    if not Path(source).is_file():
+        raise SystemExit(f"{source}: no such file; run the command that writes it first "
+                         "(this script's docstring names each)")
     text = Path(source).read_text()
     if Path(source).suffix == ".json":
         data = json.loads(text)

@@ -46,3 +46,13 @@ def test_absent_peers_are_reported_absent(run, monkeypatch):
     run.bench_rotorpy(0.015)
     assert [r[1] for r in run.rows] == ["absent"] * 3
     assert all("not installed" in r[5] for r in run.rows)
+
+
+@pytest.mark.parametrize("script", sorted(p.name for p in (ROOT / "bench").glob("*.py")))
+def test_every_bench_script_imports(script, monkeypatch):
+    """An import that a refactoring broke (bench/precision.py imported a name the sweeps no
+    longer had) fails here, not only when someone regenerates the docs' tables."""
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    spec = importlib.util.spec_from_file_location(f"bench_{script[:-3]}", ROOT / "bench" / script)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)          # module level only: main() is not called

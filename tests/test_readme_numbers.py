@@ -131,3 +131,20 @@ def test_publish_fills_in_the_values_of_a_run(tmp_path):
                                 "<!-- value run e .1e -->1.8e-3<!-- /value -->, "
                                 "<!-- value other n d -->7<!-- /value -->\n")
     assert (tmp_path / "copy" / "run.json").read_text() == src.read_text()
+
+
+def test_every_published_markdown_table_is_its_tracked_copy():
+    """bench/publish.py's precision tables (bench/precision.py) and the bench table: each
+    block of a page equals the table of the file the command wrote (its tracked copy)."""
+    pub = _publish()
+    checked = []
+    for name, copy in pub.COPIES.items():
+        if copy.suffix != ".md" or name not in pub.PAGES:
+            continue
+        page = pub.PAGES[name].read_text()
+        assert pub.block(page, name) == pub.table_of(copy.read_text()), name
+        machine = pub.machine_of(copy.read_text())
+        if f"<!-- BEGIN {name}-machine -->" in page:
+            assert pub.block(page, f"{name}-machine") == machine, name
+        checked.append(name)
+    assert {"bench", "precision-float32", "precision-isa", "precision-fma"} <= set(checked)

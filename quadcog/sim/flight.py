@@ -99,7 +99,9 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
         Initial state [m, rad, m/s, rad/s] (default: at the reference, level, with the
         reference velocity).
     path : {"compiled", "python"}
-        "compiled" (one compiled call per 1000 steps) or "python" (a step loop).
+        "compiled" (the flight kernel: one compiled call for the whole flight, one per 1000
+        steps with a progress callback; CasADi's compiled chunks without a C compiler) or
+        "python" (a step loop).
     limits : Limits, optional
         Limits of divergence (default ``Limits()``).
     progress : callable, optional
