@@ -46,7 +46,8 @@ def cpu_identity(cc=None):
     Parameters
     ----------
     cc : str, optional
-        The C compiler (default ``find_compiler()``); asked only when it is gcc.
+        The C compiler (default ``find_compiler()``), asked gcc's ``-march=native -Q
+        --help=target``; a compiler that does not answer it in gcc's form is left out.
 
     Returns
     -------
@@ -65,7 +66,7 @@ def cpu_identity(cc=None):
     if "cpu family" in info:
         parts.append(f"{info.get('vendor_id', '')} family {info['cpu family']} model "
                      f"{info.get('model', '?')} stepping {info.get('stepping', '?')}".strip())
-    if "cpu MHz" in info:
+    if info.get("cpu MHz", "").replace(".", "", 1).isdigit():
         parts.append(f"{float(info['cpu MHz']):.0f} MHz listed")
     cc = find_compiler() if cc is None else cc
     if cc:
@@ -87,9 +88,10 @@ def machine():
     Returns
     -------
     dict
-        cpu (model name), identity (``cpu_identity``), cores (os.cpu_count), features (the VECTOR_FEATURES it has, space
-        separated), compiler (first line of ``cc --version``), isa (``kernel_isa()``), lanes
-        (flights per float64 block), flags (the kernel's compiler flags).
+        cpu (model name), identity (``cpu_identity``), cores (os.cpu_count), features (the
+        VECTOR_FEATURES it has, space separated), compiler (first line of ``cc --version``),
+        isa (``kernel_isa()``), lanes (flights per float64 block), flags (the kernel's
+        compiler flags).
     """
     feats = qk.cpu_features()
     cc = find_compiler()

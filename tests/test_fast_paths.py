@@ -89,6 +89,10 @@ def test_fastcall_refuses_a_sparse_matrix_output_by_name():
     f = ca.Function("f", [x], [ca.diag(x)], ["x"], ["D"])
     with pytest.raises(InputError, match=r"'f' output 0 \(D\) is a sparse 2x2"):
         FastCall(f)
+    v = ca.SX(3, 1)                       # a structural zero in the middle: its 2 nonzeros
+    v[0], v[2] = x[0], x[1]               # would pass for the 3-vector
+    with pytest.raises(InputError, match=r"'c' output 0 \(v\) is a sparse 3x1"):
+        FastCall(ca.Function("c", [x], [v], ["x"], ["v"]))
     assert np.array_equal(evaluate(f, [1.0, 2.0])[0], np.diag([1.0, 2.0]))
     call = FastCall(ca.Function("g", [x], [ca.densify(ca.diag(x))]))
     call.inputs[0][:] = [1.0, 2.0]

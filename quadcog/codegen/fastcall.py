@@ -39,24 +39,24 @@ class FastCall:
     Parameters
     ----------
     function : casadi.Function
-        The Function to call (compiled or VM). Its matrix outputs must be dense (a sparse
-        one has no view of its shape: ``evaluate`` densifies it, or ``ca.densify`` the
-        Function's outputs).
+        The Function to call (compiled or VM). Its outputs must be dense (a sparse one has
+        no view of its shape, and a sparse column's nonzeros are not the column:
+        ``evaluate`` densifies them, or ``ca.densify`` the Function's outputs).
 
     Raises
     ------
     InputError
-        A matrix output of ``function`` is sparse.
+        An output of ``function`` is sparse.
     """
 
     def __init__(self, function: ca.Function) -> None:
         for j in range(function.n_out()):
             sp = function.sparsity_out(j)
-            if sp.size2() > 1 and not sp.is_dense():
+            if not sp.is_dense():
                 raise InputError(
                     f"FastCall: function {function.name()!r} output {j} "
                     f"({function.name_out(j)}) is a sparse {sp.size1()}x{sp.size2()} matrix "
-                    f"with {sp.nnz()} nonzeros; expected dense matrix outputs (use "
+                    f"with {sp.nnz()} nonzeros; expected dense outputs (use "
                     f"quadcog.codegen.fastcall.evaluate, or ca.densify the outputs)")
         self.function = function
         self.inputs, self._flat_out, self._buffer, self._eval = _bound_buffers(function)

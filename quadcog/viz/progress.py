@@ -74,8 +74,8 @@ class ProgressBar(_Printer):
     def __call__(self, fraction: float) -> None:
         self._fraction, self._called = fraction, True
         now = time.perf_counter()
-        # the final line of a log is close()'s
-        if fraction < 1 and self._due(now, False) or self._live and fraction >= 1:
+        # a terminal draws a full bar at once; the final line of a log is close()'s
+        if (self._live and fraction >= 1) or (fraction < 1 and self._due(now, False)):
             self._show(self._line(fraction, now), now, False)
 
     def _line(self, fraction: float, now: float) -> str:
