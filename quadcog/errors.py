@@ -6,7 +6,7 @@ __all__ = ["QuadcogError", "GeneratedFilesError", "InputError", "ParameterError"
            "QuadcogWarning", "EulerSingularityError", "TargetError", "ExportError",
            "ScenarioError", "OverrideError", "ReferenceWarning", "KernelError", "SweepError",
            "PhysicalConsistencyError", "MissingDependencyError", "LogError", "LogFormatError",
-           "LogCRCError", "LogSignalError", "IdentificationError"]
+           "LogCRCError", "LogSignalError", "IdentificationError", "StackError"]
 
 
 class QuadcogError(Exception):
@@ -160,3 +160,8 @@ class Interrupted(KeyboardInterrupt):
         self.signum = int(signum)
         self.status = 128 + self.signum
         super().__init__(f"interrupted by {signal.Signals(self.signum).name}")
+
+
+class StackError(QuadcogError):
+    """A flight stack's or peer suite's tree is missing or is not one, or its build failed;
+    the message says what is missing and how to get it (quadcog.stacks)."""

@@ -1,13 +1,16 @@
 """Rotor models: what turns a logged motor command (and the battery voltage) into rotor thrust.
 
 A ``RotorModel`` is data with its source: a frozen, validated record of one published map from
-the motor output a flight log records to the thrust of one rotor (N). Three forms:
+the motor output a flight log records to the thrust of one rotor (N). Four forms:
 
 - ``"polynomial"``: ``f = c0 + c1 (s u) + c2 (s u)^2`` for the logged output u in 0..1 and
   the scale s of the source's command (65535 for the Crazyflie's 16-bit PWM);
 - ``"voltage"``: the voltage across the motor, ``u V_bat``, is a quadratic of the thrust,
   ``u V_bat = c0 + c1 F + c2 F^2`` with F in the source's unit (``thrust_unit`` N per unit per
   rotor); the model solves it for F (0 below ``c0``: the motor does not turn);
+- ``"voltage_cubic"``: the thrust of one rotor is a cubic of the voltage across the motor,
+  ``f = c0 + c1 v + c2 v^2 + c3 v^3`` (N) with ``v = u V_bat`` (the Crazyflie firmware's
+  ``VMOTOR2THRUST0..3`` since 2025); 0 where the cubic is below 0 (the motor does not turn);
 - ``"thr_mdl_fac"``: PX4's thrust curve, ``f = T_max ((1 - k) u + k u^2)`` for the normalized
   motor output u in 0..1, k the vehicle's ``THR_MDL_FAC``.
 
@@ -26,10 +29,11 @@ from quadcog import validate
 from quadcog.errors import InputError
 
 __all__ = ["RotorModel", "ROTOR_MODELS", "STANDARD_GRAVITY", "CRAZYFLIE_BITCRAZE_VOLTAGE",
-           "CRAZYFLIE_FOERSTER", "CRAZYFLIE_FIRMWARE_COMMAND", "px4_thrust_curve",
+           "CRAZYFLIE_FOERSTER", "CRAZYFLIE_FIRMWARE_COMMAND", "CRAZYFLIE_21_PLUS_CUBIC",
+           "cubic_voltage", "px4_thrust_curve",
            "px4_thrust_curve_from_log"]
 
-KINDS = ("polynomial", "voltage", "thr_mdl_fac")
+KINDS = ("polynomial", "voltage", "thr_mdl_fac", "voltage_cubic")
 SIGNALS_READ = ("motor_pwm", "motor_command")
 STANDARD_GRAVITY = 9.80665          # m/s^2: grams-force to newtons (CGPM 1901)
 
@@ -48,7 +52,8 @@ class RotorModel:
         The log signal read: ``"motor_pwm"`` (the duty the motor sees) or ``"motor_command"``.
     coefficients : tuple of float
         ``"polynomial"``: (c0, c1, c2) in N; ``"voltage"``: (c0, c1, c2) in V, V per unit and
-        V per unit^2 of the source's thrust; ``"thr_mdl_fac"``: (k,), dimensionless in [0, 1].
+        V per unit^2 of the source's thrust; ``"thr_mdl_fac"``: (k,), dimensionless in [0, 1];
+        ``"voltage_cubic"``: (c0, c1, c2, c3) in N, N/V, N/V^2, N/V^3 (a thrust rising with v).
     scale : float
         ``"polynomial"``: the source's command at u = 1 (65535 for a 16-bit PWM); else 1.
     thrust_unit : float
@@ -79,7 +84,7 @@ class RotorModel:
             validate.fail("RotorModel.name", "a non-empty string", self.name)
         validate.choice(self.kind, f"{where}: kind", KINDS)
         validate.choice(self.signal, f"{where}: signal", SIGNALS_READ)
-        n = {"polynomial": 3, "voltage": 3, "thr_mdl_fac": 1}[self.kind]
+        n = {"polynomial": 3, "voltage": 3, "thr_mdl_fac": 1, "voltage_cubic": 4}[self.kind]
         c = validate.array(self.coefficients, f"{where}: coefficients", (n,))
         object.__setattr__(self, "coefficients", tuple(float(v) for v in c))
         for field in ("scale", "thrust_unit"):
@@ -95,14 +100,17 @@ class RotorModel:
         if self.kind == "voltage" and not (c[1] > 0 and c[0] >= 0):
             validate.fail(f"{where}: coefficients", "c0 >= 0 V and a positive slope c1",
                           c.tolist())
+        if self.kind == "voltage_cubic" and not (c[3] > 0 and 3 * c[3] * c[1] > c[2] ** 2):
+            validate.fail(f"{where}: coefficients", "a cubic that rises everywhere (c3 > 0 and "
+                          "3 c3 c1 > c2^2, so it has one inverse)", c.tolist())
         if not isinstance(self.source, str) or not self.source.strip():
             validate.fail(f"{where}: source", "the citation of the numbers", self.source)
 
     @property
     def uses_voltage(self) -> bool:
-        """bool: True when the thrust depends on the battery voltage (the ``"voltage"``
-        form)."""
-        return self.kind == "voltage"
+        """bool: True when the thrust depends on the battery voltage (the ``"voltage"`` and
+        ``"voltage_cubic"`` forms)."""
+        return self.kind in ("voltage", "voltage_cubic")
 
     @property
     def signals(self) -> tuple[str, ...]:
@@ -154,6 +162,9 @@ class RotorModel:
             f = c[0] + c[1] * s + c[2] * s * s
         elif self.kind == "thr_mdl_fac":
             f = self.max_thrust * ((1.0 - c[0]) * u + c[0] * u * u)
+        elif self.kind == "voltage_cubic":
+            v = u * self._voltage(voltage, u.shape)
+            f = c[0] + v * (c[1] + v * (c[2] + v * c[3]))
         else:
             volts = u * self._voltage(voltage, u.shape) - c[0]
             if c[2] < 0:        # beyond the parabola's vertex the fit means nothing: saturate
@@ -192,6 +203,8 @@ class RotorModel:
             u = _quadratic_root(c[2], c[1], c[0] - f) / self.scale
         elif self.kind == "thr_mdl_fac":
             u = _quadratic_root(c[0], 1.0 - c[0], -f / self.max_thrust)
+        elif self.kind == "voltage_cubic":
+            u = np.where(f > 0, cubic_voltage(c, f), 0.0) / self._voltage(voltage, f.shape)
         else:
             F = f / self.thrust_unit
             u = np.where(F > 0, c[0] + c[1] * F + c[2] * F * F, 0.0) \
@@ -211,6 +224,35 @@ class RotorModel:
             ``"<name> (<kind> of <signal>): <source>"``.
         """
         return f"{self.name} ({self.kind} of {self.signal}): {self.source}"
+
+
+def cubic_voltage(c: tuple[float, ...], f: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """The motor voltage v at which the rising cubic ``c0 + c1 v + c2 v^2 + c3 v^3`` is f.
+
+    Cardano's formula in the form the Crazyflie firmware inverts its thrust map with
+    (``motorsCompensateBatteryVoltage`` in src/drivers/src/motors.c): with
+    ``p = -c2 / (3 c3)``, ``r = c1 / (3 c3)`` and
+    ``q = p^3 + (c2 c1 - 3 c3 (c0 - f)) / (6 c3^2)``,
+    ``v = cbrt(q + s) + cbrt(q - s) + p``, ``s = sqrt(q^2 + (r - p^2)^3)``.
+
+    Parameters
+    ----------
+    c : tuple of 4 float
+        (c0, c1, c2, c3) in N, N/V, N/V^2, N/V^3, with ``3 c3 c1 > c2^2`` (one real root).
+    f : array_like
+        Thrusts (N).
+
+    Returns
+    -------
+    numpy.ndarray, shape of f
+        Motor voltages (V).
+    """
+    c0, c1, c2, c3 = c
+    f = np.asarray(f, dtype=float)
+    p, r = -c2 / (3 * c3), c1 / (3 * c3)
+    q = p ** 3 + (c2 * c1 - 3 * c3 * (c0 - f)) / (6 * c3 * c3)
+    s = np.sqrt(q * q + (r - p * p) ** 3)
+    return np.cbrt(q + s) + np.cbrt(q - s) + p
 
 
 def _quadratic_root(a, b, c):
@@ -262,8 +304,23 @@ CRAZYFLIE_FIRMWARE_COMMAND = RotorModel(
     source="Bitcraze, crazyflie-firmware motors.c: with battery compensation the thrust "
            "command maps 65536 <==> 60 g total (15 g per rotor), linearly")
 
+# The Crazyflie firmware's thrust map for the Crazyflie 2.1 with its default 2.1+ propellers
+# (Kconfig choice CRAZYFLIE_21_PLUS, the default when battery compensation is on), thrust of
+# one rotor (N) a cubic of the motor voltage (V): crazyflie-firmware
+# src/platform/interface/platform_defaults_cf2.h, VMOTOR2THRUST0..3 (commit 2a18fc29; Bitcraze
+# blog "Keeping thrust consistent as the battery drains", 2025-10, firmware PR #1526).
+# tests/test_crazyflie_preset.py reads them from the firmware tree.
+CRAZYFLIE_21_PLUS_CUBIC = RotorModel(
+    name="bitcraze-2.1plus", kind="voltage_cubic", signal="motor_pwm",
+    coefficients=(-0.02476537915958403, 0.06523793527519485, -0.026792504967750107,
+                  0.006776789303971145),
+    max_thrust=0.12,
+    source="Bitcraze, crazyflie-firmware platform_defaults_cf2.h (2.1+ propellers): thrust of "
+           "one rotor = VMOTOR2THRUST0 + VMOTOR2THRUST1 v + VMOTOR2THRUST2 v^2 + "
+           "VMOTOR2THRUST3 v^3 N, v = V_bat PWM / 65535; THRUST_MAX 0.12 N")
+
 ROTOR_MODELS = {m.name: m for m in (CRAZYFLIE_BITCRAZE_VOLTAGE, CRAZYFLIE_FOERSTER,
-                                    CRAZYFLIE_FIRMWARE_COMMAND)}
+                                    CRAZYFLIE_FIRMWARE_COMMAND, CRAZYFLIE_21_PLUS_CUBIC)}
 
 
 def px4_thrust_curve(max_thrust: float, thr_mdl_fac: float, name: str = "px4",

@@ -6,10 +6,10 @@ constants, thrust limits, motor time constant). It gives the 14-entry parameter 
 generated functions (``parameters()``) and the mixer ``U = mixer() @ f`` from rotor thrusts
 ``f`` (N) to ``U = [U1 (N), U2, U3, U4 (N m, about O)]`` and back (``rotor_thrusts(U)``).
 
-Three vehicles ship, nearly two orders of magnitude apart in mass: ``HUMMINGBIRD`` (AscTec
+Four vehicles ship, nearly two orders of magnitude apart in mass: ``HUMMINGBIRD`` (AscTec
 Hummingbird, 0.68 kg, "+" layout, the default), ``CRAZYFLIE`` (Bitcraze Crazyflie 2.0, 27 g,
-"X" layout) and ``X500`` (Holybro X500 as in PX4's Gazebo model, 2 kg, "X" layout). Any
-planar layout of four rotors is data:
+"X" layout), ``CRAZYFLIE_21`` (Crazyflie 2.1 from its firmware's constants, 29 g) and
+``X500`` (Holybro X500 as in PX4's Gazebo model, 2 kg, "X" layout). Any planar layout of four rotors is data:
 ``Vehicle(..., rotor_positions=x_layout(0.225), rotor_directions=(1, -1, 1, -1), ...)``.
 
 Frames: body x forward, z up (thrust along +z at O), so a rotor at (x_i, y_i) with thrust f_i
@@ -31,9 +31,9 @@ from quadcog.model.parameters import check_parameters
 from quadcog.numerics import exact_inverse
 from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.payload import Payload, as_payload
-from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
+from quadcog.vehicles.rotor_model import CRAZYFLIE_21_PLUS_CUBIC, CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
-__all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
+__all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "CRAZYFLIE_21", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
            "plus_layout", "x_layout", "default_parameters"]
 
 N_ROTORS = 4
@@ -592,7 +592,33 @@ X500 = Vehicle(
     max_rotor_thrust=_X500_THRUST_CONSTANT * _X500_MAX_ROTOR_SPEED ** 2,   # 8.55 N
     motor_time_constant=0.0125)
 
-PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE, "x500": X500}
+# Bitcraze Crazyflie 2.1 with its default 2.1+ propellers, from the firmware's own constants
+# (crazyflie-firmware 2a18fc29, src/platform/interface/platform_defaults_cf2.h with the
+# Kconfig defaults ENABLE_THRUST_BAT_COMPENSATED and CRAZYFLIE_21_PLUS): CF_MASS 0.029 kg,
+# ARM_LENGTH 0.046 m ("X" layout, M1 front-right .. M4 front-left), THRUST2TORQUE
+# 0.0069928948992470565 m, THRUST_MAX 0.12 N per motor, the thrust map VMOTOR2THRUST0..3
+# (CRAZYFLIE_21_PLUS_CUBIC). The inertia is the one the firmware's Lee controller flies with
+# (controller_lee.c, .J), which is Foerster's published identification (as for the 2.0). The
+# firmware has no rotor-speed constant: the thrust constant is Foerster's (it only turns
+# thrust limits into rotor speeds), the motor time constant the 2.0's, the rotor directions
+# those of the firmware's force-torque mixer (power_distribution_quadrotor.c: M2, M4 give
+# +torqueZ, i.e. turn clockwise seen from above). Drag as for the other presets: the
+# Hummingbird's per mass and per inertia. tests/test_crazyflie_preset.py checks the firmware
+# numbers against the header of a firmware tree. (The CrazyPAD drones weigh 34-38 g by
+# quadcog's identification: `vehicle.replace(m=...)`.)
+_CF21_MASS, _CF21_IXX = 0.029, 16.571710e-6
+CRAZYFLIE_21 = Vehicle(
+    name="Crazyflie 2.1 (2.1+ propellers)", m=_CF21_MASS, g=9.81, Ixx=_CF21_IXX,
+    Iyy=16.655602e-6, Izz=29.261652e-6, c_x=_DRAG_PER_MASS * _CF21_MASS,
+    c_y=_DRAG_PER_MASS * _CF21_MASS, c_z=_DRAG_PER_MASS * _CF21_MASS,
+    c_phi=_RATE_DRAG_PER_INERTIA * _CF21_IXX, c_theta=_RATE_DRAG_PER_INERTIA * _CF21_IXX,
+    c_psi=_RATE_DRAG_PER_INERTIA * _CF21_IXX, rotor_positions=x_layout(0.046),
+    rotor_directions=(-1, 1, -1, 1), thrust_constant=_CF_THRUST_CONSTANT,
+    moment_constant=0.0069928948992470565, max_rotor_thrust=0.12,
+    motor_time_constant=0.0125, rotor_model=CRAZYFLIE_21_PLUS_CUBIC)
+
+PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE, "x500": X500,
+           "crazyflie21": CRAZYFLIE_21}
 
 
 def default_parameters(**overrides: float) -> npt.NDArray[np.float64]:
