@@ -28,7 +28,7 @@ from quadcog.stacks.vendor import find_tree, tree_digest
 
 __all__ = ["FIRMWARE_ENV", "MARKERS", "PROPELLERS", "CONTROLLERS", "INCLUDE_DIRS",
            "FIRMWARE_SOURCES", "GET_FIRMWARE", "firmware_tree", "autoconf", "constants",
-           "check_structs", "extracted_source", "FirmwareBuild", "build_firmware"]
+           "check_structs", "extracted_source", "loop_source", "FirmwareBuild", "build_firmware"]
 
 FIRMWARE_ENV = "QUADCOG_CRAZYFLIE_FIRMWARE"
 GET_FIRMWARE = ("get one with `git clone --recursive https://github.com/bitcraze/"
@@ -286,6 +286,17 @@ class FirmwareBuild:
     out_of_tree: Path | None
 
 
+def loop_source() -> bytes:
+    """The C text of quadcog's driver loop (``c/loop.c``; the tests mutate it here).
+
+    Returns
+    -------
+    bytes
+        The file's bytes.
+    """
+    return (_C_DIR / "loop.c").read_bytes()
+
+
 def _oot_sources(folder: Path) -> tuple[list[Source], tuple[Path, ...]]:
     src = folder / "src" if (folder / "src").is_dir() else folder
     files = sorted(src.glob("*.c"))
@@ -330,7 +341,7 @@ def build_firmware(firmware: str | os.PathLike[str] | None = None, propellers: s
     config = _config_dir(autoconf(propellers, oot is not None))
     sources: list[Source] = [(Path(f).name, (tree / f).read_bytes()) for f in FIRMWARE_SOURCES]
     sources.append(("qc_motors.c", extracted_source(tree)))
-    sources.append(("qc_loop.c", (_C_DIR / "loop.c").read_bytes()))
+    sources.append(("qc_loop.c", loop_source()))
     extra: tuple[Path, ...] = ()
     if oot is not None:
         oot_sources, extra = _oot_sources(oot)
