@@ -1,6 +1,5 @@
 """The Crazyflie firmware in quadcog's loop: units and signs at the boundary (hand-derived
 oracles), isolation of flights, the out-of-tree API, bad input."""
-import os
 from pathlib import Path
 import shutil
 import stat

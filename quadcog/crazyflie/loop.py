@@ -148,9 +148,20 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
     vehicle : Vehicle, optional
         The truth vehicle (default ``CRAZYFLIE_21``); an "X" frame in the firmware's motor
         order. Its ``rotor_model`` is not used: the thrust map is the firmware's own.
-    cog, payloads, disturbances, truth, x0, limits
-        As for ``quadcog.simulate`` (``truth.rotor_saturation`` caps each rotor at the
-        vehicle's ``max_rotor_thrust`` beyond the PWM's own cap; ``truth.motor_lag`` lags it).
+    cog : CogProfile or list of (t, r, ramp), optional
+        The CoG changes, as for ``quadcog.simulate``.
+    payloads : sequence of PayloadEvent or dict, optional
+        Payload events, as for ``quadcog.simulate``.
+    disturbances : sequence of Disturbance
+        Wrench pulses, as for ``quadcog.simulate``.
+    truth : TruthOptions, optional
+        As for ``quadcog.simulate``: ``rotor_saturation`` caps each rotor at the vehicle's
+        ``max_rotor_thrust`` beyond the PWM's own cap; ``motor_lag`` lags the rotors (without
+        it the PID's rate loop chatters once it must hold a torque, and Mellinger limit-cycles).
+    x0 : (12,) array_like, optional
+        Initial state, as for ``quadcog.simulate``.
+    limits : Limits, optional
+        When a run counts as diverged, as for ``quadcog.simulate``.
     firmware : str or os.PathLike, optional
         The firmware tree (default ``$QUADCOG_CRAZYFLIE_FIRMWARE``, else the vendor tarball).
     propellers : str
