@@ -19,6 +19,7 @@ build). ``tests/test_docsite.py`` checks that every schema key has a meaning her
 import argparse
 import dataclasses
 import importlib
+import importlib.util
 import inspect
 from pathlib import Path
 import pkgutil
@@ -46,6 +47,11 @@ TOP_MEANING = {
     "dt": "RK4 step (s); default `quadcog.config.defaults[\"simulate.dt\"]`",
     "path": "execution path: \"compiled\" (default) or \"python\"",
     "initial_offset": "start this far (m) from the reference's first point",
+    "stack": "table: fly a flight stack's controller instead of `controller`: `name = "
+             "\"crazyflie\"`, `controller` (\"pid\", \"mellinger\", \"indi\", "
+             "\"brescianini\", \"lee\" or an out-of-tree folder), `propellers`, "
+             "`battery_voltage` (V); `quadcog run` flies it (docs: The Crazyflie firmware in "
+             "the loop)",
     "trajectory": "table: the reference; `kind` and its settings (below)",
     "cog": "array of tables: the CoG changes (below); r_G is the vehicle's before the first",
     "payload": "array of tables: payloads attached, moved and dropped (below); the vehicle's own "
@@ -408,6 +414,9 @@ def _help(p: argparse.ArgumentParser) -> str:
 
 
 def _modules(package: str) -> list[str]:
+    # a layer may name a package that is not there (yet): the stacks layer's px4, aqb
+    if importlib.util.find_spec(package) is None:
+        return []
     mod = importlib.import_module(package)
     if not hasattr(mod, "__path__"):
         return [package]

@@ -180,6 +180,12 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--identified", type=Path, default=None, metavar="FILE",
                    help="JSON of `quadcog identify --json`: its r_G becomes the vehicle's CoG "
                         "and the controller's starting estimate")
+    p.add_argument("--stack", choices=("crazyflie",), default=None,
+                   help="fly a flight stack's own controller instead (as --set stack.name=...; "
+                        "docs: The Crazyflie firmware in the loop)")
+    p.add_argument("--controller", dest="stack_controller", default=None, metavar="NAME",
+                   help="with --stack: the stack's controller (crazyflie: pid, mellinger, indi, "
+                        "brescianini, lee or an out-of-tree controller's folder; default pid)")
     p.set_defaults(func=cmd_run)
 
 
@@ -200,8 +206,18 @@ def cmd_run(args: argparse.Namespace) -> None:
         path = json.dumps(str(args.identified.resolve()))
         args.overrides = list(args.overrides) + [f"vehicle.identified={path}",
                                                  f"controller_model.identified={path}"]
+    if args.stack is not None:
+        args.overrides = list(args.overrides) + [f"stack.name={json.dumps(args.stack)}"]
+    if args.stack_controller is not None:
+        if args.stack is None:
+            raise SystemExit("quadcog run: --controller names a flight stack's controller; give "
+                             "--stack too (a quadcog law is --set controller=NAME)")
+        args.overrides = list(args.overrides) + [
+            f"stack.controller={json.dumps(args.stack_controller)}"]
+    from quadcog.crazyflie.scenario import run_scenario
     run_file(args.scenario, out, progress=not args.quiet, overrides=args.overrides,
-             plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate)
+             plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate,
+             stack_runner=run_scenario)
 
 
 def add_animate(sub: _Subparsers[argparse.ArgumentParser]) -> None:

@@ -193,3 +193,25 @@ def test_no_compiler(tree, monkeypatch):
     monkeypatch.setenv("CC", "/nonexistent/cc")
     with pytest.raises(StackError, match="no C compiler found"):
         _fly("pid", "hover", 0.1)
+
+
+def test_quadcog_run_with_the_stack(tree, tmp_path, capsys):
+    import json
+
+    from quadcog.cli import main
+    main(["run", "parcel-crazyflie", "--stack", "crazyflie", "--controller", "pid",
+          "--set", "duration=3", "--out", str(tmp_path), "--quiet", "--no-plot"])
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["controller"] == "crazyflie pid" and not metrics["diverged"]
+    assert "tail RMS" in capsys.readouterr().out
+
+
+def test_a_stack_scenario_without_the_stacks_layer_is_refused(tmp_path):
+    from quadcog.errors import ScenarioError
+    from quadcog.scenarios.scenario import run_file
+    with pytest.raises(ScenarioError, match="key 'stack'"):
+        run_file("parcel-crazyflie", tmp_path, progress=False,
+                 overrides=['stack.name="crazyflie"'], plot=False)
+    with pytest.raises(ScenarioError, match="stack.name"):
+        run_file("parcel-crazyflie", tmp_path, progress=False,
+                 overrides=['stack.name="px5"'], plot=False)

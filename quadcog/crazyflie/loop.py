@@ -33,10 +33,11 @@ from quadcog.sim.plant import PI_INDEX, Actuation, TruthOptions, body_mass_and_c
 from quadcog.sim.prepare import prepare_flight
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
 from quadcog.sim.schedule import cog_at
+from quadcog.sim.sensing import Sensing
 from quadcog.trajectories.analytic import ACC, POS, VEL, YAW, YAW_RATE
 from quadcog.vehicles.vehicle import CRAZYFLIE_21, Vehicle, x_layout
 
-__all__ = ["DT", "DEFAULT_LOG", "simulate"]
+__all__ = ["DT", "DEFAULT_LOG", "sensing_noise", "simulate"]
 
 DT = 0.001                 # s: the firmware's RATE_MAIN_LOOP, 1 kHz
 FIRMWARE_DIVERGED = 4      # the loop's code when the firmware asserted
@@ -85,7 +86,8 @@ def _check_x_frame(vehicle: Vehicle) -> None:
                          "'X' frame with rotor 1 front-right, 2 back-right, 3 back-left, 4 "
                          "front-left and rotor_directions (-1, 1, -1, 1); got rotor_positions "
                          f"{vehicle.rotor_positions} and rotor_directions "
-                         f"{vehicle.rotor_directions}")
+                         f"{vehicle.rotor_directions} (in a scenario: vehicle.preset = "
+                         "\"crazyflie21\")")
 
 
 @contextlib.contextmanager
@@ -123,14 +125,40 @@ def _controller(controller: Any) -> tuple[int, Path | None, str]:
                   "controller's C sources", controller)
 
 
+def sensing_noise(sensing: Sensing, n: int) -> npt.NDArray[np.float64] | None:
+    """What ``sensing`` adds to the firmware's inputs over n ticks.
+
+    Parameters
+    ----------
+    sensing : Sensing
+        Its noise flag, standard deviations, seed and gyroscope bias.
+    n : int
+        Ticks.
+
+    Returns
+    -------
+    (n, 12) numpy.ndarray or None
+        Position (m), world velocity (m/s), Euler angles (rad), body rates (rad/s, the bias
+        included); None without noise.
+    """
+    if not isinstance(sensing, Sensing):
+        validate.fail("sensing", "a quadcog.sim.sensing.Sensing", sensing)
+    if not sensing.noise:
+        return None
+    sig = sensing.sigmas(DT)          # state order: position, attitude, velocity, rates
+    sig = np.concatenate([sig[0:3], sig[6:9], sig[3:6], sig[9:12]])
+    rows = np.random.default_rng(sensing.seed).normal(size=(n, 12)) * sig
+    rows[:, 9:] += sensing.bias()
+    return rows
+
+
 def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float = 10.0,
              vehicle: Vehicle | None = None, cog: Any = None, payloads: Any = None,
              disturbances: Any = (), truth: TruthOptions | None = None,
              firmware: str | os.PathLike[str] | None = None, propellers: str = "2.1+",
              battery_voltage: float = 4.0, params: Mapping[str, float] | None = None,
              log: Sequence[str] = DEFAULT_LOG, x0: npt.ArrayLike | None = None,
-             limits: Limits | None = None, noise: npt.ArrayLike | None = None,
-             seed: int = 0) -> SimulationResult:
+             limits: Limits | None = None, sensing: Sensing | None = None) -> SimulationResult:
     """Fly the Crazyflie firmware's controller in quadcog's truth plant, one tick per 1 ms.
 
     Parameters
@@ -173,11 +201,10 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
         Firmware parameters set before the flight, by firmware name (``"pid_rate.roll_kp"``).
     log : sequence of str
         Firmware log variables recorded every tick, by firmware name (``"group.name"``).
-    noise : (N, 12) array_like, optional
-        Added to what the firmware is told at each tick: position (m), world velocity (m/s),
-        Euler angles (rad), body rates (rad/s); ``N`` = duration / 1 ms.
-    seed : int
-        Unused (noise is given); kept for batches.
+    sensing : Sensing, optional
+        Gaussian noise (``Sensing.sigmas`` at 1 ms, from its seed) and the gyroscope bias added
+        to what the firmware is told each tick: position, world velocity, attitude, body
+        rates. Its ``delay`` is not applied (the firmware's own timing is the tick).
 
     Returns
     -------
@@ -211,8 +238,7 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
                            truth, x0, "python", limits, None, False, payloads)
     s, P, actuation = setup.schedule, setup.P, setup.actuation
     n, nf = s.n_steps, setup.n_rotor_states
-    if noise is not None:
-        noise = validate.array(noise, "noise", (n, 12))
+    noise = None if sensing is None else sensing_noise(sensing, n)
     plant_lib, n_iw, n_w = _plant(actuation)
     plant = ctypes.CDLL(str(plant_lib))
     Pn = np.tile(P, (n, 1))

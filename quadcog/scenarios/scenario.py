@@ -29,6 +29,8 @@ from quadcog.scenarios.schema import (
     NUMBER,
     PAYLOAD,
     SENSING,
+    STACK,
+    STACKS,
     TOP,
     TRUTH,
     VEHICLE,
@@ -111,6 +113,7 @@ class Scenario:
     limits: Limits = field(default_factory=Limits)
     initial_offset: tuple[float, ...] = (0.0, 0.0, 0.0)
     source: str = "<scenario>"
+    stack: dict[str, Any] = field(default_factory=dict)   # [stack]: a flight stack flies instead
 
     def make_controller(self) -> Controller | Sensed:
         """The scenario's controller, designed for its controller model.
@@ -347,6 +350,10 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
             sensing = dict(sensing, seed=int(sensing["seed"]))
     _validate(truth, TRUTH, source, "truth.")
     _validate(limits, LIMITS, source, "limits.")
+    stack = dict(data.get("stack", {}))
+    if stack:
+        _validate(stack, STACK, source, "stack.")
+        validate.choice(stack.get("name"), w("stack.name"), STACKS, ScenarioError)
     max_error = validate.positive(
         limits.get("max_position_error", config.defaults["limits.max_position_error"]),
         w("limits.max_position_error"), "m", ScenarioError)
@@ -372,7 +379,8 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
             truth=TruthOptions(**truth),
             sensing=None if sensing is None else Sensing(**sensing),
             limits=Limits(max_error, math.radians(max_tilt_deg)),
-            initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source)
+            initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source,
+            stack=stack)
     except InputError as e:
         raise ScenarioError(f"{source}: {e}") from None
 
@@ -530,7 +538,8 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
     result : quadcog.sim.result.SimulationResult
         The run.
     scenario : Scenario
-        The scenario flown (its name, controller, duration, dt go into metrics.json).
+        The scenario flown (its name, controller, duration, dt go into metrics.json; with a
+        ``[stack]``, the controller is the stack's, ``result.controller``).
     out : str or os.PathLike
         The folder.
     plot : bool
@@ -550,7 +559,9 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
         The metrics as written to metrics.json (errors in m, times in s).
     """
     metrics = result.metrics.as_dict()
-    metrics.update(name=scenario.name, controller=scenario.controller,
+    # with a [stack], the stack's controller flew (result.controller names it)
+    metrics.update(name=scenario.name,
+                   controller=result.controller if scenario.stack else scenario.controller,
                    duration=scenario.duration, dt=scenario.dt,
                    simulated_until=float(result.t[-1]), wall_time_s=result.info.get("seconds"))
     with RunFiles(out) as files:
@@ -599,7 +610,9 @@ def run_with_progress(scenario: Scenario, label: str | None = None,
 
 def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = None,
              progress: bool = True, overrides: Sequence[str] = (), plot: bool = True,
-             every: int = 1, fmt: str = "csv", animate: bool = False) -> dict[str, Any]:
+             every: int = 1, fmt: str = "csv", animate: bool = False,
+             stack_runner: Callable[["Scenario"], SimulationResult] | None = None
+             ) -> dict[str, Any]:
     """`quadcog run`: load, simulate with a progress bar, write the outputs, print a line.
 
     Parameters
@@ -620,6 +633,9 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
         'csv' or 'parquet'.
     animate : bool
         Also write flight.gif.
+    stack_runner : callable, optional
+        Flies a scenario that has a ``[stack]`` table (the stacks layer's, which this layer
+        cannot import; ``quadcog run`` passes ``quadcog.crazyflie.scenario.run_scenario``).
 
     Returns
     -------
@@ -637,7 +653,13 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
     if every is None:                       # the command's default: decimated, not every step
         every = max(1, round(config.defaults["run.sample_period"] / scenario.dt))
     try:
-        result = run_with_progress(scenario, progress=progress)
+        if scenario.stack:
+            if stack_runner is None:
+                raise ScenarioError(f"{scenario.source}: key 'stack': a flight stack flies "
+                                    "through `quadcog run` (or quadcog.crazyflie.simulate)")
+            result = stack_runner(scenario)
+        else:
+            result = run_with_progress(scenario, progress=progress)
     except ScenarioError:
         raise
     except InputError as e:                 # e.g. dt too large for the closed loop

@@ -15,7 +15,7 @@ from quadcog.kinds import Kind
 from quadcog.trajectories.registry import TRAJECTORIES, trajectory_kinds, trajectory_settings
 from quadcog.vehicles.vehicle import FIELD_NAMES
 
-__all__ = ["NUMBER", "CHECK", "TOP", "VEHICLE", "TRUTH", "SENSING", "LIMITS", "COG", "PAYLOAD",
+__all__ = ["NUMBER", "CHECK", "TOP", "VEHICLE", "TRUTH", "STACK", "STACKS", "SENSING", "LIMITS", "COG", "PAYLOAD",
            "DISTURBANCE", "controller_params", "trajectory_schema"]
 
 NUMBER = (int, float)
@@ -29,7 +29,7 @@ TOP = {"name": str, "description": str, "controller": str, "duration": NUMBER, "
        "path": str, "trajectory": dict, "cog": list, "payload": list, "disturbance": list,
        "vehicle": dict,
        "controller_model": dict, "controller_params": dict, "truth": dict, "limits": dict,
-       "sensing": dict, "initial_offset": "vec3"}
+       "sensing": dict, "initial_offset": "vec3", "stack": dict}
 # every Vehicle field, and a preset to start from
 VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
                   "name": str, "rotor_model": str, "payloads": list}.get(name, NUMBER)
@@ -37,6 +37,9 @@ VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
 VEHICLE["preset"] = str
 VEHICLE["identified"] = str         # the JSON of `quadcog identify --json`: its r_G
 TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
+# a flight stack instead of quadcog's law (quadcog.crazyflie): its name and its own settings
+STACK = {"name": str, "controller": str, "propellers": str, "battery_voltage": NUMBER}
+STACKS = ("crazyflie",)
 SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,
            "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}
 LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}
