@@ -415,6 +415,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     """
     from quadcog.validate import require_extra
     require_extra("sweep", "pyarrow", "dask", "distributed")   # before any flight
+    import quadcog.crazyflie  # noqa: F401  (registers the flight stack for [stack] flights)
     from quadcog.sweeps.runner import run_cli
     # the folder is made by the sweep once the file validates: a rejected file leaves none
     run_cli(args.sweep, args.out, workers=args.workers, scheduler=args.scheduler)

@@ -215,3 +215,27 @@ def test_a_stack_scenario_without_the_stacks_layer_is_refused(tmp_path):
     with pytest.raises(ScenarioError, match="stack.name"):
         run_file("parcel-crazyflie", tmp_path, progress=False,
                  overrides=['stack.name="px5"'], plot=False)
+
+
+@pytest.mark.slow
+def test_a_sweep_of_firmware_flights(tree, tmp_path):
+    pytest.importorskip("pyarrow")
+    import quadcog.crazyflie  # noqa: F401  (registers the stack)
+    from quadcog.sweeps.runner import sweep
+    spec = {"name": "cf", "scenario": "parcel-crazyflie", "mode": "grid", "threshold": 0.5,
+            "set": {"duration": 2.0, "stack": {"name": "crazyflie"}, "payload": [],
+                    "cog": [{"t": 0.5, "r": [0.0, 0.0, 0.0], "ramp": 0.0}],
+                    "trajectory": {"kind": "hover"}},
+            "dimension": [{"key": "stack.controller", "values": ["pid", "lee"]},
+                          {"key": "cog[0].r[0]", "values": [0.0, 0.003]}]}
+    res = sweep(spec, out=tmp_path, workers=1, progress=False)
+    cols = res.columns
+    assert list(cols["controller"]) == ["crazyflie pid"] * 2 + ["crazyflie lee"] * 2
+    assert not cols["diverged"].any()
+    # the same flight flown alone
+    from quadcog.crazyflie.scenario import run_scenario
+    from quadcog.scenarios.scenario import load_scenario
+    alone = run_scenario(load_scenario("parcel-crazyflie", [
+        "duration=2.0", 'stack={name="crazyflie", controller="lee"}', "payload=[]",
+        "cog=[{t=0.5, r=[0.003, 0.0, 0.0], ramp=0.0}]", 'trajectory={kind="hover"}']))
+    assert cols["rms_position_error"][3] == alone.metrics.rms_position_error

@@ -5,7 +5,7 @@ A chunk is a plain dict (the base scenario data, the flights' values) and its re
 columns, so it travels to a Dask worker and back without any compiled object: the worker builds
 or loads the compiled code itself (from the disk cache, keyed by its source).
 """
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 import copy
 from typing import Any
 
@@ -18,10 +18,46 @@ from quadcog.sim.flight import start_at_reference
 from quadcog.sweeps.groups import CONTROLLERS_BY_GROUP, group_key
 from quadcog.sweeps.spec import Flight, Sweep
 
-__all__ = ["METRICS", "make_job", "run_chunk", "cog_steps", "fly_group"]
+__all__ = ["METRICS", "STACK_RUNNERS", "register_stack", "make_job", "run_chunk", "cog_steps",
+           "fly_group"]
 
 METRICS = ("rms_position_error", "max_position_error", "rms_position_error_tail",
            "final_position_error", "diverged", "diverged_at")
+# how a flight stack (a layer above: quadcog.crazyflie registers itself on import) flies one
+# scenario with a [stack] table; such flights run one by one, not as a batch
+STACK_RUNNERS: dict[str, Callable[[Scenario], Any]] = {}
+
+
+def register_stack(name: str, runner: Callable[[Scenario], Any]) -> None:
+    """Let sweeps fly scenarios whose ``[stack]`` table names ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The stack's name (``stack.name``).
+    runner : callable
+        ``runner(scenario) -> SimulationResult``.
+    """
+    STACK_RUNNERS[name] = runner
+
+
+def _fly_stack(scenarios: Sequence[Scenario]) -> dict[str, NDArray[Any]]:
+    """The METRICS of flights of a flight stack, one after the other."""
+    from quadcog.sweeps.spec import SweepError
+    name = scenarios[0].stack.get("name")
+    runner = STACK_RUNNERS.get(name)
+    if runner is None:
+        raise SweepError(f"{scenarios[0].source}: key 'stack.name' = {name!r}: no such flight "
+                         "stack in this process; import quadcog.crazyflie before the sweep "
+                         "(`quadcog sweep` does)")
+    out: dict[str, NDArray[Any]] = {k: np.full(len(scenarios), np.nan) for k in METRICS}
+    out["diverged"] = np.zeros(len(scenarios), dtype=bool)
+    for i, scenario in enumerate(scenarios):
+        m = runner(scenario).metrics
+        for k in METRICS:
+            v = getattr(m, k)
+            out[k][i] = np.nan if v is None else v
+    return out
 
 
 def make_job(sweep: Sweep, chunk_index: int, flights: Sequence[Flight]) -> dict[str, Any]:
@@ -45,7 +81,9 @@ def make_job(sweep: Sweep, chunk_index: int, flights: Sequence[Flight]) -> dict[
     return {"chunk": chunk_index, "base": sweep.base, "source": sweep.source,
             "threshold": sweep.threshold,
             "dimensions": [(d.key, d.width) for d in sweep.dimensions],
-            "flights": [(f.index, f.values, f.admissible) for f in flights]}
+            "flights": [(f.index, f.values, f.admissible) for f in flights],
+            # the modules that registered flight stacks here, imported again in a worker
+            "stacks": sorted({runner.__module__ for runner in STACK_RUNNERS.values()})}
 
 
 def run_chunk(job: dict[str, Any], threads: int = 1) -> dict[str, NDArray[Any]]:
@@ -66,6 +104,9 @@ def run_chunk(job: dict[str, Any], threads: int = 1) -> dict[str, NDArray[Any]]:
         {column: (n,) array}, one row per flight in flight order: ``flight``, the varied
         keys, ``controller``, ``admissible``, the ``METRICS`` (m, s) and ``failed``.
     """
+    import importlib
+    for module in job.get("stacks", ()):       # a worker process registers them again
+        importlib.import_module(module)
     flights = job["flights"]
     n = len(flights)
     metrics = {k: np.full(n, np.nan) for k in METRICS}
@@ -93,7 +134,9 @@ def run_chunk(job: dict[str, Any], threads: int = 1) -> dict[str, NDArray[Any]]:
             for i in range(width):
                 columns[f"{key}[{i}]"] = arr[:, i]
     if "controller" not in columns:
-        columns["controller"] = np.array([scenarios[r].controller for r in range(n)])
+        columns["controller"] = np.array([
+            f"{scenarios[r].stack['name']} {scenarios[r].stack.get('controller', 'pid')}"
+            if scenarios[r].stack else scenarios[r].controller for r in range(n)])
     columns["admissible"] = np.array([f[2] for f in flights], dtype=bool)
     columns.update(metrics)
     tail = metrics["rms_position_error_tail"]
@@ -146,6 +189,8 @@ def fly_group(key: str, scenarios: Sequence[Scenario], threads: int = 1,
     """
     from quadcog.sim.vector_batch import fly_batch
     s0 = scenarios[0]
+    if s0.stack:
+        return _fly_stack(scenarios)
     ctl = CONTROLLERS_BY_GROUP.get(key)
     if ctl is None:
         ctl = CONTROLLERS_BY_GROUP[key] = s0.make_controller()
