@@ -4,6 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
+.PHONY: crazyflie
 .PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded docs targets clean
 
 OUT ?= out
@@ -68,6 +69,12 @@ targets: compile
 
 test: $(STAMP)
 	$(PY) -m pytest
+
+# The Crazyflie firmware's five controllers against quadcog's laws on the Crazyflie 2.1
+# (docs/crazyflie.md; a few minutes; needs a firmware tree); the page's table is copied.
+crazyflie: compile
+	$(PY) bench/crazyflie.py $(OUT)/crazyflie/side-by-side.md
+	$(PY) bench/publish.py crazyflie $(OUT)/crazyflie/side-by-side.md
 
 # Timing tables (no assertions); writes out/bench/results.md (`python bench/publish.py bench`
 # copies it into docs/performance.md and bench/results.md).
