@@ -70,11 +70,14 @@ targets: compile
 test: $(STAMP)
 	$(PY) -m pytest
 
-# The Crazyflie firmware's five controllers against quadcog's laws on the Crazyflie 2.1
-# (docs/crazyflie.md; a few minutes; needs a firmware tree); the page's table is copied.
+# The Crazyflie firmware's five controllers against quadcog's laws on the Crazyflie 2.1, and
+# the firmware PID against the CrazyPAD flights (docs/crazyflie.md; under a minute; needs a
+# firmware tree and ../shared/data/crazypad); the page's tables are copied.
 crazyflie: compile
 	$(PY) bench/crazyflie.py $(OUT)/crazyflie/side-by-side.md
 	$(PY) bench/publish.py crazyflie $(OUT)/crazyflie/side-by-side.md
+	$(PY) bench/crazyflie_real.py $(OUT)/crazyflie/real-flights.md
+	$(PY) bench/publish.py crazyflie-real $(OUT)/crazyflie/real-flights.md
 
 # Timing tables (no assertions); writes out/bench/results.md (`python bench/publish.py bench`
 # copies it into docs/performance.md and bench/results.md).

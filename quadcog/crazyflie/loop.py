@@ -184,8 +184,9 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
         Wrench pulses, as for ``quadcog.simulate``.
     truth : TruthOptions, optional
         As for ``quadcog.simulate``: ``rotor_saturation`` caps each rotor at the vehicle's
-        ``max_rotor_thrust`` beyond the PWM's own cap; ``motor_lag`` lags the rotors (without
-        it the PID's rate loop chatters once it must hold a torque, and Mellinger limit-cycles).
+        ``max_rotor_thrust`` beyond the PWM's own cap; ``motor_lag`` lags the rotors. Default
+        ``TruthOptions(motor_lag=True)``: without the lag the firmware's rate loops chatter
+        (the PID's once it must hold a torque, Mellinger's and Brescianini's at hover).
     x0 : (12,) array_like, optional
         Initial state, as for ``quadcog.simulate``.
     limits : Limits, optional
@@ -233,6 +234,7 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
     build = build_firmware(firmware, propellers, oot)
     from quadcog.crazyflie.firmware import constants
     c = constants(build.tree, propellers)
+    truth = TruthOptions(motor_lag=True) if truth is None else truth
     hold = lambda t, x, ref, s: np.zeros(4)     # never called: the firmware flies
     setup = prepare_flight(hold, trajectory, duration, DT, vehicle, None, cog, disturbances,
                            truth, x0, "python", limits, None, False, payloads)
