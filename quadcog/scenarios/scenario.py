@@ -94,6 +94,9 @@ class Scenario:
         (3,) start position relative to the reference at t = 0 [m].
     source : str
         What error messages name (the file, with its ``--set`` texts).
+    stack : dict
+        The ``[stack]`` table: a flight stack's controller flies instead of ``controller``
+        (``name``, ``controller``, ``propellers``, ``battery_voltage``); empty for none.
     """
     name: str
     controller: str

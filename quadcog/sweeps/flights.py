@@ -44,7 +44,7 @@ def register_stack(name: str, runner: Callable[[Scenario], Any]) -> None:
 def _fly_stack(scenarios: Sequence[Scenario]) -> dict[str, NDArray[Any]]:
     """The METRICS of flights of a flight stack, one after the other."""
     from quadcog.sweeps.spec import SweepError
-    name = scenarios[0].stack.get("name")
+    name = str(scenarios[0].stack.get("name"))
     runner = STACK_RUNNERS.get(name)
     if runner is None:
         raise SweepError(f"{scenarios[0].source}: key 'stack.name' = {name!r}: no such flight "
