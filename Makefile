@@ -72,7 +72,7 @@ test: $(STAMP)
 
 # The Crazyflie firmware's five controllers against quadcog's laws on the Crazyflie 2.1, and
 # the firmware PID against the CrazyPAD flights (docs/crazyflie.md; under a minute; needs a
-# firmware tree and ../shared/data/crazypad); the page's tables are copied.
+# firmware tree and the CrazyPAD data beside the repository); the page's tables are copied.
 crazyflie: compile
 	$(PY) bench/crazyflie.py $(OUT)/crazyflie/side-by-side.md
 	$(PY) bench/publish.py crazyflie $(OUT)/crazyflie/side-by-side.md

@@ -13,7 +13,7 @@ from quadcog.vehicles.vehicle import CRAZYFLIE_21
 
 INSTALL = ("no Crazyflie firmware tree: set QUADCOG_CRAZYFLIE_FIRMWARE to a `git clone "
            "--recursive https://github.com/bitcraze/crazyflie-firmware` or put "
-           "crazyflie-firmware.tar.xz in ../shared/vendor")
+           "crazyflie-firmware.tar.xz in the vendor folder ($QUADCOG_VENDOR_DIR)")
 OOT = Path(__file__).parent / "data" / "crazyflie_oot"
 
 
