@@ -239,3 +239,18 @@ def test_a_sweep_of_firmware_flights(tree, tmp_path):
         "duration=2.0", 'stack={name="crazyflie", controller="lee"}', "payload=[]",
         "cog=[{t=0.5, r=[0.003, 0.0, 0.0], ramp=0.0}]", 'trajectory={kind="hover"}']))
     assert cols["rms_position_error"][3] == alone.metrics.rms_position_error
+
+
+def test_brescianini_is_not_finite_at_an_exactly_level_hover(tree):
+    # issue 30: Brescianini returns NaN torques at an exactly level attitude with zero lateral
+    # error. Confirmed: in a level hover at the setpoint its control_t is NaN on some 100 Hz
+    # periods, and the firmware's power distribution turns that into all motors off; with the
+    # least sensing noise the attitude is never exactly level and it never happens
+    from quadcog.sim.sensing import Sensing
+    level = _fly("brescianini", "hover", 3.0, log=("motor.m1", "motor.m2", "motor.m3", "motor.m4"))
+    assert level.info["nonfinite_control_ticks"] > 0
+    pwm = np.array([level.info["log"][f"motor.m{i}"] for i in range(1, 5)])
+    assert (pwm[:, 100:] == 0).all(axis=0).any()          # motors off after the start
+    noisy = _fly("brescianini", "hover", 3.0, sensing=Sensing(delay=False, seed=1))
+    assert noisy.info["nonfinite_control_ticks"] == 0
+    assert _fly("lee", "hover", 1.0).info["nonfinite_control_ticks"] == 0

@@ -14,6 +14,7 @@ PWM (``motor.m1..m4``). No SWIG is needed. The firmware's ``autoconf.h`` is writ
 from the Kconfig defaults of the cf2 platform (battery compensation on, the propellers chosen).
 """
 from dataclasses import dataclass
+import hashlib
 import os
 from pathlib import Path
 import re
@@ -23,7 +24,8 @@ import tempfile
 from quadcog import validate
 from quadcog.codegen.compiler import find_compiler
 from quadcog.errors import StackError
-from quadcog.stacks.build import Source, build_library, c_function
+from quadcog.paths import cache_dir
+from quadcog.stacks.build import Source, build_library, c_function, first_error_line
 from quadcog.stacks.vendor import find_tree, tree_digest
 
 __all__ = ["FIRMWARE_ENV", "MARKERS", "PROPELLERS", "CONTROLLERS", "INCLUDE_DIRS",
@@ -126,9 +128,7 @@ def autoconf(propellers: str = "2.1+", out_of_tree: bool = False) -> str:
 
 def _config_dir(text: str) -> Path:
     """A folder in the cache holding autoconf.h of this text."""
-    import hashlib
 
-    from quadcog.paths import cache_dir
     d = cache_dir() / "stacks" / f"crazyflie-config-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
     if not (d / "autoconf.h").is_file():
         d.mkdir(parents=True, exist_ok=True)
@@ -173,6 +173,20 @@ def constants(firmware: str | os.PathLike[str] | None = None, propellers: str = 
     if cc is None:
         raise StackError("reading the firmware's constants: no C compiler found (looked for "
                          "$CC or `cc` on PATH); install one, e.g. `apt-get install gcc`")
+    # once per process and header state: the preprocessor run costs tens of ms per flight
+    headers = sorted((tree / "src/platform/interface").glob("platform_defaults*.h"))
+    key = (str(tree), propellers, cc, tuple((h.name, h.stat().st_mtime_ns, h.stat().st_size)
+                                            for h in headers))
+    if key not in _CONSTANTS:
+        _CONSTANTS[key] = _read_constants(tree, cc, propellers)
+    return dict(_CONSTANTS[key])
+
+
+_CONSTANTS: dict[tuple, dict[str, float]] = {}
+
+
+def _read_constants(tree: Path, cc: str, propellers: str) -> dict[str, float]:
+    """The constants of ``constants`` from the preprocessor."""
     names = ("CF_MASS", "ARM_LENGTH", "VMOTOR2THRUST0", "VMOTOR2THRUST1", "VMOTOR2THRUST2",
              "VMOTOR2THRUST3", "THRUST_MIN", "THRUST_MAX", "THRUST2TORQUE")
     config = _config_dir(autoconf(propellers))
@@ -182,7 +196,6 @@ def constants(firmware: str | os.PathLike[str] | None = None, propellers: str = 
         res = subprocess.run([cc, "-E", "-dM", *_include_flags(tree, config), str(src)],
                              capture_output=True, text=True)
     if res.returncode:
-        from quadcog.stacks.build import first_error_line
         raise StackError(f"reading platform_defaults.h of {str(tree)!r} failed: "
                          f"{first_error_line(res.stderr)}")
     macros = dict(re.findall(r"^#define (\w+) (.*)$", res.stdout, re.M))

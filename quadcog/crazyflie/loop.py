@@ -8,6 +8,7 @@ controllers' state in C statics, so every flight loads its own copy of the libra
 under a unique name, opened, closed and removed): two flights never share a controller's
 state, in one process or many.
 """
+import _ctypes
 from collections.abc import Mapping, Sequence
 import contextlib
 import ctypes
@@ -24,7 +25,7 @@ import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.codegen.compiler import compile_library
-from quadcog.crazyflie.firmware import CONTROLLERS, OUT_OF_TREE, build_firmware
+from quadcog.crazyflie.firmware import CONTROLLERS, OUT_OF_TREE, build_firmware, constants
 from quadcog.errors import InputError, StackError
 from quadcog.model.conventions import IDX, N_STATE, R_G
 from quadcog.model.functions import load
@@ -103,7 +104,6 @@ def _own_copy(library: Path):
         finally:
             handle = lib._handle
             del lib
-            import _ctypes
             _ctypes.dlclose(handle)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
@@ -212,8 +212,10 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
     SimulationResult
         As ``quadcog.simulate``'s, ``path="crazyflie"``; ``info["log"]`` maps each recorded
         firmware name to its (N,) values (the last sample repeats the last tick's),
-        ``info["console"]`` is what the firmware printed, ``rotor_thrust`` is the thrust the
-        PWMs gave.
+        ``info["console"]`` is what the firmware printed, ``info["nonfinite_control_ticks"]``
+        counts the ticks whose force-torque ``control_t`` was not finite (the firmware's
+        power distribution turns such a command into motors off), ``rotor_thrust`` is the
+        thrust the PWMs gave.
 
     Raises
     ------
@@ -232,7 +234,6 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
     params = dict(params or {})
     log = tuple(log)
     build = build_firmware(firmware, propellers, oot)
-    from quadcog.crazyflie.firmware import constants
     c = constants(build.tree, propellers)
     truth = TruthOptions(motor_lag=True) if truth is None else truth
     hold = lambda t, x, ref, s: np.zeros(4)     # never called: the firmware flies
@@ -290,11 +291,15 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
         ran = lib.qc_run(ctypes.byref(f), ctypes.byref(code))
         lib.qc_console.restype = lib.qc_assert_message.restype = ctypes.c_char_p
         console = lib.qc_console().decode(errors="replace")
+        lib.qc_nonfinite_control.restype = ctypes.c_long
+        nonfinite = int(lib.qc_nonfinite_control())
         if code.value == FIRMWARE_DIVERGED:
             raise StackError(f"the firmware asserted at t = {ran * DT:.3f} s: "
                              f"{lib.qc_assert_message().decode(errors='replace')}")
     elapsed = time.perf_counter() - t0
-    return _result(setup, X, U, F, out, log, ran, code.value, elapsed, name, build, console)
+    result = _result(setup, X, U, F, out, log, ran, code.value, elapsed, name, build, console)
+    result.info["nonfinite_control_ticks"] = nonfinite
+    return result
 
 
 def _result(setup, X, U, F, out, log, ran, code, elapsed, name, build, console):

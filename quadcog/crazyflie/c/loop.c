@@ -126,7 +126,10 @@ static int qc_asserted;
 static double qc_battery_voltage = 4.2;
 static uint16_t motor_ratios[STABILIZER_NR_OF_MOTORS];
 
+static long qc_nonfinite_ticks;     /* ticks whose control_t (force-torque) was not finite */
+
 const char *qc_console(void) { return qc_console_text; }
+long qc_nonfinite_control(void) { return qc_nonfinite_ticks; }
 const char *qc_assert_message(void) { return qc_assert_text; }
 
 void qc_console_printf(const char *fmt, ...)
@@ -297,6 +300,12 @@ long qc_run(struct qc_flight *f, int *code)
     qc_sense(x, f->noise ? f->noise + 12 * k : 0, acc, &state, &sensors);
     qc_setpoint(f->ref + 11 * k, tick, &setpoint);
     controller(&control, &setpoint, &sensors, &state, tick);
+    /* a non-finite force-torque command reaches the motors as the firmware makes it (its
+     * float-to-integer conversion in powerDistributionForceTorque); count it */
+    if (control.controlMode == controlModeForceTorque
+        && !(isfinite(control.thrustSi) && isfinite(control.torqueX)
+             && isfinite(control.torqueY) && isfinite(control.torqueZ)))
+      qc_nonfinite_ticks++;
     qc_control_motors(&control);
     for (int i = 0; i < 4; i++) {
       double v = f->battery * motor_ratios[i] / 65535.0, *c = f->thrust_map;
