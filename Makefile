@@ -100,7 +100,8 @@ embedded: compile
 
 # quadcog's laws (composite, payload_adaptive) as out-of-tree controller apps of the Crazyflie
 # firmware: built into cf2.elf by the firmware's own Makefiles (in quadcog's cache; the tree is
-# $(QUADCOG_CRAZYFLIE_FIRMWARE) or ../shared/vendor/crazyflie-firmware.tar.xz), with the flash
+# $(QUADCOG_CRAZYFLIE_FIRMWARE) or shared/vendor/crazyflie-firmware.tar.xz beside the
+# checkout), with the flash
 # and RAM they add, instructions per call on the Cortex-M4 (QEMU) against the 500 Hz budget,
 # and their host agreement with quadcog's law; needs $(ARM_PACKAGES). A few minutes the first
 # time (two full firmware builds), seconds from the cache.

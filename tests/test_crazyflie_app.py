@@ -4,7 +4,7 @@ units (it must give quadcog's commands; a pitch-sign, quaternion-order or gyro-s
 of the conversion must not), the firmware's rate, bad input, and (slow) cf2.elf built with
 the app by the firmware's own Makefiles.
 
-The firmware tree is ../shared/vendor/crazyflie-firmware.tar.xz or $QUADCOG_CRAZYFLIE_FIRMWARE;
+The firmware tree is firmware.VENDOR_TARBALL or $QUADCOG_CRAZYFLIE_FIRMWARE;
 without either the tests that need its headers skip with how to get it.
 """
 import os

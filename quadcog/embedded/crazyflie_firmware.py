@@ -1,7 +1,7 @@
 """Build a Crazyflie out-of-tree controller app inside the firmware, in quadcog's cache.
 
 The firmware tree is the ``firmware`` argument, else ``$QUADCOG_CRAZYFLIE_FIRMWARE``, else the
-vendored ``../shared/vendor/crazyflie-firmware.tar.xz`` beside the checkout, unpacked once
+vendored ``shared/vendor/crazyflie-firmware.tar.xz`` in the folder of the checkout, unpacked once
 into the cache. A user's tree is copied into the cache (without ``.git`` and ``build``
 folders) and built there, so it is never written. The app (``write_crazyflie_app``) is
 copied into one workspace per firmware and built there with the firmware's own Makefiles
@@ -32,7 +32,7 @@ __all__ = ["FIRMWARE_ENV", "VENDOR_TARBALL", "ARM_INSTALL", "TREE_FILES", "Firmw
            "elf_size", "build_app", "build_plain"]
 
 FIRMWARE_ENV = "QUADCOG_CRAZYFLIE_FIRMWARE"
-# beside a checkout: /work/<checkout>/quadcog/embedded -> /work/shared/vendor
+# in the folder that holds a checkout: <folder>/<checkout>/quadcog/embedded/this file
 VENDOR_TARBALL = (Path(__file__).resolve().parents[3] / "shared" / "vendor"
                   / "crazyflie-firmware.tar.xz")
 ARM_INSTALL = "apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi"
@@ -321,7 +321,7 @@ def build_app(app: str | os.PathLike[str], firmware: str | os.PathLike[str] | No
               jobs: int = 2) -> FirmwareBuild:
     """Build ``cf2.elf`` with an out-of-tree app, or find the build in the cache.
 
-    The build runs in one workspace per firmware, ``<cache>/crazyflie/work/<firmware
+    The build runs in one workspace per firmware, ``<cache>/crazyflie/workspace/<firmware
     key>/app`` (the firmware's objects name their build folder in their command lines, so a
     fixed folder lets Kbuild rebuild only the app's objects for the next app: the first
     build takes the firmware's full time, about 90 s on 2 cores, the next a few seconds).
@@ -361,7 +361,7 @@ def build_app(app: str | os.PathLike[str], firmware: str | os.PathLike[str] | No
     final = _root() / "app" / key
     if (final / "build" / "cf2.elf").is_file():
         return _finished(final, cached=True)
-    ws = _root() / "work" / fw_key / "app"
+    ws = _root() / "workspace" / fw_key / "app"
     ws.parent.mkdir(parents=True, exist_ok=True)
     with _exclusive(ws.parent / "lock"):
         if (final / "build" / "cf2.elf").is_file():          # built while we waited

@@ -17,20 +17,26 @@ from quadcog.controllers.registry import make_controller
 from quadcog.embedded import crazyflie_firmware as firmware
 from quadcog.embedded import target
 from quadcog.embedded.crazyflie_app import CONTROL_PERIOD, RATE, resolve_vehicle, write_crazyflie_app
-from quadcog.embedded.crazyflie_host import HostApp, agreement, build_host_app, firmware_units
+from quadcog.embedded.crazyflie_host import HOST_INCLUDES, HostApp, agreement, build_host_app, \
+    firmware_units
+from quadcog.embedded.host import compile_checked
 from quadcog.sim.flight import simulate
 from quadcog.sim.result import SimulationResult
 from quadcog.sim.timeline import CogProfile
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["LAWS", "CLOCK_HZ", "BUDGET_CYCLES", "FIRMWARE_OPT", "COG_RAMP", "agreement_flight",
-           "host_agreement", "law_cost", "report", "table", "main"]
+__all__ = ["LAWS", "CLOCK_HZ", "BUDGET_CYCLES", "FIRMWARE_OPT", "COG_RAMP", "STABILIZER_STACK",
+           "agreement_flight", "host_agreement", "law_cost", "boundary_frame", "report", "table",
+           "main"]
 
 LAWS = ("composite", "payload_adaptive")
 CLOCK_HZ = 168_000_000                    # the Crazyflie 2.x's STM32F405
 BUDGET_CYCLES = CLOCK_HZ // RATE           # 336,000 per call at 500 Hz
 FIRMWARE_OPT = ("-Os",)                    # the firmware's optimization (its Makefile)
 COG_RAMP = (1.0, (0.004, 0.004, 0.0), 0.5)  # t (s), r_G step (m, body), ramp (s)
+# bytes of the stabilizer task's stack, on which the controller runs: config.h's
+# STABILIZER_TASK_STACKSIZE, 3 * configMINIMAL_STACK_SIZE (150) words of 4 bytes
+STABILIZER_STACK = 3 * 150 * 4
 
 
 def agreement_flight(name: str, vehicle: Vehicle) -> SimulationResult:
@@ -111,6 +117,40 @@ def law_cost(app: str | os.PathLike[str], name: str, nc: int, flight: Simulation
     return target.parse_output(target.run_qemu(elf), "float32", nc)[2]
 
 
+def boundary_frame(app: str | os.PathLike[str], name: str,
+                   firmware_tree: str | os.PathLike[str], work: str | os.PathLike[str]) -> int:
+    """The stack frame of the app's ``controllerOutOfTree`` (bytes, -fstack-usage at -Os).
+
+    Parameters
+    ----------
+    app : str or os.PathLike
+        The app folder.
+    name : str
+        The law's short name.
+    firmware_tree : str or os.PathLike
+        A firmware tree (headers).
+    work : str or os.PathLike
+        Where the object goes.
+
+    Returns
+    -------
+    int
+        Bytes of its own frame (the law's step is measured apart, ``law_cost``).
+    """
+    work = Path(work)
+    work.mkdir(parents=True, exist_ok=True)
+    obj = work / f"quadcog_cf_{name}.o"
+    includes = [a for d in HOST_INCLUDES for a in ("-I", str(Path(firmware_tree) / d))]
+    compile_checked([target.ARM_GCC, "-std=gnu11", *target.CORTEX_M4, *FIRMWARE_OPT,
+                     "-fno-math-errno", "-DCONFIG_CONTROLLER_OOT=1", "-fstack-usage",
+                     "-I", Path(app) / "src", *includes, "-c",
+                     Path(app) / "src" / f"quadcog_cf_{name}.c", "-o", obj])
+    for line in obj.with_suffix(".su").read_text().splitlines():
+        if ":controllerOutOfTree\t" in line:
+            return int(line.split("\t")[1])
+    return 0
+
+
 def report(laws: Sequence[str] = LAWS, vehicle: str | Vehicle | None = None,
            firmware_path: str | os.PathLike[str] | None = None,
            jobs: int = 2) -> list[dict[str, Any]]:
@@ -131,7 +171,8 @@ def report(laws: Sequence[str] = LAWS, vehicle: str | Vehicle | None = None,
     -------
     list of dict
         One row per law: controller, vehicle, flash and RAM added to cf2.elf (B), the plain
-        and the app's cf2.elf sizes, instructions per call (mean, max), the budget, the host
+        and the app's cf2.elf sizes, instructions per call (mean, max), the stack (the
+        law's measured in QEMU plus controllerOutOfTree's frame), the budget, the host
         agreement and whether the builds came from the cache.
     """
     v = resolve_vehicle(vehicle)
@@ -148,6 +189,7 @@ def report(laws: Sequence[str] = LAWS, vehicle: str | Vehicle | None = None,
             flight = agreement_flight(name, v)
             nc = int(make_controller(name, vehicle=v).n_state)
             cost = law_cost(app, name, nc, flight, Path(tmp) / "qemu")
+            frame = boundary_frame(app, name, tree, Path(tmp) / "frame")
             agree = host_agreement(app, flight, tree, tmp)
         rows.append(dict(controller=name, vehicle=v.name, flash_added=built.flash - plain.flash,
                          ram_added=built.ram - plain.ram, plain=(plain.text, plain.data,
@@ -155,7 +197,7 @@ def report(laws: Sequence[str] = LAWS, vehicle: str | Vehicle | None = None,
                          app=(built.text, built.data, built.bss),
                          instructions_mean=cost["instructions_mean"],
                          instructions_max=cost["instructions_max"],
-                         stack_bytes=cost["stack_bytes"], budget=BUDGET_CYCLES,
+                         stack_bytes=cost["stack_bytes"] + frame, budget=BUDGET_CYCLES,
                          agreement=agree, cached=(plain.cached, built.cached)))
     return rows
 
@@ -174,7 +216,8 @@ def table(rows: Sequence[dict[str, Any]]) -> str:
         The table.
     """
     head = ("| law | flash added (B) | RAM added (B) | instructions per call, mean | max | "
-            "of the 500 Hz budget | stack (B) | host agreement, thrust | torque |\n"
+            f"of the 500 Hz budget | stack (B, of the stabilizer's {STABILIZER_STACK}) | "
+            "host agreement, thrust | torque |\n"
             "|---|---|---|---|---|---|---|---|---|\n")
     lines = [f"| {r['controller']} | {r['flash_added']} | {r['ram_added']} | "
              f"{r['instructions_mean']:.0f} | {r['instructions_max']:.0f} | "
