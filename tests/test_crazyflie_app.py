@@ -24,6 +24,7 @@ from quadcog.embedded.crazyflie_host import (
     AGREEMENT_RTOL,
     MODE_ABS,
     MODE_DISABLE,
+    MODE_VELOCITY,
     HostApp,
     agreement,
     build_host_app,
@@ -185,6 +186,31 @@ def test_rate_and_idle(tree, flights, tmp_path):
     assert np.array_equal(host.run(*rows), first)
 
 
+@needs_tree
+def test_velocity_setpoints(tree, flights, tmp_path):
+    """An axis in modeVelocity holds the current position; a body (hover) velocity is turned
+    by the yaw: at yaw 90 deg, body x is world y."""
+    write_crazyflie_app("composite", tmp_path / "app")
+    host = _host(tmp_path / "app", tree, tmp_path)
+    res = flights["composite"]
+    state, gyro, sp = (a[:100].copy() for a in firmware_units(res.x, res.ref, CONTROL_PERIOD))
+    state[:, 2] = 90.0
+    state[:, 3:7] = [0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)]      # yaw 90 deg, x y z w
+    sp[:, 12] = 90.0
+    velocity = (MODE_VELOCITY, MODE_VELOCITY, MODE_ABS, MODE_ABS)
+    held = sp.copy()
+    held[:, 0:2] = state[:, 7:9]                  # a position setpoint at the current position
+    host.init()
+    expected = host.run(state, gyro, held)
+    host.init()
+    assert np.array_equal(host.run(state, gyro, sp, modes=velocity), expected)
+    body = sp.copy()
+    body[:, 3], body[:, 4] = sp[:, 4], -sp[:, 3]   # world (vx, vy) in the frame turned by 90 deg
+    host.init()
+    got = host.run(state, gyro, body, modes=velocity, velocity_body=True)
+    assert np.allclose(got, expected, rtol=1e-5, atol=1e-9)
+
+
 def test_bad_input(tmp_path, monkeypatch):
     with pytest.raises(FirmwareError, match=r"firmware = .*not a Crazyflie firmware tree: "
                                             r"Makefile, tools/make/oot.mk"):
@@ -202,6 +228,18 @@ def test_bad_input(tmp_path, monkeypatch):
         write_crazyflie_app("composite", tmp_path / "a", vehicle="cf3")
     with pytest.raises(ExportError, match="controller 'lqr'"):
         write_crazyflie_app("lqr", tmp_path / "a")
+
+
+@needs_tree
+def test_a_user_tree_is_copied_not_written(tree, tmp_path, monkeypatch):
+    """A tree named by the environment variable is copied into the cache (the builds run in
+    the copy), and is the same tree afterwards."""
+    monkeypatch.setenv("QUADCOG_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv(firmware.FIRMWARE_ENV, str(tree))
+    before = firmware.tree_hash(tree)
+    copy, key = firmware.firmware_tree()
+    assert copy != tree and copy.is_relative_to(tmp_path / "cache")
+    assert key == before[:16] and firmware.tree_hash(copy) == before == firmware.tree_hash(tree)
 
 
 def test_first_error_line():
@@ -270,7 +308,7 @@ background_job("crazyflie: cf2.elf with the app", __file__, "test_firmware_build
 @pytest.mark.skipif(not (HAVE_TREE and HAVE_ARM),
                     reason=f"needs the firmware tree and {firmware.ARM_INSTALL} (CI installs "
                            "it: .ci/run)")
-def test_firmware_build_with_the_app():
+def test_firmware_build_with_the_app(capsys):
     """The firmware's own Makefiles build cf2.elf with the app (its -Os -Werror, its arm-none-
     eabi-gcc); the ELF has the app's controller and law; the second call finds it cached; a
     broken app fails with the compiler's first error line."""
@@ -287,6 +325,10 @@ def test_firmware_build_with_the_app():
     assert cmd.startswith("cmd_") and "arm-none-eabi-gcc" in cmd
     for flag in ("-Os -Werror", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-Wdouble-promotion"):
         assert f" {flag} " in cmd, flag
+    # the command line finds the same app in the cache (same files: same hash)
+    assert cli(["export", "--target", "crazyflie", "--controller", "composite", "--out",
+                str(work / "cli"), "--build"]) == 0
+    assert f"found {first.elf}: flash {first.flash} B" in capsys.readouterr().out
     # a broken app: the compiler's first error line, naming the file and line
     assert failed is not None
     assert re.search(r"quadcog_cf_composite\.c:\d+:\d+: error: expected ';'", str(failed)), failed

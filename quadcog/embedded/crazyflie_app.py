@@ -17,7 +17,8 @@ const sensorData_t *, const state_t *, stabilizerStep_t)``) and converts at the 
   law's state has no acceleration.
 - the setpoint (world-frame position m, velocity m/s, acceleration m/s^2, jerk m/s^3, yaw
   and yaw rate in degrees) into quadcog's reference; an axis in ``modeVelocity`` holds the
-  current position; the yaw reference is taken within half a turn of the current yaw (the
+  current position; with ``velocity_body`` (hover setpoints) the x, y velocity is turned by
+  the yaw into the world frame; the yaw reference is taken within half a turn of the current yaw (the
   firmware's yaw is wrapped to +-180 deg, quadcog's law subtracts angles).
 - the output as ``controlModeForceTorque``: thrustSi = U1 (N), torque = U2..U4 (N m), which
   the firmware's ``powerDistributionForceTorque`` mixes for its X frame.
@@ -152,12 +153,19 @@ static void quadcog_cf_{name}_reference(const setpoint_t *setpoint, const state_
                                         qc_real psi, qc_real ref[14])
 {{
     const float yaw_rate = QC_DEG_TO_RAD * setpoint->attitudeRate.yaw;
-    float yaw = psi, turn;
+    float yaw = psi, turn, vx = setpoint->velocity.x, vy = setpoint->velocity.y;
+    if (setpoint->velocity_body) {{
+        /* hover setpoints: x and y velocity in the frame turned by the yaw (as the firmware's
+           position controller reads them) */
+        const float c = cosf(psi), s = sinf(psi);
+        vx = c * setpoint->velocity.x - s * setpoint->velocity.y;
+        vy = s * setpoint->velocity.x + c * setpoint->velocity.y;
+    }}
     ref[0] = setpoint->mode.x == modeAbs ? setpoint->position.x : state->position.x;
     ref[1] = setpoint->mode.y == modeAbs ? setpoint->position.y : state->position.y;
     ref[2] = setpoint->mode.z == modeAbs ? setpoint->position.z : state->position.z;
-    ref[3] = setpoint->velocity.x;
-    ref[4] = setpoint->velocity.y;
+    ref[3] = vx;
+    ref[4] = vy;
     ref[5] = setpoint->velocity.z;
     ref[6] = setpoint->acceleration.x;
     ref[7] = setpoint->acceleration.y;

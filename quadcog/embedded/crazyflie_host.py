@@ -183,7 +183,7 @@ class HostApp:
 
     def run(self, state: ArrayLike, gyro: ArrayLike, setpoint: ArrayLike,
             modes: tuple[int, int, int, int] = (MODE_ABS,) * 4, tick0: int = 0,
-            tick_step: int = 2) -> NDArray[np.float32]:
+            tick_step: int = 2, velocity_body: bool = False) -> NDArray[np.float32]:
         """Call ``controllerOutOfTree`` once per row, at ticks tick0 + k tick_step.
 
         Parameters
@@ -196,6 +196,8 @@ class HostApp:
             The first ``stabilizerStep`` (1 kHz ticks).
         tick_step : int
             Ticks between rows (2: every row at the 500 Hz rate of the law).
+        velocity_body : bool
+            ``setpoint.velocity_body``: the x, y velocity in the frame turned by the yaw.
 
         Returns
         -------
@@ -205,7 +207,7 @@ class HostApp:
         rows = [np.ascontiguousarray(a, dtype=np.float32) for a in (state, gyro, setpoint)]
         n = len(rows[0])
         out = np.zeros((n, 5), dtype=np.float32)
-        m = (ctypes.c_int * 4)(*modes)
+        m = (ctypes.c_int * 5)(*modes, int(velocity_body))
         ptr = lambda a: a.ctypes.data_as(ctypes.POINTER(ctypes.c_float))
         self.lib.qc_cf_run(n, *(ptr(a) for a in rows), m, tick0, tick_step, ptr(out))
         return out

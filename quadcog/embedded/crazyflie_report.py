@@ -17,8 +17,7 @@ from quadcog.controllers.registry import make_controller
 from quadcog.embedded import crazyflie_firmware as firmware
 from quadcog.embedded import target
 from quadcog.embedded.crazyflie_app import CONTROL_PERIOD, RATE, resolve_vehicle, write_crazyflie_app
-from quadcog.embedded.crazyflie_host import HOST_INCLUDES, HostApp, agreement, build_host_app, \
-    firmware_units
+from quadcog.embedded.crazyflie_host import HOST_INCLUDES, HostApp, agreement, build_host_app, firmware_units
 from quadcog.embedded.host import compile_checked
 from quadcog.sim.flight import simulate
 from quadcog.sim.result import SimulationResult

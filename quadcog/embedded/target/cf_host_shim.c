@@ -6,7 +6,7 @@
                    position (m), velocity (m/s, world), acc (g, world, 1 g removed)
    gyro row (3):   deg/s, body
    setpoint row (14): position, velocity, acceleration, jerk (world), yaw (deg), yaw rate (deg/s)
-   modes (4):      stab_mode_t of x, y, z and yaw (the same for every row)
+   modes (5):      stab_mode_t of x, y, z and yaw, then velocity_body (the same for every row)
    out row (5):    thrustSi (N), torque x, y, z (N m), controlMode */
 #include <stdint.h>
 #include <string.h>
@@ -39,6 +39,7 @@ void qc_cf_run(int n, const float *state_rows, const float *gyro_rows, const flo
     setpoint.mode.y = (stab_mode_t)modes[1];
     setpoint.mode.z = (stab_mode_t)modes[2];
     setpoint.mode.yaw = (stab_mode_t)modes[3];
+    setpoint.velocity_body = modes[4] != 0;
     for (k = 0; k < n; ++k) {
         const float *s = state_rows + 16 * k, *g = gyro_rows + 3 * k, *p = setpoint_rows + 14 * k;
         float *o = out + 5 * k;
