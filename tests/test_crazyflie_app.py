@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from quadcog.cli import main as cli
+from quadcog.controllers import make_controller
 from quadcog.embedded import crazyflie_firmware as firmware
 from quadcog.embedded.crazyflie_app import CONTROL_PERIOD, resolve_vehicle, write_crazyflie_app
 from quadcog.embedded.crazyflie_host import (
@@ -30,7 +31,8 @@ from quadcog.embedded.crazyflie_host import (
     build_host_app,
     firmware_units,
 )
-from quadcog.embedded.crazyflie_report import LAWS, agreement_flight
+from quadcog.embedded.crazyflie_report import LAWS, agreement_flight, law_cost
+from quadcog.embedded.target import missing_tools
 from quadcog.errors import ExportError, FirmwareBuildError, FirmwareError, TargetError
 from quadcog.model.conventions import rotation_matrix
 
@@ -333,3 +335,22 @@ def test_firmware_build_with_the_app(capsys):
     assert failed is not None
     assert re.search(r"quadcog_cf_composite\.c:\d+:\d+: error: expected ';'", str(failed)), failed
     shutil.rmtree(work, ignore_errors=True)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(bool(missing_tools()), reason="needs gcc-arm-none-eabi "
+                    "libnewlib-arm-none-eabi qemu-system-arm (CI installs them: .ci/run)")
+@pytest.mark.parametrize("name", LAWS)
+def test_published_instructions_are_this_app_s(flights, tmp_path, name):
+    """The instructions per call in docs/tour/crazyflie.md (from `make crazyflie-app`) are what
+    QEMU counts for the app's law now (-icount: the same on any host): a change of the law or
+    of the export that is not republished fails here."""
+    page = (Path(__file__).resolve().parent.parent / "docs/tour/crazyflie.md").read_text()
+    row = re.search(rf"^\| {name} \| \d+ \| \d+ \| (\d+) \| (\d+) \|", page, re.M)
+    assert row, f"no row of {name} in docs/tour/crazyflie.md"
+    app = tmp_path / "app"
+    write_crazyflie_app(name, app)
+    nc = int(make_controller(name, vehicle=resolve_vehicle(None)).n_state)
+    cost = law_cost(app, name, nc, flights[name], tmp_path / "qemu")
+    assert (f"{cost['instructions_mean']:.0f}", f"{cost['instructions_max']:.0f}") == row.groups(), (
+        "run make crazyflie-app and republish its output in docs/tour/crazyflie.md")

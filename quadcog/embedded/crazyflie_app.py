@@ -99,10 +99,11 @@ CONFIG_CONTROLLER_OOT=y
 
 def _controller_c(name: str, nc: int, notice: str) -> str:
     """The firmware's out-of-tree controller API around quadcog_<name>_step."""
+    pad = " " * len(f"static void quadcog_cf_{name}_state(")      # continuation lines
     return f"""\
 /* {notice} */
-/* quadcog_cf_{name}: the quadcog law quadcog_{name} as the Crazyflie firmware's out-of-tree
- * controller (controller.h). Units and frames at the boundary: see
+/* quadcog_cf_{name}: the quadcog law quadcog_{name} as the Crazyflie firmware's
+ * out-of-tree controller (controller.h). Units and frames at the boundary: see
  * quadcog/embedded/crazyflie_app.py. float32 throughout. */
 #include <math.h>
 #include <stdbool.h>
@@ -122,7 +123,7 @@ static qc_real qc_state[QUADCOG_{name.upper()}_NC > 0 ? QUADCOG_{name.upper()}_N
    (rad/s), from the firmware's state (attitude in deg with the pitch negated, quaternion
    x y z w, world-frame velocity) and gyro (deg/s) */
 static void quadcog_cf_{name}_state(const state_t *state, const sensorData_t *sensors,
-                                    qc_real x[12])
+{pad}qc_real x[12])
 {{
     const float qx = state->attitudeQuaternion.x, qy = state->attitudeQuaternion.y;
     const float qz = state->attitudeQuaternion.z, qw = state->attitudeQuaternion.w;
@@ -150,7 +151,7 @@ static void quadcog_cf_{name}_state(const state_t *state, const sensorData_t *se
 /* quadcog's ref (14): position, velocity, acceleration, jerk (world), yaw (rad, within half a
    turn of the current yaw psi), yaw rate (rad/s), from the setpoint */
 static void quadcog_cf_{name}_reference(const setpoint_t *setpoint, const state_t *state,
-                                        qc_real psi, qc_real ref[14])
+{pad}    qc_real psi, qc_real ref[14])
 {{
     const float yaw_rate = QC_DEG_TO_RAD * setpoint->attitudeRate.yaw;
     float yaw = psi, turn, vx = setpoint->velocity.x, vy = setpoint->velocity.y;
