@@ -395,6 +395,8 @@ def _export_crazyflie(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.embedded.crazyflie_app import write_crazyflie_app
+    if args.firmware is not None and not args.build:
+        raise QuadcogError("--firmware needs --build")
     vehicle = [f"--vehicle {args.vehicle}"] if args.vehicle else []
     if args.scenario is None:
         if args.overrides:

@@ -244,6 +244,13 @@ def test_a_user_tree_is_copied_not_written(tree, tmp_path, monkeypatch):
     assert key == before[:16] and firmware.tree_hash(copy) == before == firmware.tree_hash(tree)
 
 
+@pytest.mark.skipif(not firmware.VENDOR_TARBALL.is_file(), reason="needs the vendored tarball")
+def test_a_tarball_is_a_firmware(monkeypatch):
+    """A tarball named as the firmware is unpacked into the cache as the vendored one is."""
+    monkeypatch.delenv(firmware.FIRMWARE_ENV, raising=False)
+    assert firmware.firmware_tree(firmware.VENDOR_TARBALL) == firmware.firmware_tree()
+
+
 def test_first_error_line():
     log = ("  CC      src/modules/src/crtp.o\n"
            "In file included from app/src/quadcog_cf_x.c:9:\n"
@@ -268,6 +275,10 @@ def test_cli(tmp_path, capsys):
     assert cli(["export", "--controller", "pd", "--vehicle", "crazyflie",
                 "--out", str(tmp_path)]) == 2
     assert "--vehicle needs --target crazyflie" in capsys.readouterr().err
+    assert cli(["export", "--target", "crazyflie", "--controller", "composite", "--firmware",
+                str(tmp_path), "--out", str(tmp_path / "never")]) == 2
+    assert "--firmware needs --build" in capsys.readouterr().err
+    assert not (tmp_path / "never").exists()
 
 
 # ---- the firmware build (slow: about 90 s on 2 cores, once per firmware and app source) ----

@@ -171,7 +171,8 @@ def firmware_tree(firmware: str | os.PathLike[str] | None = None) -> tuple[Path,
     Parameters
     ----------
     firmware : str or os.PathLike, optional
-        A firmware tree (default: ``$QUADCOG_CRAZYFLIE_FIRMWARE``, else ``VENDOR_TARBALL``).
+        A firmware tree, or a tarball of one in a ``crazyflie-firmware/`` folder (default:
+        ``$QUADCOG_CRAZYFLIE_FIRMWARE``, else ``VENDOR_TARBALL``).
 
     Returns
     -------
@@ -184,7 +185,9 @@ def firmware_tree(firmware: str | os.PathLike[str] | None = None) -> tuple[Path,
     quadcog.errors.FirmwareError
         The tree named is not a firmware tree, or none is named and the tarball is absent.
     """
-    if firmware is not None:
+    if firmware is not None and Path(firmware).is_file() and tarfile.is_tarfile(firmware):
+        source, where = Path(firmware).resolve(), "tarball"
+    elif firmware is not None:
         source, where = check_tree(firmware, "firmware"), "firmware"
     elif os.environ.get(FIRMWARE_ENV):
         source, where = check_tree(os.environ[FIRMWARE_ENV], f"${FIRMWARE_ENV}"), FIRMWARE_ENV
