@@ -4,8 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: crazyflie
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded docs targets clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded crazyflie crazyflie-app docs targets clean
 
 OUT ?= out
 
@@ -107,6 +106,16 @@ mutations: $(STAMP)
 ARM_PACKAGES := gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
 embedded: compile
 	$(PY) -m quadcog.embedded --out $(OUT)/embedded
+
+# quadcog's laws (composite, payload_adaptive) as out-of-tree controller apps of the Crazyflie
+# firmware: built into cf2.elf by the firmware's own Makefiles (in quadcog's cache; the tree is
+# $(QUADCOG_CRAZYFLIE_FIRMWARE) or shared/vendor/crazyflie-firmware.tar.xz beside the
+# checkout), with the flash
+# and RAM they add, instructions per call on the Cortex-M4 (QEMU) against the 500 Hz budget,
+# and their host agreement with quadcog's law; needs $(ARM_PACKAGES). A few minutes the first
+# time (two full firmware builds), seconds from the cache.
+crazyflie-app: $(STAMP)
+	$(PY) -m quadcog.embedded.crazyflie_report
 
 # The documentation site (MkDocs, Material, mkdocstrings) into $(OUT)/docs/; the reference pages
 # (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.

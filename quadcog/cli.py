@@ -349,6 +349,17 @@ def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--precision", default="float32", choices=("float32", "double"),
                    help="float32 (default) or double")
     p.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
+    p.add_argument("--target", default="c", choices=("c", "crazyflie"),
+                   help="c (default: the C99 module) or crazyflie (an out-of-tree controller "
+                        "app of the Crazyflie firmware, float32; docs: On a Crazyflie)")
+    p.add_argument("--vehicle", help="with --target crazyflie: the vehicle preset the law is "
+                                     "designed for (default the Crazyflie's)")
+    p.add_argument("--build", action="store_true",
+                   help="with --target crazyflie: also build cf2.elf with the app in quadcog's "
+                        "cache and print its size (needs gcc-arm-none-eabi)")
+    p.add_argument("--firmware", type=Path,
+                   help="with --build: the firmware tree (default $QUADCOG_CRAZYFLIE_FIRMWARE, "
+                        "else the vendored tarball); never written")
     p.set_defaults(func=cmd_export)
 
 
@@ -362,6 +373,14 @@ def cmd_export(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.embedded import export_controller
+    if args.target == "crazyflie":
+        _export_crazyflie(args)
+        return
+    for flag in ("vehicle", "firmware"):
+        if getattr(args, flag) is not None:
+            raise QuadcogError(f"--{flag} needs --target crazyflie")
+    if args.build:
+        raise QuadcogError("--build needs --target crazyflie")
     if args.scenario is None:
         if args.overrides:
             raise QuadcogError("--set needs --scenario (the keys of a scenario file)")
@@ -380,6 +399,42 @@ def cmd_export(args: argparse.Namespace) -> None:
                                   name=scenario.controller, command=command)
     for path in paths:
         print(f"wrote {path}")
+
+
+def _export_crazyflie(args: argparse.Namespace) -> None:
+    """`quadcog export --target crazyflie`: write (and with --build, build) the firmware app
+    (``quadcog.embedded.crazyflie_app.write_crazyflie_app``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+    from quadcog.embedded.crazyflie_app import write_crazyflie_app
+    if args.firmware is not None and not args.build:
+        raise QuadcogError("--firmware needs --build")
+    vehicle = [f"--vehicle {args.vehicle}"] if args.vehicle else []
+    if args.scenario is None:
+        if args.overrides:
+            raise QuadcogError("--set needs --scenario (the keys of a scenario file)")
+        law, name = args.controller, None
+        which = [f"--controller {args.controller}"]
+    else:
+        from quadcog.scenarios.scenario import load_scenario
+        scenario = load_scenario(args.scenario, args.overrides)
+        law = scenario.make_controller()
+        law, name = getattr(law, "inner", law), scenario.controller
+        which = [f"--scenario {args.scenario}"] + [f"--set {o}" for o in args.overrides]
+    command = " ".join(["quadcog export --target crazyflie", *which, *vehicle, "--out DIR"])
+    out = _out_dir(args.out)
+    paths = write_crazyflie_app(law, out, vehicle=args.vehicle, name=name, command=command)
+    for path in paths:
+        print(f"wrote {path}")
+    if args.build:
+        from quadcog.embedded.crazyflie_firmware import build_app
+        built = build_app(out, args.firmware)
+        print(f"{'found' if built.cached else 'built'} {built.elf}: flash {built.flash} B, "
+              f"RAM {built.ram} B (text {built.text}, data {built.data}, bss {built.bss})")
 
 
 def add_sweep(sub: _Subparsers[argparse.ArgumentParser]) -> None:

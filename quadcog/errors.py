@@ -6,7 +6,8 @@ __all__ = ["QuadcogError", "GeneratedFilesError", "InputError", "ParameterError"
            "QuadcogWarning", "EulerSingularityError", "TargetError", "ExportError",
            "ScenarioError", "OverrideError", "ReferenceWarning", "KernelError", "SweepError",
            "PhysicalConsistencyError", "MissingDependencyError", "LogError", "LogFormatError",
-           "LogCRCError", "LogSignalError", "IdentificationError", "StackError"]
+           "LogCRCError", "LogSignalError", "IdentificationError", "StackError",
+           "FirmwareError", "FirmwareBuildError"]
 
 
 class QuadcogError(Exception):
@@ -43,6 +44,15 @@ class TargetError(QuadcogError):
 
 class ExportError(QuadcogError):
     """A controller cannot be exported: the message names the controller and the reason."""
+
+
+class FirmwareError(QuadcogError):
+    """A Crazyflie firmware tree is missing or is not one: the message names the folder, where
+    it came from (argument, environment variable) and the file that is missing."""
+
+
+class FirmwareBuildError(CompileError):
+    """A firmware build failed: the message gives the compiler's first error line and the log."""
 
 
 class ScenarioError(InputError):

@@ -143,11 +143,11 @@ def _fmt(a):
     return "[" + "; ".join(", ".join(f"{v:.6g}" for v in row) for row in a) + "]"
 
 
-def _header(name, controller, precision, command, nc):
+def _header(name, controller, precision, command, nc, dt=None):
     N = name.upper()
     c_type = C_TYPE[precision]
     is_float = 1 if precision == "float32" else 0
-    dt = config.defaults["simulate.dt"]
+    dt = config.defaults["simulate.dt"] if dt is None else dt
     p = controller.nominal
     params = [f" *   {n:<8s} = {v:.6g} {PARAM_UNITS[n]}" for n, v in zip(PARAM_NAMES, p)]
     consts = []
@@ -263,7 +263,7 @@ def _source(name, controller, precision, command, fn):
 
 
 def render(controller: Controller, precision: str = "float32", name: str | None = None,
-           command: str | None = None) -> dict[str, str]:
+           command: str | None = None, dt: float | None = None) -> dict[str, str]:
     """The exported module's files as text.
 
     Parameters
@@ -277,6 +277,9 @@ def render(controller: Controller, precision: str = "float32", name: str | None 
     command : str, optional
         What wrote the files, named in their first line (default: the Python call
         ``quadcog.embedded.export_controller(<class>(...), precision=...)``).
+    dt : float, optional
+        The control period the header says the law is designed for (s; default
+        ``quadcog.config.defaults["simulate.dt"]``).
 
     Returns
     -------
@@ -300,7 +303,7 @@ def render(controller: Controller, precision: str = "float32", name: str | None 
         f"precision={precision!r})")
     fn = step_function(controller)
     return {f"quadcog_{name}.h": _header(name, controller, precision, command,
-                                         int(controller.n_state)),
+                                         int(controller.n_state), dt),
             f"quadcog_{name}.c": _source(name, controller, precision, command, fn)}
 
 

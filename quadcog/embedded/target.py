@@ -7,6 +7,7 @@ advances exactly 1 ns per instruction, and the SysTick, clocked at the board's 2
 every 40 instructions, deterministically. A calibration loop of known length (2 x 100,000
 instructions) is timed first, which checks that mapping on every run.
 """
+from collections.abc import Sequence
 import os
 from pathlib import Path
 import re
@@ -146,7 +147,8 @@ def _defines(name, nc):
 
 
 def build_target(module_dir: str | os.PathLike[str], name: str, nc: int,
-                 data_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str]) -> Path:
+                 data_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str],
+                 opt: Sequence[str] = TARGET_OPT) -> Path:
     """Cross-compile the controller with the harness for the Cortex-M4.
 
     The controller also gets a .su file (-fstack-usage) and an object for arm-none-eabi-size.
@@ -163,6 +165,9 @@ def build_target(module_dir: str | os.PathLike[str], name: str, nc: int,
         The folder of harness_data.h.
     out_dir : str or os.PathLike
         Where the object and the ELF go (created if needed).
+    opt : sequence of str
+        The optimization flags of the controller's object (default ``TARGET_OPT``; the
+        Crazyflie firmware builds with ``-Os``).
 
     Returns
     -------
@@ -183,7 +188,7 @@ def build_target(module_dir: str | os.PathLike[str], name: str, nc: int,
     out_dir.mkdir(parents=True, exist_ok=True)
     module_dir = Path(module_dir)
     obj = out_dir / f"quadcog_{name}.o"
-    compile_checked([ARM_GCC, *STRICT_FLAGS, *CORTEX_M4, *TARGET_OPT, "-fstack-usage",
+    compile_checked([ARM_GCC, *STRICT_FLAGS, *CORTEX_M4, *opt, "-fstack-usage",
                      "-ffunction-sections", "-c", module_dir / f"quadcog_{name}.c", "-o", obj])
     elf = out_dir / f"harness_{name}.elf"
     compile_checked([ARM_GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", *CORTEX_M4,
