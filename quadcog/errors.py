@@ -160,3 +160,11 @@ class Interrupted(KeyboardInterrupt):
         self.signum = int(signum)
         self.status = 128 + self.signum
         super().__init__(f"interrupted by {signal.Signals(self.signum).name}")
+
+
+class AttitudeError(InputError):
+    """An attitude that is not one: a matrix that is not a rotation (R^T R != I or det R != 1)
+    or a quaternion whose norm is not 1 (a zero quaternion has no attitude)."""
+
+
+__all__ += ["AttitudeError"]
