@@ -19,6 +19,8 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py verify   [FILE]   # default out/report/verification.json (make report)
     python bench/publish.py embedded [FILE]   # default out/embedded/costs.json (make embedded)
     python bench/publish.py targets  [FILE]   # default out/targets/targets.md (quadcog targets)
+    python bench/publish.py geometric [FILE]  # out/geometric/geometric.json
+                                              # (python -m quadcog.studies.geometric)
     python bench/publish.py precision-float32 [FILE]   # out/bench/precision-float32.md,
     python bench/publish.py precision-isa     [FILE]   # ... -isa.md and -fma.md
     python bench/publish.py precision-fma     [FILE]   # (python bench/precision.py)
@@ -38,6 +40,7 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            "verify": OUT / "report" / "verification.json",
            "embedded": OUT / "embedded" / "costs.json",
            "targets": OUT / "targets" / "targets.md",
+           "geometric": OUT / "geometric" / "geometric.json",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
               for p in ("float32", "isa", "fma")}}
 # the page that holds each table block
@@ -46,6 +49,7 @@ PAGES = {"bench": ROOT / "docs" / "performance.md",
          "beyond": ROOT / "docs" / "tour" / "beyond.md",
          "embedded": ROOT / "docs" / "tour" / "flight-controller.md",
          "targets": ROOT / "docs" / "targets.md",
+         "geometric": ROOT / "docs" / "tour" / "geometric.md",
          **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
@@ -53,6 +57,7 @@ COPIES = {"bench": ROOT / "bench" / "results.md",
           "analysis": MEASURED / "analysis.json",
           "verify": MEASURED / "verification.json",
           "embedded": MEASURED / "embedded.json",
+          "geometric": MEASURED / "geometric.json",
           **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")}}
 VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
                    r"(?P<text>[^<]*)<!-- /value -->")

@@ -9,6 +9,7 @@ from quadcog.controllers.cascade_pd import CascadePD
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.fl_integral import FeedbackLinearizationIntegral
+from quadcog.controllers.geometric import GeometricAdaptive
 from quadcog.controllers.payload_adaptive import PayloadAdaptive
 from quadcog.controllers.registry import CONTROLLERS, make_controller
 
@@ -17,3 +18,4 @@ BY_NAME = CONTROLLERS          # the name of earlier releases
 __all__ = ["AdaptiveFeedbackLinearization", "BY_NAME", "CONTROLLERS", "CascadePD",
            "CompositeAdaptive", "Controller", "FeedbackLinearization",
            "FeedbackLinearizationIntegral", "PayloadAdaptive", "make_controller"]
+__all__ += ["GeometricAdaptive"]
