@@ -21,7 +21,7 @@ import numpy as np
 
 from quadcog.controllers.registry import CONTROLLERS, controller_names, controller_settings
 from quadcog.errors import EulerSingularityError, ReferenceWarning
-from quadcog.files import atomic_write, cpu_model, strict_json
+from quadcog.files import atomic_write, run_stamp, strict_json
 from quadcog.model.functions import load
 from quadcog.model.parameters import with_cog
 from quadcog.scenarios.scenario import Scenario, load_scenario
@@ -184,8 +184,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="folder of geometric.json (default out/geometric)")
     args = ap.parse_args(argv)
     data = rows(progress=lambda s: print(s, flush=True))
-    machine = (f"Measured by `python -m quadcog.studies.geometric` on {cpu_model()} "
-               f"({platform.machine()}), Python {platform.python_version()}.")
+    machine = (f"Measured by `python -m quadcog.studies.geometric` {run_stamp()}, Python "
+               f"{platform.python_version()}.")
     results: dict[str, dict[str, Any]] = {}
     for r in data:
         key = r["law"] + ("-wide" if r["settings"] != "defaults" else "") \
