@@ -1,6 +1,7 @@
 """Layer 5, controllers: the paper's three (cascade PD, feedback linearization, the adaptive
 law) and three beyond it (feedback linearization with integral action, the composite adaptive
-law, and the payload law that learns the mass with the CoG), each a CasADi law, a compiled
+law, and the payload law that learns the mass with the CoG) and the geometric law on SE(3)
+that flies past the Euler angles' reach, each a CasADi law, a compiled
 call and a Python object. ``registry`` is the one table of them by short name; ``template``
 states the interface a controller of your own implements."""
 from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization

@@ -20,11 +20,11 @@ b3_c || b2_d, which would take a roll of 90 degrees. Omega_c = (R_c^T R_c_dot)^v
 R_c_dot the derivative of R_c(f, yaw) along f_dot = m_hat (j_d - k_x e_v - k_v (a - a_d)) +
 d/dt (R D_v nu1) and yaw_rate, with a = (U1 R e3 - R D_v nu1) / m_hat - g e3 the acceleration
 that the thrust gives the believed body (assuming instead that e_v follows its command makes
-the feedforward cancel the feedback: measured, a hover held 0.66 m off after a CoG step). The
-reference has no snap, so Omega_c_dot is the derivative of Omega_c through a first-order
+the feedforward cancel the feedback: in a development run, a hover held 0.66 m off after a CoG
+step). The reference has no snap, so Omega_c_dot is the derivative of Omega_c through a first-order
 filter, ``Omega_f_dot = lam_d (Omega_c - Omega_f)``, ``Omega_c_dot ~ lam_d (Omega_c -
-Omega_f)`` (``rate_filter`` lam_d; without it the banked circle at 60 degrees lags by 8.6 cm
-RMS, its body rates turning at 2.9 rad/s).
+Omega_f)`` (``rate_filter`` lam_d; without it, in a development run, the banked circle at 60
+degrees lagged by 8.6 cm RMS, its body rates turning at 2.9 rad/s).
 
     e_R = (R_c^T R - R^T R_c)^vee / 2,  e_W = w - R^T R_c Omega_c
     w_dot* = -k_R e_R - k_W e_W - w x R^T R_c Omega_c + R^T R_c Omega_c_dot
@@ -218,6 +218,8 @@ class GeometricAdaptive(Controller):
                                       ca.vertcat(f_dot, yaw_rate)), 3, 3)
         self._desired = ca.Function("desired_attitude", [f, yaw, f_dot, yaw_rate],
                                     [Rc, Rc_dot])
+        # Omega_f and its rate, set by expression() for parts() while one law is built
+        self._omega_f, self._omega_f_dot = ca.SX.zeros(3), ca.SX.zeros(3)
 
     def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:
         """The law as CasADi expressions: ``PayloadAdaptive``'s estimator around ``parts``,
