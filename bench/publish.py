@@ -21,6 +21,8 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py targets  [FILE]   # default out/targets/targets.md (quadcog targets)
     python bench/publish.py crazyflie [FILE]  # default out/crazyflie/side-by-side.md (make crazyflie)
     python bench/publish.py crazyflie-real [FILE]  # out/crazyflie/real-flights.md (make crazyflie)
+    python bench/publish.py geometric [FILE]  # out/geometric/geometric.json
+                                              # (python -m quadcog.studies.geometric)
     python bench/publish.py precision-float32 [FILE]   # out/bench/precision-float32.md,
     python bench/publish.py precision-isa     [FILE]   # ... -isa.md and -fma.md
     python bench/publish.py precision-fma     [FILE]   # (python bench/precision.py)
@@ -42,6 +44,7 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            "targets": OUT / "targets" / "targets.md",
            "crazyflie": OUT / "crazyflie" / "side-by-side.md",
            "crazyflie-real": OUT / "crazyflie" / "real-flights.md",
+           "geometric": OUT / "geometric" / "geometric.json",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
               for p in ("float32", "isa", "fma")}}
 # the page that holds each table block
@@ -52,6 +55,7 @@ PAGES = {"bench": ROOT / "docs" / "performance.md",
          "targets": ROOT / "docs" / "targets.md",
          "crazyflie": ROOT / "docs" / "crazyflie.md",
          "crazyflie-real": ROOT / "docs" / "crazyflie.md",
+         "geometric": ROOT / "docs" / "tour" / "geometric.md",
          **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
@@ -61,6 +65,7 @@ COPIES = {"bench": ROOT / "bench" / "results.md",
           "embedded": MEASURED / "embedded.json",
           "crazyflie": MEASURED / "crazyflie.md",
           "crazyflie-real": MEASURED / "crazyflie-real.md",
+          "geometric": MEASURED / "geometric.json",
           **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")}}
 VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
                    r"(?P<text>[^<]*)<!-- /value -->")

@@ -25,6 +25,13 @@ VECTORS = {
            sym.inertial),
     "g": (("g",), sp.Matrix([sym.g])),
     "c": (("c_x", "c_y", "c_z", "c_phi", "c_theta", "c_psi"), sym.drag),
+    # The model on SE(3) (docs/model.md sec. 8): the state with a unit quaternion (scalar
+    # first) for the Euler angles, a rotation matrix row by row, the body velocities alone.
+    "xq": (("x", "y", "z", "q_w", "q_x", "q_y", "q_z", "u", "v", "w", "p", "q", "r"),
+           sym.state_se3),
+    "R": (("R11", "R12", "R13", "R21", "R22", "R23", "R31", "R32", "R33"), sym.R_entries),
+    "nu": (("u", "v", "w", "p", "q", "r"), sym.nu),
+    "quaternion": (("q_w", "q_x", "q_y", "q_z"), sym.quaternion),
 }
 # The outputs y = h(x) of the feedback linearization: state entries, by name.
 OUTPUT_NAMES = ("z", "phi", "theta", "psi")
@@ -87,6 +94,20 @@ FUNCTIONS = (
                  "x_dot of the rigid body with inertial parameters pi about O, gravity g and "
                  "drag c; equals dynamics(x, U, p) at pi = [m, m r_G, Ixx, 0, Iyy, 0, 0, Izz]",
                  lambda d: d.inertial.I_G_inv),
+    FunctionSpec("se3_dynamics", ("xq", "U", "pi", "g", "c", "wrench"),
+                 (("xq_dot", lambda d: d.se3.xdot),),
+                 "x_dot on SE(3) of the rigid body with inertial parameters pi about O: "
+                 "[R(q) nu1; q (0, nu2) / 2; nu_dot], q a unit quaternion, with drag c and an "
+                 "external wrench [force at O in ground axes; moment in body axes]",
+                 lambda d: d.se3.I_G_inv),
+    FunctionSpec("se3_regressor", ("R", "nu", "nu_dot", "g"), (("Y", lambda d: d.se3.Y),),
+                 "Y = d/dpi [M nu_dot + C nu + g_G] with the attitude as a rotation matrix R "
+                 "(body to ground, row by row), 6x10; at R = R(eta) it is inertial_regressor",
+                 lambda d: {}),
+    FunctionSpec("quaternion_rotation", ("quaternion",), (("R", lambda d: d.se3.R_q),),
+                 "R(q), body to ground, of the quaternion q = [q_w, q_x, q_y, q_z] (Hamilton, "
+                 "R(q) v = q v q^*), 3x3",
+                 lambda d: {}),
 )
 
 

@@ -413,6 +413,9 @@ _FUNCTION_TEXT = {
     "inertial_regressor": r"$Y$: $Y\pi = M\dot\nu + C\nu + g_G$",
     "inertial_mass_matrix": r"$M$ of the body $\pi$",
     "inertial_dynamics": r"$\dot x$ of the body $\pi$",
+    "se3_dynamics": r"$\dot x_q$ on SE(3), quaternion",
+    "se3_regressor": r"$Y$ with the attitude as $R$",
+    "quaternion_rotation": r"$R(q)$",
 }
 
 
@@ -504,6 +507,19 @@ def _inertial(model):
     )
 
 
+def _se3(model):
+    """R(q), q_dot and the gravity column of Y on SE(3); the blocks of Y are those of the
+    Euler model with R for R(eta) (checked here)."""
+    se3 = model.se3
+    n = (sym.quaternion.T * sym.quaternion)[0]
+    J = (se3.R_q * n).applyfunc(sp.expand)
+    a_O = se3.Y[:3, 0]
+    if (se3.Y[3:, 1:4] + sym.skew(a_O)).applyfunc(sp.expand) != sp.zeros(3, 3):
+        raise AssertionError("the h columns of the moment rows of Y on SE(3) are not -S(a_O)")
+    return dict(se3_state=_vec(sym.state_se3), se3_J=_tex(J), se3_qdot=_tex(se3.q_dot),
+                se3_a=_tex(a_O))
+
+
 def _inertia_about_cog_in_pi(body):
     """I_G = I_O - (|h|^2 I - h h^T) / m, checked against the body's, printed as m I_G."""
     h = sym.h
@@ -540,5 +556,6 @@ def render(model):
         b=_display(entries[16:]),
         n_kappa=str(len(definitions)),
         **_zero_dynamics(model), **_hover(model), **_comparison(model), **_inertial(model),
+        **_se3(model),
     )
     return tex_header() + _TexTemplate(TEMPLATE.read_text()).substitute(fields)

@@ -11,6 +11,7 @@ from derive.lie import OutputDerivatives, output_derivatives
 from derive.linearization import linearization
 from derive.newton_euler import RigidBody, inverse_inertia_definition, rigid_body, solve_accelerations
 from derive.regressor import regressor
+from derive.se3 import SE3Model, se3_model
 from derive.vector_field import dynamics, vector_field
 
 
@@ -34,6 +35,7 @@ class DerivedModel:
     xdot_general: sp.Matrix                # truth model: products of inertia, external wrench
     I_G_inv_general: dict                  # placeholders for that model
     inertial: InertialModel                # the model linear in the ten inertial parameters
+    se3: SE3Model                          # the same body on SE(3) (quaternion, R)
     timings: dict = field(default_factory=dict)
 
     def substituted(self, expr):
@@ -62,11 +64,12 @@ def derive_model(log=None):
     Phi = stage("regressor", regressor, body)
     inertial = stage("inertial parameters", inertial_model, R, Q, general_body, body, Phi,
                      xdot, _placeholders)
+    se3 = stage("SE(3) (quaternion)", se3_model, R, inertial)
     outputs = stage("lie derivatives", output_derivatives, f, G, placeholders)
     A, B = stage("linearization", linearization, xdot)
     M_inv = solve_accelerations(body, sp.eye(6))
     return DerivedModel(R, Q, J, body, f, G, xdot, Phi, outputs, A, B, placeholders, M_inv,
-                        *general, inertial, timings)
+                        *general, inertial, se3, timings)
 
 
 def _placeholders(body):

@@ -65,3 +65,12 @@ I_G_INV_SYMBOLS = tuple(_Gi[(i, j)] for i in range(3) for j in range(i, 3))
 def skew(a):
     """S(a) with S(a) b = a x b."""
     return sp.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+
+# The attitude on SE(3) (docs/model.md sec. 8): a unit quaternion q = [q_w, q_x, q_y, q_z]
+# (Hamilton, scalar first, body to ground: R(q) v = q v q^*) and the nine entries of a rotation
+# matrix R (body to ground), row by row. The state on SE(3) is [eta1; q; nu1; nu2] (13).
+q_w, q_x, q_y, q_z = sp.symbols("q_w q_x q_y q_z", real=True)
+quaternion = sp.Matrix([q_w, q_x, q_y, q_z])
+R_entries = sp.Matrix(sp.symbols("R_11 R_12 R_13 R_21 R_22 R_23 R_31 R_32 R_33", real=True))
+R_matrix = sp.Matrix(3, 3, list(R_entries))
+state_se3 = sp.Matrix.vstack(eta1, quaternion, nu)

@@ -175,3 +175,11 @@ class Interrupted(KeyboardInterrupt):
 class StackError(QuadcogError):
     """A flight stack's or peer suite's tree is missing or is not one, or its build failed;
     the message says what is missing and how to get it (quadcog.stacks)."""
+
+
+class AttitudeError(InputError):
+    """An attitude that is not one: a matrix that is not a rotation (R^T R != I or det R != 1)
+    or a quaternion whose norm is not 1 (a zero quaternion has no attitude)."""
+
+
+__all__ += ["AttitudeError"]

@@ -13,6 +13,7 @@ import casadi as ca
 import numpy as np
 
 import quadcog
+from quadcog.model.attitude import quaternion_of_euler
 from quadcog.model.conventions import B_U, FUNCTIONS, IDX, OUTPUT_ROWS, hover_trim, rotation_matrix
 from quadcog.model.inertial_parameters import box, inertial_arguments
 from quadcog.model.sampling import random_points
@@ -220,6 +221,9 @@ def _backends(c, pt):
               "wrench": np.concatenate([v[:3], 0.1 * v[3:]]), "nu_dot": v,
               "pi": box(p[IDX["m"]], 10 * p[2:5], p[IDX["x_G"]:]),     # consistent
               "g": p[IDX["g"]:IDX["g"] + 1], "c": p[IDX["c_x"]:IDX["c_psi"] + 1]}
+    q = quaternion_of_euler(*x[3:6])            # the model on SE(3), at the same attitude
+    inputs.update({"xq": np.concatenate([x[:3], q, x[6:]]), "quaternion": q, "nu": x[6:],
+                   "R": rotation_matrix(*x[3:6]).ravel()})
     worst = 0.0
     for name, (spec_in, _) in FUNCTIONS.items():
         args = [inputs[n] for n, _ in spec_in]

@@ -7,7 +7,8 @@ import sympy as sp
 from derive import symbols as sym
 from derive.contract import FUNCTIONS as SPECS
 from derive.contract import VECTORS
-from quadcog.model.conventions import FUNCTIONS
+from quadcog.model.attitude import quaternion_of_euler
+from quadcog.model.conventions import FUNCTIONS, rotation_matrix
 from quadcog.model.inertial_parameters import box
 
 RTOL = 1e-12
@@ -36,8 +37,11 @@ def _args(names, x, U, p, v):
     products = 0.1 * p[2:5] * np.sin(x[:3])      # small products of inertia, I_G stays > 0
     wrench = np.concatenate([v[:3], 0.1 * v[3:]])
     pi = box(p[0], 10 * p[2:5], p[11:14])          # a box of positive volume: consistent
+    q = quaternion_of_euler(*x[3:6])               # the model on SE(3): the same attitude
     return [{"x": x, "U": U, "p": p, "vartheta": v, "I_products": products,
-             "wrench": wrench, "nu_dot": v, "pi": pi, "g": p[1:2], "c": p[5:11]}[n]
+             "wrench": wrench, "nu_dot": v, "pi": pi, "g": p[1:2], "c": p[5:11],
+             "xq": np.concatenate([x[:3], q, x[6:]]), "R": rotation_matrix(*x[3:6]).ravel(),
+             "nu": x[6:], "quaternion": q}[n]
             for n in names]
 
 

@@ -156,7 +156,7 @@ def test_shipped_scenarios_by_name(tmp_path, monkeypatch):
     # an existing file wins over the shipped name
     (tmp_path / "fig7").write_text('name = "mine"\ncontroller = "fl"\nduration = 1.0\n')
     assert load_scenario("fig7").name == "mine"
-    with pytest.raises(ScenarioError, match=r"fig99: no such scenario file.*shipped: fig3a"):
+    with pytest.raises(ScenarioError, match=r"fig99: no such scenario file.*shipped: .*fig3a"):
         load_scenario("fig99")
 
 

@@ -27,7 +27,8 @@ def test_deep_nesting(tmp_path, depth):
 
 @pytest.mark.parametrize("text, message", [
     ("duration = 1.0\n[trajectory]\nkind = {}\n",
-     r"key 'trajectory.kind': expected one of 'hover', 'circle', 'figure8', 'helix', 'waypoints', got a table"),
+     r"key 'trajectory.kind': expected one of 'hover', 'circle', 'figure8', 'helix', 'waypoints', "
+     r"'flip', 'banked_circle', got a table"),
     ('duration = 1.0\n[trajectory]\nkind = ["hover"]\n',
      r"key 'trajectory.kind': expected one of .*, got \['hover'\]"),
     ("duration = 1.0\ncog = [1]\n", r"key 'cog': expected an array of tables .*, got \[1\]"),

@@ -36,6 +36,9 @@ extern "C" {
 #define casadi_f11 CASADI_PREFIX(f11)
 #define casadi_f12 CASADI_PREFIX(f12)
 #define casadi_f13 CASADI_PREFIX(f13)
+#define casadi_f14 CASADI_PREFIX(f14)
+#define casadi_f15 CASADI_PREFIX(f15)
+#define casadi_f16 CASADI_PREFIX(f16)
 #define casadi_f2 CASADI_PREFIX(f2)
 #define casadi_f3 CASADI_PREFIX(f3)
 #define casadi_f4 CASADI_PREFIX(f4)
@@ -49,6 +52,9 @@ extern "C" {
 #define casadi_s10 CASADI_PREFIX(s10)
 #define casadi_s11 CASADI_PREFIX(s11)
 #define casadi_s12 CASADI_PREFIX(s12)
+#define casadi_s13 CASADI_PREFIX(s13)
+#define casadi_s14 CASADI_PREFIX(s14)
+#define casadi_s15 CASADI_PREFIX(s15)
 #define casadi_s2 CASADI_PREFIX(s2)
 #define casadi_s3 CASADI_PREFIX(s3)
 #define casadi_s4 CASADI_PREFIX(s4)
@@ -98,6 +104,9 @@ static const casadi_int casadi_s9[3] = {3, 1, 1};
 static const casadi_int casadi_s10[3] = {1, 1, 1};
 static const casadi_int casadi_s11[3] = {6, 10, 1};
 static const casadi_int casadi_s12[3] = {10, 1, 1};
+static const casadi_int casadi_s13[3] = {13, 1, 1};
+static const casadi_int casadi_s14[3] = {9, 1, 1};
+static const casadi_int casadi_s15[3] = {3, 3, 1};
 
 /* dynamics:(x[12],U[4],p[14])->(xdot[12]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
@@ -5865,6 +5874,1073 @@ CASADI_SYMBOL_EXPORT int inertial_dynamics_work(casadi_int *sz_arg, casadi_int* 
 
 CASADI_SYMBOL_EXPORT int inertial_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 5*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* se3_dynamics:(xq[13],U[4],pi[10],g,c[6],wrench[6])->(xq_dot[13]) */
+static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76;
+  a00=arg[0]? arg[0][7] : 0;
+  a01=arg[0]? arg[0][3] : 0;
+  a02=casadi_sq(a01);
+  a03=arg[0]? arg[0][4] : 0;
+  a04=casadi_sq(a03);
+  a05=(a02+a04);
+  a06=arg[0]? arg[0][5] : 0;
+  a07=casadi_sq(a06);
+  a08=(a05+a07);
+  a09=arg[0]? arg[0][6] : 0;
+  a10=casadi_sq(a09);
+  a08=(a08+a10);
+  a11=(a00/a08);
+  a05=(a05-a07);
+  a05=(a05-a10);
+  a12=(a11*a05);
+  a13=arg[0]? arg[0][8] : 0;
+  a14=(a13/a08);
+  a15=-2.;
+  a16=(a15*a01);
+  a17=(a16*a09);
+  a18=(2.*a03);
+  a19=(a18*a06);
+  a17=(a17+a19);
+  a20=(a14*a17);
+  a12=(a12+a20);
+  a20=arg[0]? arg[0][9] : 0;
+  a21=(a20/a08);
+  a22=(2.*a01);
+  a23=(a22*a06);
+  a18=(a18*a09);
+  a23=(a23+a18);
+  a24=(a21*a23);
+  a12=(a12+a24);
+  if (res[0]!=0) res[0][0]=a12;
+  a12=(a22*a09);
+  a12=(a12+a19);
+  a19=(a11*a12);
+  a24=(a02+a07);
+  a24=(a24-a04);
+  a24=(a24-a10);
+  a25=(a14*a24);
+  a19=(a19+a25);
+  a25=(a16*a03);
+  a26=(2.*a06);
+  a26=(a26*a09);
+  a25=(a25+a26);
+  a27=(a21*a25);
+  a19=(a19+a27);
+  if (res[0]!=0) res[0][1]=a19;
+  a16=(a16*a06);
+  a16=(a16+a18);
+  a11=(a11*a16);
+  a22=(a22*a03);
+  a22=(a22+a26);
+  a14=(a14*a22);
+  a11=(a11+a14);
+  a02=(a02+a10);
+  a02=(a02-a04);
+  a02=(a02-a07);
+  a21=(a21*a02);
+  a11=(a11+a21);
+  if (res[0]!=0) res[0][2]=a11;
+  a11=-5.0000000000000000e-01;
+  a21=arg[0]? arg[0][10] : 0;
+  a07=(a11*a21);
+  a04=(a07*a03);
+  a10=arg[0]? arg[0][11] : 0;
+  a14=(a11*a10);
+  a26=(a14*a06);
+  a04=(a04+a26);
+  a26=(a11*a09);
+  a18=arg[0]? arg[0][12] : 0;
+  a26=(a26*a18);
+  a04=(a04+a26);
+  if (res[0]!=0) res[0][3]=a04;
+  a04=5.0000000000000000e-01;
+  a26=(a04*a21);
+  a19=(a26*a01);
+  a27=(a04*a06);
+  a27=(a27*a18);
+  a19=(a19+a27);
+  a14=(a14*a09);
+  a19=(a19+a14);
+  if (res[0]!=0) res[0][4]=a19;
+  a26=(a26*a09);
+  a09=(a04*a10);
+  a19=(a09*a01);
+  a26=(a26+a19);
+  a11=(a11*a03);
+  a11=(a11*a18);
+  a26=(a26+a11);
+  if (res[0]!=0) res[0][5]=a26;
+  a09=(a09*a03);
+  a04=(a04*a01);
+  a04=(a04*a18);
+  a09=(a09+a04);
+  a07=(a07*a06);
+  a09=(a09+a07);
+  if (res[0]!=0) res[0][6]=a09;
+  a09=arg[5]? arg[5][0] : 0;
+  a09=(a09/a08);
+  a05=(a09*a05);
+  a07=arg[2]? arg[2][2] : 0;
+  a06=(a07*a21);
+  a04=arg[2]? arg[2][0] : 0;
+  a01=(a20*a04);
+  a03=(a06+a01);
+  a26=arg[2]? arg[2][1] : 0;
+  a11=(a26*a10);
+  a03=(a03-a11);
+  a19=(a10*a03);
+  a14=arg[2]? arg[2][3] : 0;
+  a27=(a14*a21);
+  a28=(a26*a18);
+  a29=(a27-a28);
+  a30=(a13*a04);
+  a29=(a29-a30);
+  a31=(a18*a29);
+  a19=(a19+a31);
+  a31=arg[4]? arg[4][0] : 0;
+  a31=(a00*a31);
+  a19=(a19+a31);
+  a05=(a05-a19);
+  a19=arg[5]? arg[5][1] : 0;
+  a19=(a19/a08);
+  a12=(a19*a12);
+  a05=(a05+a12);
+  a12=arg[5]? arg[5][2] : 0;
+  a12=(a12/a08);
+  a31=(a12*a16);
+  a05=(a05+a31);
+  a31=arg[3]? arg[3][0] : 0;
+  a32=(a31*a04);
+  a32=(a32/a08);
+  a33=(a32*a16);
+  a05=(a05-a33);
+  a33=(a05/a04);
+  a34=casadi_sq(a07);
+  a35=casadi_sq(a34);
+  a36=casadi_sq(a26);
+  a37=(a36*a34);
+  a38=(a35+a37);
+  a39=casadi_sq(a14);
+  a40=(a34*a39);
+  a38=(a38+a40);
+  a41=arg[2]? arg[2][7] : 0;
+  a42=casadi_sq(a41);
+  a43=casadi_sq(a04);
+  a44=(a42*a43);
+  a38=(a38-a44);
+  a44=arg[2]? arg[2][4] : 0;
+  a45=arg[2]? arg[2][9] : 0;
+  a46=(a44*a45);
+  a47=(a46*a43);
+  a38=(a38+a47);
+  a47=(a44*a04);
+  a48=(a47*a36);
+  a38=(a38-a48);
+  a49=(a47*a34);
+  a38=(a38-a49);
+  a49=(a45*a04);
+  a50=(a49*a34);
+  a38=(a38-a50);
+  a50=(a49*a39);
+  a38=(a38-a50);
+  a51=(a15*a41);
+  a51=(a51*a26);
+  a51=(a51*a14);
+  a52=(a51*a04);
+  a38=(a38+a52);
+  a52=casadi_sq(a36);
+  a53=(a44*a52);
+  a54=arg[2]? arg[2][6] : 0;
+  a35=(a54*a35);
+  a53=(a53+a35);
+  a35=casadi_sq(a39);
+  a55=(a45*a35);
+  a53=(a53+a55);
+  a55=(a44*a36);
+  a56=(a55*a34);
+  a53=(a53+a56);
+  a55=(a55*a39);
+  a53=(a53+a55);
+  a55=(a54*a36);
+  a55=(a55*a34);
+  a53=(a53+a55);
+  a55=(a54*a34);
+  a55=(a55*a39);
+  a53=(a53+a55);
+  a55=(a45*a36);
+  a55=(a55*a39);
+  a53=(a53+a55);
+  a55=(a45*a34);
+  a55=(a55*a39);
+  a53=(a53+a55);
+  a55=arg[2]? arg[2][5] : 0;
+  a56=casadi_sq(a55);
+  a57=(a04*a56);
+  a58=(a57*a36);
+  a53=(a53+a58);
+  a57=(a57*a34);
+  a53=(a53+a57);
+  a57=(a04*a42);
+  a58=(a57*a36);
+  a53=(a53+a58);
+  a57=(a57*a39);
+  a53=(a53+a57);
+  a57=arg[2]? arg[2][8] : 0;
+  a58=casadi_sq(a57);
+  a59=(a04*a58);
+  a60=(a59*a34);
+  a53=(a53+a60);
+  a59=(a59*a39);
+  a53=(a53+a59);
+  a59=(a44*a58);
+  a59=(a59*a43);
+  a53=(a53-a59);
+  a42=(a54*a42);
+  a42=(a42*a43);
+  a53=(a53-a42);
+  a42=(a45*a56);
+  a42=(a42*a43);
+  a53=(a53-a42);
+  a42=(2.*a55);
+  a59=(a42*a26);
+  a60=(a07*a34);
+  a61=(a59*a60);
+  a53=(a53+a61);
+  a61=(a42*a07);
+  a62=(a26*a36);
+  a61=(a61*a62);
+  a53=(a53+a61);
+  a61=(2.*a41);
+  a63=(a61*a26);
+  a64=(a14*a39);
+  a65=(a63*a64);
+  a53=(a53+a65);
+  a65=(a61*a14);
+  a65=(a65*a62);
+  a53=(a53+a65);
+  a65=(2.*a57);
+  a66=(a65*a07);
+  a67=(a66*a64);
+  a53=(a53+a67);
+  a65=(a65*a14);
+  a65=(a65*a60);
+  a53=(a53+a65);
+  a65=(a44*a54);
+  a67=(a65*a45);
+  a67=(a67*a43);
+  a53=(a53+a67);
+  a67=(a65*a04);
+  a68=(a67*a36);
+  a53=(a53-a68);
+  a67=(a67*a34);
+  a53=(a53-a67);
+  a46=(a46*a04);
+  a67=(a46*a36);
+  a53=(a53-a67);
+  a46=(a46*a39);
+  a53=(a53-a46);
+  a46=(a54*a45);
+  a67=(a46*a04);
+  a68=(a67*a34);
+  a53=(a53-a68);
+  a67=(a67*a39);
+  a53=(a53-a67);
+  a67=(a42*a41);
+  a68=(a67*a57);
+  a68=(a68*a43);
+  a53=(a53+a68);
+  a59=(a59*a07);
+  a59=(a59*a39);
+  a53=(a53+a59);
+  a63=(a63*a14);
+  a63=(a63*a34);
+  a53=(a53+a63);
+  a66=(a66*a14);
+  a66=(a66*a36);
+  a53=(a53+a66);
+  a66=(a15*a55);
+  a66=(a66*a26);
+  a66=(a66*a07);
+  a63=(a66*a45);
+  a63=(a63*a04);
+  a53=(a53+a63);
+  a51=(a51*a54);
+  a51=(a51*a04);
+  a53=(a53+a51);
+  a15=(a15*a57);
+  a15=(a15*a07);
+  a15=(a15*a14);
+  a51=(a15*a44);
+  a51=(a51*a04);
+  a53=(a53+a51);
+  a67=(a67*a07);
+  a67=(a67*a14);
+  a67=(a67*a04);
+  a53=(a53+a67);
+  a42=(a42*a57);
+  a42=(a42*a26);
+  a42=(a42*a14);
+  a42=(a42*a04);
+  a53=(a53+a42);
+  a61=(a61*a57);
+  a61=(a61*a26);
+  a61=(a61*a07);
+  a61=(a61*a04);
+  a53=(a53+a61);
+  a38=(a38/a53);
+  a61=arg[5]? arg[5][4] : 0;
+  a42=arg[1]? arg[1][2] : 0;
+  a61=(a61+a42);
+  a42=(a07*a00);
+  a67=(a41*a21);
+  a51=(a42-a67);
+  a63=(a57*a10);
+  a51=(a51-a63);
+  a59=(a26*a13);
+  a51=(a51-a59);
+  a68=(a18*a45);
+  a51=(a51-a68);
+  a51=(a21*a51);
+  a61=(a61-a51);
+  a51=arg[4]? arg[4][4] : 0;
+  a51=(a10*a51);
+  a61=(a61-a51);
+  a51=(a55*a10);
+  a69=(a41*a18);
+  a70=(a51+a69);
+  a71=(a07*a20);
+  a70=(a70+a71);
+  a72=(a21*a44);
+  a70=(a70+a72);
+  a73=(a14*a13);
+  a70=(a70-a73);
+  a70=(a18*a70);
+  a61=(a61-a70);
+  a11=(a11-a06);
+  a11=(a11-a01);
+  a01=(a00*a11);
+  a61=(a61-a01);
+  a01=(a14*a10);
+  a06=(a00*a04);
+  a70=(a01+a06);
+  a74=(a07*a18);
+  a70=(a70-a74);
+  a75=(a20*a70);
+  a61=(a61-a75);
+  a75=(a14*a05);
+  a76=arg[1]? arg[1][0] : 0;
+  a28=(a28+a30);
+  a28=(a28-a27);
+  a27=(a21*a28);
+  a76=(a76-a27);
+  a74=(a74-a01);
+  a74=(a74-a06);
+  a06=(a10*a74);
+  a76=(a76-a06);
+  a06=arg[4]? arg[4][2] : 0;
+  a06=(a20*a06);
+  a76=(a76-a06);
+  a23=(a09*a23);
+  a76=(a76+a23);
+  a25=(a19*a25);
+  a76=(a76+a25);
+  a25=(a12*a02);
+  a76=(a76+a25);
+  a25=(a32*a02);
+  a76=(a76-a25);
+  a25=(a26*a76);
+  a75=(a75-a25);
+  a75=(a75/a04);
+  a61=(a61-a75);
+  a75=(a26*a31);
+  a75=(a75/a08);
+  a25=(a75*a02);
+  a61=(a61+a25);
+  a25=(a14*a31);
+  a25=(a25/a08);
+  a23=(a25*a16);
+  a61=(a61-a23);
+  a38=(a38*a61);
+  a23=(a55*a45);
+  a23=(a23*a43);
+  a06=(a26*a60);
+  a01=(a07*a62);
+  a06=(a06+a01);
+  a23=(a23-a06);
+  a06=(a55*a04);
+  a01=(a06*a36);
+  a23=(a23-a01);
+  a06=(a06*a34);
+  a23=(a23-a06);
+  a06=(a41*a57);
+  a06=(a06*a43);
+  a23=(a23-a06);
+  a06=(a26*a07);
+  a01=(a06*a39);
+  a23=(a23-a01);
+  a06=(a06*a45);
+  a06=(a06*a04);
+  a23=(a23+a06);
+  a06=(a41*a07);
+  a06=(a06*a14);
+  a06=(a06*a04);
+  a23=(a23-a06);
+  a06=(a57*a26);
+  a45=(a06*a14);
+  a45=(a45*a04);
+  a23=(a23-a45);
+  a23=(a23/a53);
+  a45=arg[5]? arg[5][3] : 0;
+  a01=arg[1]? arg[1][1] : 0;
+  a45=(a45+a01);
+  a01=arg[4]? arg[4][3] : 0;
+  a01=(a21*a01);
+  a45=(a45-a01);
+  a67=(a67+a63);
+  a67=(a67+a59);
+  a67=(a67+a68);
+  a67=(a67-a42);
+  a67=(a10*a67);
+  a45=(a45-a67);
+  a67=(a26*a20);
+  a42=(a55*a21);
+  a68=(a67-a42);
+  a59=(a57*a18);
+  a68=(a68-a59);
+  a63=(a14*a00);
+  a68=(a68-a63);
+  a01=(a10*a54);
+  a68=(a68-a01);
+  a68=(a18*a68);
+  a45=(a45-a68);
+  a03=(a13*a03);
+  a45=(a45-a03);
+  a20=(a20*a29);
+  a45=(a45-a20);
+  a20=(a07*a76);
+  a09=(a09*a17);
+  a11=(a21*a11);
+  a70=(a18*a70);
+  a11=(a11+a70);
+  a70=arg[4]? arg[4][1] : 0;
+  a70=(a13*a70);
+  a11=(a11+a70);
+  a09=(a09-a11);
+  a19=(a19*a24);
+  a09=(a09+a19);
+  a12=(a12*a22);
+  a09=(a09+a12);
+  a32=(a32*a22);
+  a09=(a09-a32);
+  a32=(a14*a09);
+  a20=(a20-a32);
+  a20=(a20/a04);
+  a45=(a45-a20);
+  a25=(a25*a22);
+  a45=(a45+a25);
+  a31=(a07*a31);
+  a31=(a31/a08);
+  a02=(a31*a02);
+  a45=(a45-a02);
+  a02=(a23*a45);
+  a38=(a38-a02);
+  a02=(a57*a44);
+  a02=(a02*a43);
+  a08=(a07*a64);
+  a60=(a14*a60);
+  a08=(a08+a60);
+  a02=(a02-a08);
+  a08=(a55*a41);
+  a08=(a08*a43);
+  a02=(a02-a08);
+  a08=(a57*a04);
+  a60=(a08*a34);
+  a02=(a02-a60);
+  a08=(a08*a39);
+  a02=(a02-a08);
+  a08=(a07*a14);
+  a60=(a08*a36);
+  a02=(a02-a60);
+  a08=(a08*a44);
+  a08=(a08*a04);
+  a02=(a02+a08);
+  a08=(a55*a26);
+  a08=(a08*a14);
+  a08=(a08*a04);
+  a02=(a02-a08);
+  a08=(a41*a26);
+  a08=(a08*a07);
+  a08=(a08*a04);
+  a02=(a02-a08);
+  a02=(a02/a53);
+  a08=arg[5]? arg[5][5] : 0;
+  a44=arg[1]? arg[1][3] : 0;
+  a08=(a08+a44);
+  a42=(a42+a59);
+  a42=(a42+a63);
+  a42=(a42+a01);
+  a42=(a42-a67);
+  a21=(a21*a42);
+  a08=(a08-a21);
+  a73=(a73-a51);
+  a73=(a73-a69);
+  a73=(a73-a71);
+  a73=(a73-a72);
+  a10=(a10*a73);
+  a08=(a08-a10);
+  a10=arg[4]? arg[4][5] : 0;
+  a18=(a18*a10);
+  a08=(a08-a18);
+  a00=(a00*a28);
+  a08=(a08-a00);
+  a13=(a13*a74);
+  a08=(a08-a13);
+  a13=(a26*a09);
+  a05=(a07*a05);
+  a13=(a13-a05);
+  a13=(a13/a04);
+  a08=(a08-a13);
+  a31=(a31*a16);
+  a08=(a08+a31);
+  a75=(a75*a22);
+  a08=(a08-a75);
+  a75=(a02*a08);
+  a38=(a38-a75);
+  a75=(a14*a38);
+  a64=(a26*a64);
+  a62=(a14*a62);
+  a64=(a64+a62);
+  a57=(a55*a57);
+  a57=(a57*a43);
+  a64=(a64+a57);
+  a57=(a41*a04);
+  a62=(a57*a36);
+  a64=(a64+a62);
+  a57=(a57*a39);
+  a64=(a64+a57);
+  a57=(a26*a14);
+  a62=(a57*a34);
+  a64=(a64+a62);
+  a41=(a41*a54);
+  a41=(a41*a43);
+  a64=(a64-a41);
+  a55=(a55*a07);
+  a55=(a55*a14);
+  a55=(a55*a04);
+  a64=(a64+a55);
+  a06=(a06*a07);
+  a06=(a06*a04);
+  a64=(a64+a06);
+  a57=(a57*a54);
+  a57=(a57*a04);
+  a64=(a64-a57);
+  a64=(a64/a53);
+  a57=(a64*a45);
+  a02=(a02*a61);
+  a57=(a57-a02);
+  a02=(a36*a39);
+  a35=(a35+a02);
+  a35=(a35+a40);
+  a56=(a56*a43);
+  a35=(a35-a56);
+  a65=(a65*a43);
+  a35=(a35+a65);
+  a35=(a35-a48);
+  a47=(a47*a39);
+  a35=(a35-a47);
+  a54=(a54*a04);
+  a34=(a54*a34);
+  a35=(a35-a34);
+  a39=(a54*a39);
+  a35=(a35-a39);
+  a66=(a66*a04);
+  a35=(a35+a66);
+  a35=(a35/a53);
+  a35=(a35*a08);
+  a57=(a57+a35);
+  a35=(a07*a57);
+  a75=(a75-a35);
+  a75=(a75/a04);
+  a33=(a33-a75);
+  if (res[0]!=0) res[0][7]=a33;
+  a09=(a09/a04);
+  a33=(a26*a57);
+  a52=(a52+a37);
+  a52=(a52+a02);
+  a58=(a58*a43);
+  a52=(a52-a58);
+  a46=(a46*a43);
+  a52=(a52+a46);
+  a54=(a54*a36);
+  a52=(a52-a54);
+  a52=(a52-a34);
+  a49=(a49*a36);
+  a52=(a52-a49);
+  a52=(a52-a50);
+  a15=(a15*a04);
+  a52=(a52+a15);
+  a52=(a52/a53);
+  a52=(a52*a45);
+  a23=(a23*a61);
+  a52=(a52-a23);
+  a64=(a64*a08);
+  a52=(a52+a64);
+  a14=(a14*a52);
+  a33=(a33-a14);
+  a33=(a33/a04);
+  a09=(a09-a33);
+  if (res[0]!=0) res[0][8]=a09;
+  a76=(a76/a04);
+  a07=(a07*a52);
+  a26=(a26*a38);
+  a07=(a07-a26);
+  a07=(a07/a04);
+  a76=(a76-a07);
+  if (res[0]!=0) res[0][9]=a76;
+  if (res[0]!=0) res[0][10]=a52;
+  if (res[0]!=0) res[0][11]=a38;
+  if (res[0]!=0) res[0][12]=a57;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int se3_dynamics(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f14(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int se3_dynamics_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void se3_dynamics_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void se3_dynamics_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void se3_dynamics_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int se3_dynamics_n_in(void) { return 6;}
+
+CASADI_SYMBOL_EXPORT casadi_int se3_dynamics_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real se3_dynamics_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* se3_dynamics_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "xq";
+    case 1: return "U";
+    case 2: return "pi";
+    case 3: return "g";
+    case 4: return "c";
+    case 5: return "wrench";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* se3_dynamics_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "xq_dot";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* se3_dynamics_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s13;
+    case 1: return casadi_s1;
+    case 2: return casadi_s12;
+    case 3: return casadi_s10;
+    case 4: return casadi_s4;
+    case 5: return casadi_s4;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* se3_dynamics_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s13;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int se3_dynamics_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 6;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int se3_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 6*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* se3_regressor:(R[9],nu[6],nu_dot[6],g)->(Y[6x10]) */
+static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26;
+  a00=arg[2]? arg[2][0] : 0;
+  a01=arg[0]? arg[0][6] : 0;
+  a02=arg[3]? arg[3][0] : 0;
+  a01=(a01*a02);
+  a03=(a00+a01);
+  a04=arg[1]? arg[1][4] : 0;
+  a05=arg[1]? arg[1][2] : 0;
+  a06=(a04*a05);
+  a03=(a03+a06);
+  a07=arg[1]? arg[1][5] : 0;
+  a08=arg[1]? arg[1][1] : 0;
+  a09=(a07*a08);
+  a03=(a03-a09);
+  if (res[0]!=0) res[0][0]=a03;
+  a10=arg[2]? arg[2][1] : 0;
+  a11=arg[0]? arg[0][7] : 0;
+  a11=(a11*a02);
+  a12=(a10+a11);
+  a13=arg[1]? arg[1][0] : 0;
+  a14=(a07*a13);
+  a12=(a12+a14);
+  a15=arg[1]? arg[1][3] : 0;
+  a05=(a15*a05);
+  a12=(a12-a05);
+  if (res[0]!=0) res[0][1]=a12;
+  a16=arg[2]? arg[2][2] : 0;
+  a17=arg[0]? arg[0][8] : 0;
+  a17=(a17*a02);
+  a02=(a16+a17);
+  a08=(a15*a08);
+  a02=(a02+a08);
+  a13=(a04*a13);
+  a02=(a02-a13);
+  if (res[0]!=0) res[0][2]=a02;
+  a18=0.;
+  if (res[0]!=0) res[0][3]=a18;
+  if (res[0]!=0) res[0][4]=a18;
+  if (res[0]!=0) res[0][5]=a18;
+  a19=casadi_sq(a04);
+  a20=casadi_sq(a07);
+  a21=(a19+a20);
+  a21=(-a21);
+  if (res[0]!=0) res[0][6]=a21;
+  a21=arg[2]? arg[2][5] : 0;
+  a22=(a15*a04);
+  a23=(a21+a22);
+  if (res[0]!=0) res[0][7]=a23;
+  a24=(a15*a07);
+  a25=arg[2]? arg[2][4] : 0;
+  a26=(a24-a25);
+  if (res[0]!=0) res[0][8]=a26;
+  if (res[0]!=0) res[0][9]=a18;
+  a13=(a13-a16);
+  a13=(a13-a17);
+  a13=(a13-a08);
+  if (res[0]!=0) res[0][10]=a13;
+  if (res[0]!=0) res[0][11]=a12;
+  a12=(a22-a21);
+  if (res[0]!=0) res[0][12]=a12;
+  a15=casadi_sq(a15);
+  a12=(a15+a20);
+  a12=(-a12);
+  if (res[0]!=0) res[0][13]=a12;
+  a12=arg[2]? arg[2][3] : 0;
+  a04=(a04*a07);
+  a07=(a12+a04);
+  if (res[0]!=0) res[0][14]=a07;
+  if (res[0]!=0) res[0][15]=a02;
+  if (res[0]!=0) res[0][16]=a18;
+  a09=(a09-a00);
+  a09=(a09-a01);
+  a09=(a09-a06);
+  if (res[0]!=0) res[0][17]=a09;
+  a09=(a25+a24);
+  if (res[0]!=0) res[0][18]=a09;
+  a06=(a04-a12);
+  if (res[0]!=0) res[0][19]=a06;
+  a06=(a15+a19);
+  a06=(-a06);
+  if (res[0]!=0) res[0][20]=a06;
+  a05=(a05-a10);
+  a05=(a05-a11);
+  a05=(a05-a14);
+  if (res[0]!=0) res[0][21]=a05;
+  if (res[0]!=0) res[0][22]=a03;
+  if (res[0]!=0) res[0][23]=a18;
+  if (res[0]!=0) res[0][24]=a18;
+  if (res[0]!=0) res[0][25]=a18;
+  if (res[0]!=0) res[0][26]=a18;
+  if (res[0]!=0) res[0][27]=a12;
+  if (res[0]!=0) res[0][28]=a24;
+  a03=(-a22);
+  if (res[0]!=0) res[0][29]=a03;
+  if (res[0]!=0) res[0][30]=a18;
+  if (res[0]!=0) res[0][31]=a18;
+  if (res[0]!=0) res[0][32]=a18;
+  a03=(a25-a24);
+  if (res[0]!=0) res[0][33]=a03;
+  if (res[0]!=0) res[0][34]=a07;
+  a07=(a15-a19);
+  if (res[0]!=0) res[0][35]=a07;
+  if (res[0]!=0) res[0][36]=a18;
+  if (res[0]!=0) res[0][37]=a18;
+  if (res[0]!=0) res[0][38]=a18;
+  a07=(-a04);
+  if (res[0]!=0) res[0][39]=a07;
+  if (res[0]!=0) res[0][40]=a25;
+  if (res[0]!=0) res[0][41]=a22;
+  if (res[0]!=0) res[0][42]=a18;
+  if (res[0]!=0) res[0][43]=a18;
+  if (res[0]!=0) res[0][44]=a18;
+  if (res[0]!=0) res[0][45]=a23;
+  a15=(a20-a15);
+  if (res[0]!=0) res[0][46]=a15;
+  a12=(a12-a04);
+  if (res[0]!=0) res[0][47]=a12;
+  if (res[0]!=0) res[0][48]=a18;
+  if (res[0]!=0) res[0][49]=a18;
+  if (res[0]!=0) res[0][50]=a18;
+  a19=(a19-a20);
+  if (res[0]!=0) res[0][51]=a19;
+  a22=(a21-a22);
+  if (res[0]!=0) res[0][52]=a22;
+  if (res[0]!=0) res[0][53]=a09;
+  if (res[0]!=0) res[0][54]=a18;
+  if (res[0]!=0) res[0][55]=a18;
+  if (res[0]!=0) res[0][56]=a18;
+  if (res[0]!=0) res[0][57]=a04;
+  a24=(-a24);
+  if (res[0]!=0) res[0][58]=a24;
+  if (res[0]!=0) res[0][59]=a21;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int se3_regressor(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f15(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int se3_regressor_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void se3_regressor_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void se3_regressor_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void se3_regressor_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int se3_regressor_n_in(void) { return 4;}
+
+CASADI_SYMBOL_EXPORT casadi_int se3_regressor_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real se3_regressor_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* se3_regressor_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "R";
+    case 1: return "nu";
+    case 2: return "nu_dot";
+    case 3: return "g";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* se3_regressor_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "Y";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* se3_regressor_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s14;
+    case 1: return casadi_s4;
+    case 2: return casadi_s4;
+    case 3: return casadi_s10;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* se3_regressor_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s11;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int se3_regressor_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 4;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int se3_regressor_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* quaternion_rotation:(quaternion[4])->(R[3x3]) */
+static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12;
+  a00=arg[0]? arg[0][0] : 0;
+  a01=casadi_sq(a00);
+  a02=arg[0]? arg[0][1] : 0;
+  a03=casadi_sq(a02);
+  a04=(a01+a03);
+  a05=arg[0]? arg[0][2] : 0;
+  a06=casadi_sq(a05);
+  a07=(a04-a06);
+  a08=arg[0]? arg[0][3] : 0;
+  a09=casadi_sq(a08);
+  a07=(a07-a09);
+  a04=(a04+a06);
+  a04=(a04+a09);
+  a07=(a07/a04);
+  if (res[0]!=0) res[0][0]=a07;
+  a07=(2.*a00);
+  a10=(a07*a08);
+  a11=(2.*a02);
+  a12=(a11*a05);
+  a10=(a10+a12);
+  a10=(a10/a04);
+  if (res[0]!=0) res[0][1]=a10;
+  a10=-2.;
+  a10=(a10*a00);
+  a00=(a10*a05);
+  a11=(a11*a08);
+  a00=(a00+a11);
+  a00=(a00/a04);
+  if (res[0]!=0) res[0][2]=a00;
+  a00=(a10*a08);
+  a00=(a00+a12);
+  a00=(a00/a04);
+  if (res[0]!=0) res[0][3]=a00;
+  a00=(a01+a06);
+  a00=(a00-a03);
+  a00=(a00-a09);
+  a00=(a00/a04);
+  if (res[0]!=0) res[0][4]=a00;
+  a00=(a07*a02);
+  a12=(2.*a05);
+  a12=(a12*a08);
+  a00=(a00+a12);
+  a00=(a00/a04);
+  if (res[0]!=0) res[0][5]=a00;
+  a07=(a07*a05);
+  a07=(a07+a11);
+  a07=(a07/a04);
+  if (res[0]!=0) res[0][6]=a07;
+  a10=(a10*a02);
+  a10=(a10+a12);
+  a10=(a10/a04);
+  if (res[0]!=0) res[0][7]=a10;
+  a01=(a01+a09);
+  a01=(a01-a03);
+  a01=(a01-a06);
+  a01=(a01/a04);
+  if (res[0]!=0) res[0][8]=a01;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int quaternion_rotation(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f16(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int quaternion_rotation_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void quaternion_rotation_release(int mem) {
+}
+
+CASADI_SYMBOL_EXPORT void quaternion_rotation_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void quaternion_rotation_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int quaternion_rotation_n_in(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_int quaternion_rotation_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real quaternion_rotation_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* quaternion_rotation_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "quaternion";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* quaternion_rotation_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "R";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* quaternion_rotation_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* quaternion_rotation_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s15;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int quaternion_rotation_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int quaternion_rotation_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);

@@ -270,6 +270,60 @@ int inertial_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define inertial_dynamics_SZ_RES 1
 #define inertial_dynamics_SZ_IW 0
 #define inertial_dynamics_SZ_W 0
+int se3_dynamics(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int se3_dynamics_checkout(void);
+void se3_dynamics_release(int mem);
+void se3_dynamics_incref(void);
+void se3_dynamics_decref(void);
+casadi_int se3_dynamics_n_in(void);
+casadi_int se3_dynamics_n_out(void);
+casadi_real se3_dynamics_default_in(casadi_int i);
+const char* se3_dynamics_name_in(casadi_int i);
+const char* se3_dynamics_name_out(casadi_int i);
+const casadi_int* se3_dynamics_sparsity_in(casadi_int i);
+const casadi_int* se3_dynamics_sparsity_out(casadi_int i);
+int se3_dynamics_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int se3_dynamics_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define se3_dynamics_SZ_ARG 6
+#define se3_dynamics_SZ_RES 1
+#define se3_dynamics_SZ_IW 0
+#define se3_dynamics_SZ_W 0
+int se3_regressor(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int se3_regressor_checkout(void);
+void se3_regressor_release(int mem);
+void se3_regressor_incref(void);
+void se3_regressor_decref(void);
+casadi_int se3_regressor_n_in(void);
+casadi_int se3_regressor_n_out(void);
+casadi_real se3_regressor_default_in(casadi_int i);
+const char* se3_regressor_name_in(casadi_int i);
+const char* se3_regressor_name_out(casadi_int i);
+const casadi_int* se3_regressor_sparsity_in(casadi_int i);
+const casadi_int* se3_regressor_sparsity_out(casadi_int i);
+int se3_regressor_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int se3_regressor_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define se3_regressor_SZ_ARG 4
+#define se3_regressor_SZ_RES 1
+#define se3_regressor_SZ_IW 0
+#define se3_regressor_SZ_W 0
+int quaternion_rotation(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int quaternion_rotation_checkout(void);
+void quaternion_rotation_release(int mem);
+void quaternion_rotation_incref(void);
+void quaternion_rotation_decref(void);
+casadi_int quaternion_rotation_n_in(void);
+casadi_int quaternion_rotation_n_out(void);
+casadi_real quaternion_rotation_default_in(casadi_int i);
+const char* quaternion_rotation_name_in(casadi_int i);
+const char* quaternion_rotation_name_out(casadi_int i);
+const casadi_int* quaternion_rotation_sparsity_in(casadi_int i);
+const casadi_int* quaternion_rotation_sparsity_out(casadi_int i);
+int quaternion_rotation_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int quaternion_rotation_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define quaternion_rotation_SZ_ARG 1
+#define quaternion_rotation_SZ_RES 1
+#define quaternion_rotation_SZ_IW 0
+#define quaternion_rotation_SZ_W 0
 void quadcog_gen_casadi_version(int* major, int* minor, int* patch);
 int quadcog_gen_casadi_int_size(void);
 int quadcog_gen_casadi_real_size(void);

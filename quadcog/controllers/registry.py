@@ -12,6 +12,7 @@ from quadcog.controllers.cascade_pd import CascadePD
 from quadcog.controllers.composite import CompositeAdaptive
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.fl_integral import FeedbackLinearizationIntegral
+from quadcog.controllers.geometric import GeometricAdaptive
 from quadcog.controllers.payload_adaptive import PayloadAdaptive
 from quadcog.kinds import Kind, settings_of
 
@@ -24,6 +25,7 @@ CONTROLLERS: dict[str, type[Controller]] = {
     "fl_integral": FeedbackLinearizationIntegral,
     "composite": CompositeAdaptive,
     "payload_adaptive": PayloadAdaptive,
+    "geometric": GeometricAdaptive,
 }
 
 
@@ -68,7 +70,7 @@ def make_controller(kind: str, **params: Any) -> Controller:
     ----------
     kind : str
         A short name of ``CONTROLLERS`` ('pd', 'fl', 'adaptive', 'fl_integral',
-        'composite', 'payload_adaptive').
+        'composite', 'payload_adaptive', 'geometric').
     **params
         The constructor's keyword arguments (``vehicle``, ``model`` and the settings).
 

@@ -13,11 +13,12 @@ from quadcog.codegen.compiled import external
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import GeneratedFilesError, InputError, ParameterError, QuadcogWarning
+from quadcog.model.attitude import QUATERNION, check_rotation, check_unit_quaternion
 from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
 from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import check_parameters
 from quadcog.paths import generated_dir
-from quadcog.validate import nonnegative, positive, vector
+from quadcog.validate import nonnegative, plain, positive, vector
 
 __all__ = ["Linearization", "Model", "load"]
 
@@ -38,6 +39,15 @@ _cache_lock = threading.Lock()
 
 def _as_vector(name: str, value: ArrayLike, n: int) -> np.ndarray:
     return vector(value, name, n)
+
+
+def _as_vector_or_matrix(value: ArrayLike) -> np.ndarray:
+    """``value`` as a float array for reshaping, or InputError naming R."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"R: expected a finite (3, 3) rotation matrix, got "
+                         f"{plain(value)}") from None
 
 
 def _key(value: object) -> bytes | None:
@@ -184,7 +194,14 @@ class Model:
                 self._check_p(value)
             elif arg_name == "pi":
                 self._check_pi(value)
+            if arg_name == "R":          # a (3, 3) rotation, or its 9 entries row by row
+                value = check_rotation(np.reshape(_as_vector_or_matrix(value), (3, 3))
+                                       if np.size(value) == 9 else value, "R").ravel()
             buf[:] = _as_vector(arg_name, value, n)
+            if arg_name == "xq":         # the state on SE(3): its attitude a unit quaternion
+                check_unit_quaternion(buf[QUATERNION], "xq[3:7] (the quaternion)")
+            elif arg_name == "quaternion":
+                check_unit_quaternion(buf, "quaternion")
             if arg_name == "g":          # the model in pi: g > 0, drag >= 0 (as in p)
                 positive(buf[0], "g", unit="m/s^2", error=ParameterError)
             elif arg_name == "c":
@@ -577,6 +594,85 @@ class Model:
         # a scalar g as the (1,) argument (numpy's ArrayLike does not see the list as one)
         g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g  # type: ignore[assignment]
         return self._call("inertial_dynamics", (x, U, pi, g, c), out)
+
+    def se3_dynamics(self, xq: ArrayLike, U: ArrayLike, pi: ArrayLike, g: float | ArrayLike,
+                     c: ArrayLike, wrench: ArrayLike | None = None,
+                     out: np.ndarray | None = None) -> np.ndarray:
+        """The state derivative on SE(3) of the rigid body with inertial parameters ``pi``
+        (docs/model.md sec. 8).
+
+        Parameters
+        ----------
+        xq : array_like, shape (13,)
+            State [x, y, z (m), q_w, q_x, q_y, q_z, u, v, w (m/s), p, q, r (rad/s)]: position
+            of O in ground axes, the attitude as a unit quaternion (Hamilton, scalar first, body
+            to ground; else AttitudeError), body-axis velocities and rates.
+        U : array_like, shape (4,)
+            Thrust (N) and body moments about O (N m).
+        pi : array_like, shape (10,)
+            Inertial parameters about O (kg, kg m, kg m^2), physically consistent (else
+            PhysicalConsistencyError).
+        g : float or array_like, shape (1,)
+            Gravitational acceleration (m/s^2), > 0.
+        c : array_like, shape (6,)
+            Drag coefficients (N s/m, N m s/rad), >= 0.
+        wrench : array_like, shape (6,), optional
+            External force at O in ground axes (N) and moment in body axes (N m); default 0.
+        out : numpy.ndarray, shape (13,), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (13,)
+            [R(q) nu1; q (0, nu2) / 2; nu_dot].
+        """
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g  # type: ignore[assignment]
+        wrench = np.zeros(6) if wrench is None else wrench
+        return self._call("se3_dynamics", (xq, U, pi, g, c, wrench), out)
+
+    def se3_regressor(self, R: ArrayLike, nu: ArrayLike, nu_dot: ArrayLike,
+                      g: float | ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+        """The inertial regressor with the attitude as a rotation matrix (docs/model.md sec. 8).
+
+        Parameters
+        ----------
+        R : array_like, shape (3, 3) or (9,)
+            Rotation matrix, body to ground (or its entries row by row); else AttitudeError.
+        nu : array_like, shape (6,)
+            Body velocities [u, v, w] (m/s), [p, q, r] (rad/s).
+        nu_dot : array_like, shape (6,)
+            Their derivatives (m/s^2, rad/s^2).
+        g : float or array_like, shape (1,)
+            Gravitational acceleration (m/s^2), > 0.
+        out : numpy.ndarray, shape (6, 10), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 10)
+            Y with ``Y pi = M nu_dot + C(nu) nu + g_G(R)`` (N, N m); at R = R(eta) it is
+            ``inertial_regressor``.
+        """
+        g = [g] if np.ndim(g) == 0 and not isinstance(g, (str, bytes)) else g  # type: ignore[assignment]
+        return self._call("se3_regressor", (R, nu, nu_dot, g), out)
+
+    def quaternion_rotation(self, quaternion: ArrayLike,
+                            out: np.ndarray | None = None) -> np.ndarray:
+        """R(q), body to ground, of a unit quaternion.
+
+        Parameters
+        ----------
+        quaternion : array_like, shape (4,)
+            [q_w, q_x, q_y, q_z] (Hamilton, scalar first), of norm 1 (else AttitudeError).
+        out : numpy.ndarray, shape (3, 3), optional
+            Where to write the result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, 3)
+            R with ``R v = q (0, v) q^*``.
+        """
+        return self._call("quaternion_rotation", (quaternion,), out)
 
     def linearization(self, x: ArrayLike, U: ArrayLike, p: ArrayLike,
                       out: tuple[np.ndarray, np.ndarray] | None = None) -> Linearization:

@@ -36,10 +36,10 @@ VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
            for name in FIELD_NAMES}
 VEHICLE["preset"] = str
 VEHICLE["identified"] = str         # the JSON of `quadcog identify --json`: its r_G
-TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
 # a flight stack instead of quadcog's law (quadcog.crazyflie): its name and its own settings
 STACK = {"name": str, "controller": str, "propellers": str, "battery_voltage": NUMBER}
 STACKS = ("crazyflie",)
+TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool, "quaternion": bool}
 SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,
            "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}
 LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}

@@ -344,7 +344,8 @@ def _result(setup, X, U, e, code, elapsed):
     if idx is not None:    # never hand out NaN arrays: drop a non-finite diverged sample
         finite = np.isfinite(X[idx]).all() and np.isfinite(U[idx]).all()
         keep = idx + 1 if finite else idx
-    check_euler_singularity(t[:keep], X[:keep], limits)
+    if not setup.actuation.options.quaternion:      # on SE(3) the truth has no singularity
+        check_euler_singularity(t[:keep], X[:keep], limits)
     metrics = flight_metrics(e, schedule.tail[:n], idx, None if idx is None else t[idx],
                              cause, limits)
     x = X[:keep, :N_STATE]

@@ -15,6 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import InputError
+from quadcog.model.attitude import QUATERNION, euler_of_rotation, quaternion_of_euler
 from quadcog.model.conventions import IDX, N_PARAM, N_STATE, R_G, hover_trim
 from quadcog.model.functions import Model
 from quadcog.model.inertial_parameters import PI_NAMES
@@ -46,6 +47,13 @@ class TruthOptions:
         Rotor thrusts follow the clipped command through a first-order lag with the
         vehicle's ``motor_time_constant`` (adds 4 rotor-thrust states; a time constant of 0 is
         instant, i.e. no lag).
+    quaternion : bool
+        The truth integrates the attitude on SE(3), as a unit quaternion (the generated
+        ``se3_dynamics``, docs/model.md sec. 8), so it flies through 90 degrees of pitch and
+        upside down; each step enters the quaternion of the state's Euler angles and hands
+        back the ZYX Euler chart of the quaternion it reached (``quadcog.model.attitude``),
+        which is what every controller reads. Without it the truth integrates the Euler
+        angles, whose rates are singular at a pitch of 90 degrees.
 
     Raises
     ------
@@ -55,9 +63,10 @@ class TruthOptions:
     parallel_axis: bool = False
     rotor_saturation: bool = False
     motor_lag: bool = False
+    quaternion: bool = False
 
     def __post_init__(self) -> None:
-        for name in ("parallel_axis", "rotor_saturation", "motor_lag"):
+        for name in ("parallel_axis", "rotor_saturation", "motor_lag", "quaternion"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InputError(f"TruthOptions.{name} must be True or False, got "
                                  f"{getattr(self, name)!r}")
@@ -295,32 +304,61 @@ def rk4_step_expression(model: Model, x: ca.SX, f: ca.SX, U: ca.SX, p: ca.SX, wr
     U_applied : (4,) casadi.SX
         The input the rotors deliver at the start of the step (mixer @ rotor thrusts).
     """
-    truth = model.casadi_function("truth_dynamics")
     mix = ca.DM(actuation.mixer_matrix())
     p_eff, products = truth_arguments(p, actuation.options, payload, r_stated)
     f_cmd = actuation.rotor_command(U)
+    field, enter, leave = _attitude_chart(model, actuation.options, p_eff, products, wrench)
+    x_in = enter(x)
     if not actuation.n_rotor_states:
         U_app = mix @ f_cmd
-        rhs = lambda s: truth(s, U_app, p_eff, products, wrench)
-        k1 = rhs(x)
-        k2 = rhs(x + dt / 2 * k1)
-        k3 = rhs(x + dt / 2 * k2)
-        k4 = rhs(x + dt * k3)
-        return x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4), f, U_app
+        rhs = lambda s: field(s, U_app)
+        k1 = rhs(x_in)
+        k2 = rhs(x_in + dt / 2 * k1)
+        k3 = rhs(x_in + dt / 2 * k2)
+        k4 = rhs(x_in + dt * k3)
+        return leave(x_in + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)), f, U_app
     tau = actuation.time_constant
-    n = x.numel()
+    n = x_in.numel()
 
     def rhs(s):  # type: ignore[no-redef]  # the motor-lag branch's rhs, of [x; f]
         xs, fs = s[:n], s[n:]
-        return ca.vertcat(truth(xs, mix @ fs, p_eff, products, wrench), (f_cmd - fs) / tau)
+        return ca.vertcat(field(xs, mix @ fs), (f_cmd - fs) / tau)
 
-    s = ca.vertcat(x, f)
+    s = ca.vertcat(x_in, f)
     k1 = rhs(s)
     k2 = rhs(s + dt / 2 * k1)
     k3 = rhs(s + dt / 2 * k2)
     k4 = rhs(s + dt * k3)
     s_next = s + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return s_next[:n], s_next[n:], mix @ f
+    return leave(s_next[:n]), s_next[n:], mix @ f
+
+
+def _attitude_chart(model: Model, options: TruthOptions, p_eff: ca.SX, products: ca.SX,
+                    wrench: ca.SX) -> tuple[Any, Any, Any]:
+    """(field(s, U), enter(x), leave(s)): the truth's vector field on the state it integrates,
+    and the maps from and to the 12-state x with Euler angles (identities on the Euler chart;
+    x -> [position, q(eta), nu] and back through R(q) on SE(3))."""
+    if not options.quaternion:
+        truth = model.casadi_function("truth_dynamics")
+        same = lambda s: s
+        return (lambda s, U: truth(s, U, p_eff, products, wrench)), same, same
+    se3 = model.casadi_function("se3_dynamics")
+    rotation = model.casadi_function("quaternion_rotation")
+    m, r = p_eff[IDX["m"]], p_eff[R_G.start:R_G.stop]
+    Ixx, Iyy, Izz = p_eff[IDX["Ixx"]], p_eff[IDX["Iyy"]], p_eff[IDX["Izz"]]
+    # pi = [m, m r_G, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]; products are (Ixy, Ixz, Iyz)
+    pi = ca.vertcat(m, m * r, Ixx, products[0], Iyy, products[1], products[2], Izz)
+    g, c = p_eff[IDX["g"]], p_eff[IDX["c_x"]:IDX["c_psi"] + 1]
+
+    def enter(x):
+        return ca.vertcat(x[:3], *quaternion_of_euler(x[3], x[4], x[5], ca), x[6:])
+
+    def leave(s):
+        q = s[QUATERNION] / ca.norm_2(s[QUATERNION])     # back onto |q| = 1 after the step
+        phi, theta, psi = euler_of_rotation(rotation(q), ca)
+        return ca.vertcat(s[:3], phi, theta, psi, s[7:])
+
+    return (lambda s, U: se3(s, U, pi, g, c, wrench)), enter, leave
 
 
 def plant_step_function(model: Model, actuation: Actuation) -> ca.Function:

@@ -1,8 +1,9 @@
 """Can the vehicle follow a reference? Acceleration and jerk against what its rotors allow.
 
 A reference asks for the thrust vector ``f = m (a + g e_z)`` (ground axes): its size must stay
-within the rotors' total thrust, it must point up (rotors only push) and tilt no further than
-the divergence limit ``limits.max_tilt_deg``. The jerk turns that vector: its direction rotates
+within the rotors' total thrust, it must point up (rotors only push; unless the divergence
+limit ``limits.max_tilt_deg`` is 90 deg or more, when the vehicle may fly upside down) and tilt
+no further than that limit. The jerk turns that vector: its direction rotates
 at ``|j_perp| / |a + g e_z|`` (rad/s, ``j_perp`` the part of the jerk across the thrust), a body
 rate the vehicle must reach. The largest rate allowed is the one its rotors build up at full
 differential thrust within 45 deg of rotation, ``omega_max = sqrt(2 alpha_max pi / 4)`` with
@@ -159,7 +160,9 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
     rate = j_perp / safe
     a_size, j_size = row_norms(a).max(), row_norms(j).max()
     bad = {"thrust": size > limits.max_specific_thrust,
-           "push": f[:, 2] <= 0,
+           # upside down (a flip) the rotors push along a body z that points down: a thrust
+           # vector below the horizon is a fault only where the tilt limit keeps it upright
+           "push": (f[:, 2] <= 0) & (limits.max_tilt < math.pi / 2),
            "tilt": tilt > limits.max_tilt,
            "jerk": rate > limits.max_rate}
     words = {"thrust": f"|a + g e_z| up to {size.max():.3g} m/s^2 > "

@@ -7,6 +7,7 @@ import inspect
 
 from quadcog import validate
 from quadcog.kinds import Kind, settings_of
+from quadcog.trajectories.aerobatic import BankedCircle, Flip
 from quadcog.trajectories.analytic import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
 from quadcog.trajectories.waypoints import MinimumSnap
 
@@ -19,6 +20,8 @@ TRAJECTORIES: dict[str, type[Trajectory]] = {
     "figure8": Figure8,
     "helix": Helix,
     "waypoints": MinimumSnap,
+    "flip": Flip,
+    "banked_circle": BankedCircle,
 }
 
 
