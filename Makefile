@@ -98,6 +98,13 @@ ARM_PACKAGES := gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
 embedded: compile
 	$(PY) -m quadcog.embedded --out $(OUT)/embedded
 
+# PX4 in the loop (docs/px4.md): build PX4's px4_sitl_default into quadcog's cache, once per tree
+# (the tree: PX4=PATH, else $$QUADCOG_PX4, else ../shared/vendor/px4-autopilot.tar.xz); pip
+# installs the build's Python packages (quadcog.px4.tree.BUILD_PACKAGES) where missing.
+.PHONY: px4-build
+px4-build: $(STAMP)
+	$(PY) -m quadcog.px4.tree $(PX4)
+
 # The documentation site (MkDocs, Material, mkdocstrings) into $(OUT)/docs/; the reference pages
 # (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.
 docs: $(STAMP)
