@@ -103,7 +103,7 @@ embedded: compile
 # installs the build's Python packages (quadcog.px4.tree.BUILD_PACKAGES) where missing.
 .PHONY: px4-build
 px4-build: $(STAMP)
-	$(PY) -m quadcog.px4.tree $(PX4)
+	$(PY) -c 'import sys; from quadcog.px4.tree import main; sys.exit(main())' $(PX4)
 
 # The documentation site (MkDocs, Material, mkdocstrings) into $(OUT)/docs/; the reference pages
 # (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.

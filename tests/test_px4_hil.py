@@ -21,6 +21,7 @@ from quadcog.px4.mavlink import (
     pack_hil_sensor,
     unpack_hil_actuator_controls,
     x25_crc,
+    x25_crc_python,
 )
 from quadcog.px4.tree import shared_tarball
 from quadcog.vehicles.vehicle import X500
@@ -31,8 +32,10 @@ SENSOR = dict(time_usec=123456789, acc=(0.25, -0.5, -9.75), gyro=(0.01, -0.02, 0
 
 
 def test_crc_textbook_check_value():
-    assert x25_crc(b"123456789") == 0x6F91            # CRC-16/MCRF4XX check value
-    assert x25_crc(b"") == 0xFFFF
+    for crc in (x25_crc, x25_crc_python):            # fastcrc's (when installed) and ours
+        assert crc(b"123456789") == 0x6F91            # CRC-16/MCRF4XX check value
+        assert crc(b"") == 0xFFFF
+        assert crc(b"56789", crc(b"1234")) == 0x6F91  # running
 
 
 def test_hil_sensor_bytes_laid_by_hand():

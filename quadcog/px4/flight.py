@@ -107,10 +107,17 @@ class Px4Flight:
                 "disarmed_at": r.disarmed_at, "speed": round(self.speed, 2),
                 "lockstep_seconds": round(r.lockstep_seconds, 3),
                 "wall_seconds": round(r.wall_seconds, 3), "missed_answers": r.missed,
+                "waiting_for_px4_seconds": round(r.wait_seconds, 3),
+                "cpu_seconds_px4": round(r.cpu_px4, 3),
+                "cpu_seconds_quadcog": round(r.cpu_quadcog, 3),
                 "instance": self.instance, "px4": self.build.commit(),
                 "build_key": self.build.key, "airframe": SIM_AIRFRAME,
                 "waypoints": [list(w.position) + [w.hold] for w in self.mission.waypoints],
                 "statustext": [[round(t, 3), s] for t, s in r.statustext]}
+
+
+def _point(p: Any) -> tuple[float, float, float]:
+    return float(p[0]), float(p[1]), float(p[2])
 
 
 def mission_of(scenario: Scenario) -> Mission:
@@ -133,11 +140,10 @@ def mission_of(scenario: Scenario) -> Mission:
     """
     traj = scenario.trajectory
     if isinstance(traj, Hover):
-        return Mission((Waypoint(tuple(float(v) for v in traj.position), scenario.duration),))
+        return Mission((Waypoint(_point(traj.position), scenario.duration),))
     t = np.linspace(0.0, scenario.duration, _MISSION_POINTS + 1)
     p = traj.sample(t)[:, :3]
-    points = [Waypoint(tuple(float(v) for v in p[0]), 2.0)]
-    points += [Waypoint(tuple(float(v) for v in q)) for q in p[1:]]
+    points = [Waypoint(_point(p[0]), 2.0)] + [Waypoint(_point(q)) for q in p[1:]]
     return Mission(tuple(points))
 
 
@@ -145,6 +151,26 @@ def _progress_line(t: float, link: MissionLink, speed: float) -> None:
     import sys
     print(f"quadcog px4: t = {t:6.1f} s  {link.state:<16s} item {link.current:2d}  "
           f"{speed:5.1f}x real time", file=sys.stderr, flush=True)
+
+
+# PX4's SITL start-up (rcS) sources px4-rc.mavlink from PATH before its own etc/init.d-posix:
+# this one starts only the link the mission needs, with few streams. PX4's own starts four
+# links (ground station, API, camera, gimbal) streaming at up to 4 Mbit/s; in lockstep each
+# link's thread wakes every millisecond of PX4's time, and those wake-ups cost more than
+# everything else PX4 does.
+_MAVLINK_LINKS = """#!/bin/sh
+# written by quadcog.px4: the mission link only (PX4 listens on 14580 + i, sends to 14540 + i)
+mavlink start -u $((14580+px4_instance)) -r 200000 -m minimal -o $((14540+px4_instance))
+mavlink stream -r 1 -s EXTENDED_SYS_STATE -u $((14580+px4_instance))
+"""
+
+
+def _mavlink_links(workdir: Path) -> str:
+    """PATH for PX4's start-up with quadcog's px4-rc.mavlink first."""
+    rc = workdir / "rc"
+    rc.mkdir(parents=True, exist_ok=True)
+    (rc / "px4-rc.mavlink").write_text(_MAVLINK_LINKS)
+    return str(rc) + os.pathsep + os.environ.get("PATH", "")
 
 
 def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str] | None = None,
@@ -238,7 +264,7 @@ def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str]
     link = MissionLink(mission, instance, arm_timeout)
     workdir = Path(tempfile.mkdtemp(prefix=f"quadcog-px4-{instance}-"))
     env = {"PX4_SYS_AUTOSTART": str(SIM_AIRFRAME), "PX4_SIM_MODEL": SIM_MODEL,
-           **px4_parameters(airframe)}
+           **px4_parameters(airframe), "PATH": _mavlink_links(workdir)}
     try:
         link.open()
         with Px4Process(found.binary, found.etc, instance, workdir, env) as proc:

@@ -23,12 +23,14 @@ t) starts at its boot.
 import contextlib
 from dataclasses import dataclass, field
 import math
+import os
 import select
 import socket
 import subprocess
 import time
 from typing import Any
 
+import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
@@ -89,6 +91,13 @@ class Recording:
         Simulated time in that span.
     missed : int
         Steps PX4 did not answer in time (its last outputs were held).
+    wait_seconds : float
+        Of ``wall_seconds``, the time spent waiting for PX4's answers (the rest is
+        quadcog's: sensors, codec, plant, mission link).
+    cpu_px4, cpu_quadcog : float
+        CPU seconds (user + system) PX4 and this process spent in that span: lockstep is
+        serial, so ``lockstep_seconds / (cpu_px4 + cpu_quadcog)`` is the speed on an idle
+        machine, less the wake-up latencies.
     statustext : list
         PX4's STATUSTEXT messages on the mission link, (t, text).
     """
@@ -109,17 +118,66 @@ class Recording:
     lockstep_seconds: float = 0.0
     missed: int = 0
     statustext: list = field(default_factory=list)
+    wait_seconds: float = 0.0
+    cpu_px4: float = 0.0
+    cpu_quadcog: float = 0.0
 
     @property
     def t(self) -> npt.NDArray[np.float64]:
         """(n,) sample times (s)."""
-        return np.arange(self.n) * self.dt
+        return np.arange(self.n, dtype=np.float64) * self.dt
 
     def reference(self) -> npt.NDArray[np.float64]:
-        """(n, 14) reference rows: the mission's target as the position, the rest zero."""
+        """The reference rows of the result.
+
+        Returns
+        -------
+        (n, 14) numpy.ndarray
+            The mission's target as the position (m), the rest zero.
+        """
         ref = np.zeros((self.n, REF_SIZE))
         ref[:, POS] = self.target[:self.n]
         return ref
+
+
+def period_function(actuation: Actuation, nsub: int) -> ca.Function:
+    """``nsub`` plant steps with the input, parameters and payload held: one lockstep period
+    as one compiled call (``plant_step_function`` mapaccum'd).
+
+    Parameters
+    ----------
+    actuation : Actuation
+        The truth's rotors.
+    nsub : int
+        Plant steps per period.
+
+    Returns
+    -------
+    casadi.Function
+        ``(x, f, U, p, payload, r_stated, wrench, dt) -> (X (12 x nsub), F (nf x nsub),
+        U_applied (4 x nsub))``: the state and rotor thrusts after each step, the input the
+        rotors gave during each.
+    """
+    def build():
+        step = plant_step_function(load(), actuation)
+        acc = step.mapaccum("plant_steps", nsub)
+        ins = [ca.MX.sym(step.name_in(i), step.size1_in(i)) for i in range(step.n_in())]
+        held = [ca.repmat(v, 1, nsub) for v in ins[2:]]
+        X, F, U = acc(ins[0], ins[1], *held)
+        return ca.Function("px4_period", ins, [X, F, U],
+                           [step.name_in(i) for i in range(step.n_in())],
+                           ["X", "F", "U_applied"])
+    return cached_compile(("px4-period", actuation, nsub), build)
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of a running process (0 when it is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def _at_rest(x: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
@@ -151,7 +209,7 @@ class _SimLink:
         self.conn = conn
         self.reader = FrameReader({_CONTROLS})
         self.seq = 0
-        self.latest = (0, 0, (0.0,) * 16, 0)
+        self.latest: tuple[int, int, tuple[float, ...], int] = (0, 0, (0.0,) * 16, 0)
 
     def send(self, message, payload: bytes) -> None:
         self.conn.sendall(frame(message, payload, self.seq, 1, 200))
@@ -234,10 +292,9 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
     rec = Recording(dt, 0, np.empty((n_max, N_STATE)), np.empty((n_max, nf)),
                     np.empty((n_max, 4)), np.empty((n_max, 4)), np.empty((n_max, 4)),
                     np.empty((n_max, 3)), np.zeros(n_max, int))
-    plant = FastCall(cached_compile(("plant", actuation),
-                                    lambda: plant_step_function(load(), actuation)))
+    plant = FastCall(period_function(actuation, nsub))
     px, pf, pU, pP, pload, pr, pw, pdt = plant.inputs
-    x_next, f_next, U_app = plant.outputs
+    X_out, F_out, U_out = plant.outputs
     step = plant.eval
     pr[:] = P[R_G]
     pdt[0] = dt
@@ -245,10 +302,11 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
     g = float(P[IDX["g"]])
     m_air = float(P[IDX["m"]])
     n_sched = schedule.n_steps
+    lower, upper = actuation.lower, actuation.upper
 
     x = np.zeros(N_STATE)
+    R = np.eye(3)
     f = np.zeros(nf)
-    v_prev = np.zeros(3)
     accel = np.zeros(3)
     on_ground = True
     link = _SimLink(server, px4, connect_timeout)
@@ -256,6 +314,7 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
     gps_every = int(round(1.0 / (GPS_RATE * period)))
     answered = False
     wall0 = sim0 = 0.0
+    cpu0 = (0.0, 0.0)
     j = 0                       # lockstep periods done
     k = 0                       # plant steps done
     k_arm = None
@@ -271,7 +330,6 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
             if stop_at is not None and t >= stop_at:
                 break
             # 1. sensors at time t
-            R = rotation_matrix(x[3], x[4], x[5])
             t_us = period_us * (j + 1)
             acc, gyro, mag, pressure, alt, temp = sensors.imu(R, x[9:12], accel, x[2])
             link.send(_SENSOR, pack_hil_sensor(t_us, acc, gyro, mag, pressure, 0.0, alt, temp))
@@ -291,8 +349,10 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
                 link.read(period)           # booting: real-time pace
                 if link.latest[0] >= t_us:
                     answered, wall0, sim0 = True, time.monotonic(), t
+                    cpu0 = time.process_time(), _cpu_seconds(px4.proc.pid)
             else:
-                t_wait = time.monotonic() + answer_timeout
+                w0 = time.monotonic()
+                t_wait = w0 + answer_timeout
                 while link.latest[0] < t_us:
                     if not link.read(0.05):
                         if not px4.alive():
@@ -302,46 +362,57 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
                                 f"PX4 stopped answering: no HIL_ACTUATOR_CONTROLS for t = "
                                 f"{t:.3f} s within {answer_timeout:g} s (wall clock); it still "
                                 f"runs; its last lines: {px4.last_lines()}")
+                rec.wait_seconds += time.monotonic() - w0
             _, _, controls, mode = link.latest
             armed = bool(mode & _ARMED_FLAG)
             thrust_cmd = rotors.thrust(controls, armed)
             U = mixer @ thrust_cmd
             pU[:] = U
-            # 4. the plant through the period
-            for _ in range(nsub):
-                row = 0 if k_arm is None else min(k - k_arm, n_sched)
-                pP[:] = truth_parameters(P, schedule.cog_scale[row], schedule.cog[row])
-                pload[:] = schedule.payload[row]
-                pw[:] = schedule.wrench[row]
-                px[:] = x
-                pf[:] = f
-                step()
-                rec.x[k], rec.rotor_states[k], rec.U[k] = x, f, U_app
-                rec.rotor_command[k] = thrust_cmd
-                rec.rotor_thrust[k] = f if nf else np.clip(thrust_cmd, actuation.lower,
-                                                           actuation.upper)
-                rec.target[k] = mission.mission.target_at(mission.current)
-                rec.schedule_index[k] = row
-                x_new = x_next.copy()
-                mass = m_air + float(pload[PI_INDEX["m"]])
-                if on_ground:
-                    if U_app[0] > mass * g:
-                        on_ground = False
-                    else:
-                        x_new = _at_rest(x)
-                elif x_new[2] < 0.0:
-                    on_ground, x_new = True, _at_rest(x_new)
-                if not np.isfinite(x_new).all():
-                    rec.n = k + 1
-                    rec.partial, rec.reason = True, f"the plant's state is not finite at " \
-                                                    f"t = {(k + 1) * dt:.3f} s"
-                    return rec
-                v_new = rotation_matrix(x_new[3], x_new[4], x_new[5]) @ x_new[6:9]
-                accel = (v_new - v_prev) / dt
-                v_prev = v_new
-                x = x_new
-                f = f_next.copy()
-                k += 1
+            # 4. the plant through the period (the schedule's row of its start held)
+            row = 0 if k_arm is None else min(k - k_arm, n_sched)
+            pP[:] = truth_parameters(P, schedule.cog_scale[row], schedule.cog[row])
+            pload[:] = schedule.payload[row]
+            pw[:] = schedule.wrench[row]
+            px[:] = x
+            pf[:] = f
+            step()
+            ks = slice(k, k + nsub)
+            rec.x[k] = x
+            rec.x[k + 1:k + nsub] = X_out[:, :nsub - 1].T
+            if nf:
+                rec.rotor_states[k] = f
+                rec.rotor_states[k + 1:k + nsub] = F_out[:, :nsub - 1].T
+            rec.U[ks] = U_out.T
+            rec.rotor_command[ks] = thrust_cmd
+            rec.rotor_thrust[ks] = (rec.rotor_states[ks] if nf else
+                                    np.clip(thrust_cmd, lower, upper))
+            rec.target[ks] = mission.mission.target_at(mission.current)
+            rec.schedule_index[ks] = row
+            x_new = X_out[:, nsub - 1].copy()
+            if on_ground:
+                if U[0] > (m_air + float(pload[PI_INDEX["m"]])) * g:
+                    on_ground = False
+                else:
+                    x_new = _at_rest(x)
+                    rec.x[k + 1:k + nsub] = x_new
+            elif x_new[2] < 0.0:
+                on_ground, x_new = True, _at_rest(x_new)
+                below = k + 1 + np.flatnonzero(X_out[2, :nsub - 1] < 0.0)
+                rec.x[below] = x_new
+            if not np.isfinite(x_new).all():
+                rec.n = k + nsub
+                rec.partial, rec.reason = True, f"the plant's state is not finite at " \
+                                                f"t = {(k + nsub) * dt:.3f} s"
+                return rec
+            # the accelerometer: the last plant step's change of the ground velocity
+            before = X_out[:, nsub - 2] if nsub > 1 else x
+            v_before = rotation_matrix(before[3], before[4], before[5]) @ before[6:9]
+            R = rotation_matrix(x_new[3], x_new[4], x_new[5])      # the next sensors' too
+            v_new = R @ x_new[6:9]
+            accel = (v_new - v_before) / dt if not on_ground else np.zeros(3)
+            x = x_new
+            f = F_out[:, nsub - 1].copy()
+            k += nsub
             j += 1
             if progress is not None and t >= next_report:
                 span = time.monotonic() - wall0
@@ -355,6 +426,9 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
                       f"{px4.last_lines()}" if not px4.alive() else
                       f"PX4 closed the simulator link at t = {k * dt:.3f} s")
     finally:
+        if answered:
+            rec.cpu_quadcog = time.process_time() - cpu0[0]
+            rec.cpu_px4 = _cpu_seconds(px4.proc.pid) - cpu0[1]
         link.close()
         rec.statustext = list(mission.statustext)
     rec.n = k

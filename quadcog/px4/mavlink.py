@@ -11,11 +11,12 @@ those of common.xml (PX4's mavlink submodule); tests/test_px4_hil.py checks ever
 against pymavlink's generated codec when pymavlink is installed, and the CRC against its
 textbook check value.
 """
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 import struct
+from typing import Any
 
-__all__ = ["Message", "MESSAGES", "x25_crc", "frame", "FrameReader", "HIL_SENSOR_ALL_FIELDS",
+__all__ = ["Message", "MESSAGES", "x25_crc", "x25_crc_python", "frame", "FrameReader", "HIL_SENSOR_ALL_FIELDS",
            "pack_hil_sensor", "pack_hil_gps", "unpack_hil_actuator_controls", "padded"]
 
 
@@ -73,8 +74,8 @@ def _crc_table() -> tuple[int, ...]:
 _TABLE = _crc_table()
 
 
-def x25_crc(data: bytes, crc: int = 0xFFFF) -> int:
-    """CRC-16/MCRF4XX (MAVLink's X.25 checksum) of ``data``.
+def x25_crc_python(data: bytes, crc: int = 0xFFFF) -> int:
+    """CRC-16/MCRF4XX (MAVLink's X.25 checksum) of ``data``, table-driven, in Python.
 
     Parameters
     ----------
@@ -92,6 +93,35 @@ def x25_crc(data: bytes, crc: int = 0xFFFF) -> int:
     for b in data:
         crc = (crc >> 8) ^ table[(crc ^ b) & 0xFF]
     return crc
+
+
+_mcrf4xx: Any = None
+try:        # fastcrc (a compiled CRC that pymavlink installs) is several times faster
+    from fastcrc import crc16 as _fastcrc
+    _mcrf4xx = _fastcrc.mcrf4xx
+except ImportError:         # pragma: no cover - without pymavlink's dependency
+    pass
+
+
+def x25_crc(data: bytes, crc: int = 0xFFFF) -> int:
+    """CRC-16/MCRF4XX (MAVLink's X.25 checksum) of ``data``: fastcrc's where installed,
+    else ``x25_crc_python``.
+
+    Parameters
+    ----------
+    data : bytes
+        The bytes.
+    crc : int
+        The running value (start: 0xFFFF).
+
+    Returns
+    -------
+    int
+        The checksum (0 .. 65535); b"123456789" gives 0x6F91.
+    """
+    if _mcrf4xx is not None:
+        return _mcrf4xx(bytes(data), crc)
+    return x25_crc_python(data, crc)
 
 
 def frame(message: Message, payload: bytes, seq: int, sysid: int = 1, compid: int = 1) -> bytes:
@@ -139,8 +169,8 @@ def padded(message: Message, payload: bytes) -> bytes:
     return payload + b"\0" * (message.size - len(payload))
 
 
-def pack_hil_sensor(time_usec: int, acc: tuple[float, float, float],
-                    gyro: tuple[float, float, float], mag: tuple[float, float, float],
+def pack_hil_sensor(time_usec: int, acc: Sequence[float], gyro: Sequence[float],
+                    mag: Sequence[float],
                     abs_pressure: float, diff_pressure: float, pressure_alt: float,
                     temperature: float, fields_updated: int = HIL_SENSOR_ALL_FIELDS,
                     sensor_id: int = 0) -> bytes:
@@ -150,11 +180,11 @@ def pack_hil_sensor(time_usec: int, acc: tuple[float, float, float],
     ----------
     time_usec : int
         Time stamp (us); in lockstep it sets PX4's clock.
-    acc : 3 floats
+    acc : sequence of 3 float
         Specific force, FRD body axes (m/s^2).
-    gyro : 3 floats
+    gyro : sequence of 3 float
         Body rates, FRD (rad/s).
-    mag : 3 floats
+    mag : sequence of 3 float
         Magnetic field, FRD (gauss).
     abs_pressure : float
         Static pressure (hPa).

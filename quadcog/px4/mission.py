@@ -148,13 +148,15 @@ class MissionLink:
     mission: Mission
     instance: int
     arm_timeout: float = 120.0
-    state: str = "waiting for PX4"
-    armed: bool = False
-    armed_at: float | None = None
-    disarmed_at: float | None = None
-    current: int = 0
-    statustext: list[tuple[float, str]] = field(default_factory=list)
-    _sock: socket.socket | None = None
+    # what the link has seen (not arguments): its state, PX4's arming, the current item,
+    # PX4's STATUSTEXT messages (t, text)
+    state: str = field(default="waiting for PX4", init=False)
+    armed: bool = field(default=False, init=False)
+    armed_at: float | None = field(default=None, init=False)
+    disarmed_at: float | None = field(default=None, init=False)
+    current: int = field(default=0, init=False)
+    statustext: list[tuple[float, str]] = field(default_factory=list, init=False)
+    _sock: socket.socket | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         c = import_extra("px4", "pymavlink.dialects.v20.common")
@@ -163,6 +165,7 @@ class MissionLink:
         self._mav.robust_parsing = True
         self._reader = FrameReader(_WANTED)
         self._items: list[Any] = []
+        self._chunks: dict[int, str] = {}
         self._next_heartbeat = 0.0
         self._next_try = 0.0
         self._px4: tuple[str, int] | None = None
@@ -279,6 +282,13 @@ class MissionLink:
         elif msgid == c.MAVLINK_MSG_ID_MISSION_CURRENT:
             self.current = int(msg.seq)
         elif msgid == c.MAVLINK_MSG_ID_STATUSTEXT:
-            text = msg.text.rstrip("\0") if isinstance(msg.text, str) else str(msg.text)
+            # a text longer than 50 characters comes in chunks of one id; the last is shorter
+            text = msg.text if isinstance(msg.text, str) else str(msg.text)
+            if msg.id:
+                text = self._chunks.pop(msg.id, "") + text
+                if len(msg.text) >= 50:
+                    self._chunks[msg.id] = text
+                    return
+            text = text.strip()
             if not self.statustext or self.statustext[-1][1] != text:
                 self.statustext.append((t, text))

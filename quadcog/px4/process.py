@@ -163,11 +163,23 @@ class Px4Process:
                 raise Px4Error(f"cannot start {binary}: {e.strerror}") from None
 
     def alive(self) -> bool:
-        """Whether the process still runs."""
+        """Whether the process still runs.
+
+        Returns
+        -------
+        bool
+            True while it runs.
+        """
         return self.proc.poll() is None
 
     def describe_exit(self) -> str:
-        """How it ended, for messages ("exit code 1", "killed by SIGSEGV")."""
+        """How it ended, for messages.
+
+        Returns
+        -------
+        str
+            "exit code 1", "killed by SIGSEGV" or "still running".
+        """
         code = self.proc.poll()
         if code is None:
             return "still running"
@@ -176,7 +188,18 @@ class Px4Process:
         return f"exit code {code}"
 
     def last_lines(self, n: int = 3) -> str:
-        """The last lines of its console output, joined by " | "."""
+        """The last lines of its console output.
+
+        Parameters
+        ----------
+        n : int
+            How many.
+
+        Returns
+        -------
+        str
+            The last ``n`` non-empty lines of px4.log joined by " | " ("" when unreadable).
+        """
         with contextlib.suppress(OSError):
             lines = [ln.strip() for ln in self.log.read_text(errors="replace").splitlines()
                      if ln.strip()]

@@ -420,9 +420,14 @@ def build(tree: str | os.PathLike[str] | None = None, jobs: int | None = None,
         return done
 
 
-def main() -> int:
-    """``python -m quadcog.px4.tree [PATH]`` (``make px4-build``): install the build's Python
-    packages (``BUILD_PACKAGES``) into this interpreter where missing, then build.
+def main(argv: list[str] | None = None) -> int:
+    """``make px4-build [PX4=PATH]``: install the build's Python packages
+    (``BUILD_PACKAGES``) into this interpreter where missing, then build.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        ``[PATH]`` or ``[]`` (default: ``sys.argv[1:]``).
 
     Returns
     -------
@@ -438,13 +443,11 @@ def main() -> int:
             print("quadcog: error: pip could not install them", file=sys.stderr)
             return 2
     try:
-        done = build(sys.argv[1] if len(sys.argv) > 1 else None)
+        args = sys.argv[1:] if argv is None else argv
+        done = build(args[0] if args else None)
     except QuadcogError as e:
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2
     print(f"PX4 {done.commit()} built: {done.binary}")
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())
