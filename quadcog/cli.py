@@ -526,7 +526,7 @@ def add_px4(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("scenario", help="px4-hover, px4-payload, or any scenario name or file")
     p.add_argument("--px4", default=None, metavar="PATH",
                    help="PX4-Autopilot tree or tarball (default: $QUADCOG_PX4, else "
-                        "../shared/vendor/px4-autopilot.tar.xz)")
+                        "shared/vendor/px4-autopilot.tar.xz next to the checkout)")
     p.add_argument("--out", type=Path, default=None,
                    help="folder for the results (default: out/<scenario>-px4)")
     p.add_argument("--set", dest="overrides", action="append", default=[],

@@ -10,6 +10,7 @@ import pytest
 
 from quadcog.logs.ulog import euler_to_quaternion, px4_to_quadcog_quaternion, quaternion_to_euler
 from quadcog.model.conventions import rotation_matrix
+from quadcog.px4.compare import Comparison
 from quadcog.px4.frames import flip, flip_rotation
 from quadcog.px4.sensors import EARTH_RADIUS, HOME, Px4Sensing, Sensors, isa_pressure
 
@@ -111,3 +112,35 @@ def test_noise_is_there_and_seeded():
     assert ra == rb
     baro = np.array([r[3] for r in ra])
     assert 0.005 < baro.std() < 0.02                  # the 0.01 hPa PX4 needs to see change
+
+
+def test_side_by_side_figures_of_a_known_error():
+    """compare() on a made-up flight: the error is 0.2 m at the event, decays as
+    0.2 exp(-t) (below 5 cm after ln 4 = 1.39 s), one rotor at its limit for 0.5 s."""
+    from quadcog.px4.compare import compare
+    from quadcog.sim.result import SimulationResult, flight_metrics
+    from quadcog.vehicles.vehicle import X500
+    t = np.arange(0.0, 20.0, 0.01)
+    x = np.zeros((t.size, 12))
+    after = t >= 5.0
+    x[after, 0] = 0.2 * np.exp(-(t[after] - 5.0))
+    ref = np.zeros((t.size, 14))
+    f = np.full((t.size, 4), 5.0)
+    f[(t >= 5.0) & (t < 5.5), 2] = X500.max_rotor_thrust
+    e = np.abs(x[:, 0])
+    result = SimulationResult(t, x, np.zeros((t.size, 4)), ref, np.zeros((t.size, 3)),
+                              np.zeros((t.size, 3)), flight_metrics(e, t > 15),
+                              rotor_thrust=f)
+    c = compare("made up", result, X500, 5.0, 15.0)
+    assert not c.diverged
+    assert c.largest == pytest.approx(0.2)
+    assert c.settling == pytest.approx(math.log(4.0), abs=0.011)
+    assert c.at_limit == pytest.approx(0.5, abs=0.011)
+    assert c.tail_rms < 1e-3
+    # PX4's time counts from its arming: the same flight shifted by 3 s, offset 3 s
+    shifted = SimulationResult(t + 3.0, x, result.U, ref, result.r_hat, result.r_G,
+                               result.metrics, rotor_thrust=f)
+    s = compare("shifted", shifted, X500, 5.0, 15.0, offset=3.0)
+    assert isinstance(s, Comparison) and s.diverged == c.diverged
+    assert (s.tail_rms, s.largest, s.settling, s.at_limit) == pytest.approx(
+        (c.tail_rms, c.largest, c.settling, c.at_limit), abs=1e-9)

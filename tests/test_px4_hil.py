@@ -133,7 +133,7 @@ def _tree_files():
 def _tree_file(relative):
     files = _tree_files()
     if files is None:
-        pytest.skip("no PX4 tree: ../shared/vendor/px4-autopilot.tar.xz or `make px4-build`")
+        pytest.skip("no PX4 tree: shared/vendor/px4-autopilot.tar.xz next to the checkout, or `make px4-build`")
     return files[relative]
 
 
@@ -187,3 +187,28 @@ def test_world_magnetic_model_at_zurich(tmp_path):
 def test_airframe_file_missing_is_named(tmp_path):
     with pytest.raises(Px4Error, match="4001_gz_x500"):
         read_airframe(tmp_path)
+
+
+def test_px4_rotor_model_is_the_thrust_curve_expanded(x500_params):
+    from quadcog.px4.identify import rotor_model
+    rotors = rotor_map(x500_params, X500)
+    model = rotor_model(rotors)
+    u = np.linspace(0.0, 1.0, 11)
+    k = 8.54858e-06
+    # the gz motor model written out: thrust = k omega^2, omega = 150 + 850 u
+    expected = k * (150.0 + 850.0 * u) ** 2
+    got = model.thrust(np.repeat(u[:, None], 4, axis=1))
+    assert np.allclose(got, expected[:, None], rtol=1e-12)
+    assert np.allclose(rotors.thrust([0.3] * 4, armed=True), model.thrust([[0.3] * 4])[0])
+    assert model.signal == "motor_command" and model.command(got).max() == pytest.approx(1.0)
+
+
+def test_log_order_is_the_ulog_readers_quadrants():
+    from quadcog.px4.identify import log_order
+    v = log_order(X500)
+    signs = [(np.sign(x), np.sign(y)) for x, y in v.rotor_positions]
+    # the ULog reader's order: front-right, back-right, back-left, front-left (FLU)
+    assert signs == [(1, -1), (-1, -1), (-1, 1), (1, 1)]
+    # PX4's motors 1 (FR, ccw), 4 (BR, cw), 2 (BL, ccw), 3 (FL, cw): the spins follow
+    assert v.rotor_directions == (X500.rotor_directions[0], X500.rotor_directions[3],
+                                  X500.rotor_directions[1], X500.rotor_directions[2])

@@ -165,7 +165,8 @@ def check_rotors(params: dict[str, float], vehicle: Vehicle) -> None:
         if np.sign(x) != np.sign(px) or np.sign(y) != np.sign(-py):
             raise Px4Error(f"vehicle {vehicle.name!r}: rotor {i + 1} at ({x:g}, {y:g}) m "
                            f"(FLU) is not PX4's motor {i + 1} at ({px:g}, {-py:g}) m of "
-                           f"{X500_AIRFRAME}: expected the rotors in PX4's motor order")
+                           f"{X500_AIRFRAME}: expected the rotors in PX4's motor order (PX4 "
+                           f"flies the X500: vehicle.preset = \"x500\")")
         if vehicle.rotor_directions[i] != -np.sign(km):
             raise Px4Error(f"vehicle {vehicle.name!r}: rotor {i + 1} turns "
                            f"{vehicle.rotor_directions[i]:+d} but PX4's motor {i + 1} has "

@@ -4,7 +4,8 @@ What it takes from the scenario (``quadcog.scenarios``): the truth vehicle (the 
 checked against PX4's x500 airframe), the truth options (motor lag, rotor limits, parallel
 axis), the CoG changes, the payload events and the disturbances (timed from PX4's arming), the
 plant's dt, and the trajectory, which becomes the mission (``mission_of``): a hover is a
-take-off to its position, a hold of the scenario's duration there, and a landing; another
+take-off to its position, a hold of the scenario's duration there, and a landing; a waypoint
+trajectory is its waypoints, each held for an equal share of the duration; another
 trajectory is flown through eight waypoints sampled over its duration. The scenario's
 controller is not used: PX4 flies.
 
@@ -41,6 +42,7 @@ from quadcog.sim.prepare import as_cog_profile, as_payload_profile, check_cog_ch
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
 from quadcog.sim.schedule import Schedule
 from quadcog.trajectories.analytic import Hover
+from quadcog.trajectories.waypoints import MinimumSnap
 from quadcog.validate import positive, require_extra
 
 __all__ = ["PX4_FILES", "Px4Flight", "mission_of", "fly", "write_px4_outputs"]
@@ -68,9 +70,10 @@ class Px4Flight:
     instance : int
         Its instance.
     ulog : pathlib.Path or None
-        The ULog PX4's logger wrote (in the working folder, or ``out`` once written).
+        The ULog PX4's logger wrote: ``out``/px4.ulg, or without ``out`` a copy in a
+        temporary folder (``quadcog-px4-log-*``) that the caller may remove.
     console : pathlib.Path
-        PX4's console output.
+        PX4's console output (px4.log beside it).
     """
     result: SimulationResult
     recording: Recording
@@ -99,14 +102,14 @@ class Px4Flight:
         -------
         dict
             partial, reason, armed_at, disarmed_at (s, PX4's time), speed (x real time),
-            lockstep seconds, wall seconds, missed answers, instance, PX4's commit and
+            lockstep seconds, wall seconds, CPU seconds of each side, instance, PX4's commit and
             build key, the mission's waypoints, PX4's messages.
         """
         r = self.recording
         return {"partial": r.partial, "reason": r.reason, "armed_at": r.armed_at,
                 "disarmed_at": r.disarmed_at, "speed": round(self.speed, 2),
                 "lockstep_seconds": round(r.lockstep_seconds, 3),
-                "wall_seconds": round(r.wall_seconds, 3), "missed_answers": r.missed,
+                "wall_seconds": round(r.wall_seconds, 3),
                 "waiting_for_px4_seconds": round(r.wait_seconds, 3),
                 "cpu_seconds_px4": round(r.cpu_px4, 3),
                 "cpu_seconds_quadcog": round(r.cpu_quadcog, 3),
@@ -141,9 +144,13 @@ def mission_of(scenario: Scenario) -> Mission:
     traj = scenario.trajectory
     if isinstance(traj, Hover):
         return Mission((Waypoint(_point(traj.position), scenario.duration),))
+    if isinstance(traj, MinimumSnap):       # its waypoints, the duration spread over them
+        corners = np.asarray(traj.waypoints, float)
+        return Mission(tuple(Waypoint(_point(p), scenario.duration / len(corners))
+                             for p in corners))
     t = np.linspace(0.0, scenario.duration, _MISSION_POINTS + 1)
-    p = traj.sample(t)[:, :3]
-    points = [Waypoint(_point(p[0]), 2.0)] + [Waypoint(_point(q)) for q in p[1:]]
+    sampled = traj.sample(t)[:, :3]
+    points = [Waypoint(_point(sampled[0]), 2.0)] + [Waypoint(_point(q)) for q in sampled[1:]]
     return Mission(tuple(points))
 
 
@@ -178,7 +185,7 @@ def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str]
         sensing: Px4Sensing | None = None, max_time: float | None = None,
         connect_timeout: float = 60.0, answer_timeout: float = 10.0,
         arm_timeout: float = 120.0, allow_build: bool = True, progress: bool = False,
-        overrides: tuple[str, ...] = ()) -> Px4Flight:
+        overrides: tuple[str, ...] = (), params: dict[str, float] | None = None) -> Px4Flight:
     """Fly a scenario with PX4 in the loop (see the module docstring).
 
     Parameters
@@ -209,6 +216,8 @@ def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str]
         A line on stderr every 10 s of PX4's time.
     overrides : tuple of str
         ``--set`` texts for a scenario given by name or file.
+    params : dict of str to float, optional
+        PX4 parameters set at start-up over the airframe's (e.g. ``{"MPC_XY_CRUISE": 2}``).
 
     Returns
     -------
@@ -264,7 +273,7 @@ def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str]
     link = MissionLink(mission, instance, arm_timeout)
     workdir = Path(tempfile.mkdtemp(prefix=f"quadcog-px4-{instance}-"))
     env = {"PX4_SYS_AUTOSTART": str(SIM_AIRFRAME), "PX4_SIM_MODEL": SIM_MODEL,
-           **px4_parameters(airframe), "PATH": _mavlink_links(workdir)}
+           **px4_parameters({**airframe, **(params or {})}), "PATH": _mavlink_links(workdir)}
     try:
         link.open()
         with Px4Process(found.binary, found.etc, instance, workdir, env) as proc:
@@ -286,8 +295,11 @@ def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str]
         shutil.rmtree(workdir, ignore_errors=True)
     flight = Px4Flight(_result(rec, P, schedule, actuation), rec, scenario, mission, found,
                        instance, ulog, console)
-    if out is not None:
+    if out is not None:         # the files move into out; the temporary folder goes
         write_px4_outputs(flight, out)
+        flight.ulog = Path(out) / "px4.ulg" if ulog is not None else None
+        flight.console = Path(out) / "px4.log"
+        shutil.rmtree(keep, ignore_errors=True)
     return flight
 
 

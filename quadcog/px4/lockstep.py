@@ -24,7 +24,6 @@ import contextlib
 from dataclasses import dataclass, field
 import math
 import os
-import select
 import socket
 import subprocess
 import time
@@ -62,6 +61,7 @@ _SENSOR = MESSAGES["HIL_SENSOR"]
 _GPS = MESSAGES["HIL_GPS"]
 _CONTROLS = MESSAGES["HIL_ACTUATOR_CONTROLS"].msgid
 _ARMED_FLAG = 128
+_MISSION_EVERY = 5              # lockstep periods between two looks at the mission link (20 ms)
 
 
 @dataclass
@@ -89,8 +89,6 @@ class Recording:
         Wall time of the lockstep from PX4's first answer on.
     lockstep_seconds : float
         Simulated time in that span.
-    missed : int
-        Steps PX4 did not answer in time (its last outputs were held).
     wait_seconds : float
         Of ``wall_seconds``, the time spent waiting for PX4's answers (the rest is
         quadcog's: sensors, codec, plant, mission link).
@@ -116,7 +114,6 @@ class Recording:
     reason: str = ""
     wall_seconds: float = 0.0
     lockstep_seconds: float = 0.0
-    missed: int = 0
     statustext: list = field(default_factory=list)
     wait_seconds: float = 0.0
     cpu_px4: float = 0.0
@@ -209,6 +206,7 @@ class _SimLink:
         self.conn = conn
         self.reader = FrameReader({_CONTROLS})
         self.seq = 0
+        self._timeout: float | None = None
         self.latest: tuple[int, int, tuple[float, ...], int] = (0, 0, (0.0,) * 16, 0)
 
     def send(self, message, payload: bytes) -> None:
@@ -217,10 +215,13 @@ class _SimLink:
 
     def read(self, timeout: float) -> bool:
         """Read what has arrived within ``timeout`` s; False when nothing came."""
-        ready, _, _ = select.select([self.conn], [], [], timeout)
-        if not ready:
+        if timeout != self._timeout:            # one recv with a timeout: no select first
+            self.conn.settimeout(timeout)
+            self._timeout = timeout
+        try:
+            data = self.conn.recv(1 << 16)
+        except socket.timeout:
             return False
-        data = self.conn.recv(1 << 16)
         if not data:
             raise ConnectionResetError("PX4 closed the simulator link")
         for _, _, _, payload, _ in self.reader.feed(data):
@@ -338,7 +339,8 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
                 link.send(_GPS, pack_hil_gps(t_us, lat, lon, alt_mm, 30, 40,
                                              int(math.hypot(vn, ve)), vn, ve, vd, cog))
             # 2. the mission, at PX4's time
-            mission.poll(t)
+            if j % _MISSION_EVERY == 0:
+                mission.poll(t)
             if mission.armed and k_arm is None:
                 k_arm, rec.armed_at = k, t
             if mission.finished and stop_at is None:

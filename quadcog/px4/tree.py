@@ -2,7 +2,7 @@
 
 Where the tree comes from, first found wins: the argument (a source folder or a ``.tar.xz``
 of one), the environment variable ``QUADCOG_PX4`` (the same), else the shared tarball
-``../shared/vendor/px4-autopilot.tar.xz`` beside the checkout. Every build happens in
+``shared/vendor/px4-autopilot.tar.xz`` next to the checkout. Every build happens in
 ``cache_dir()/px4/<key>/PX4-Autopilot``, never in the user's tree: a tarball is unpacked there
 (key: the first 16 hex digits of its sha256); a folder is copied there (key: ``tree-`` and a
 sha256 of its files' names and contents, ``build/`` left out), because PX4's version script
@@ -108,7 +108,7 @@ class Px4Build:
 
 
 def shared_tarball() -> Path | None:
-    """The shared tarball, ``../shared/vendor/px4-autopilot.tar.xz`` beside the checkout
+    """The shared tarball, ``shared/vendor/px4-autopilot.tar.xz`` next to the checkout
     (or beside the current folder).
 
     Returns
@@ -149,7 +149,7 @@ def find_source(tree: str | os.PathLike[str] | None = None) -> Path:
         path = shared_tarball()
         if path is None:
             raise Px4Error(f"no PX4 tree: none given (--px4 PATH), ${TREE_ENV} is not set and "
-                           f"there is no ../shared/vendor/{TARBALL_NAME} beside the checkout; "
+                           f"there is no shared/vendor/{TARBALL_NAME} next to the checkout; "
                            f"expected a PX4-Autopilot source folder or a .tar.xz of one")
         return path
     path = Path(named).expanduser()
