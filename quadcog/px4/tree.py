@@ -26,6 +26,7 @@ import os
 from pathlib import Path
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tarfile
@@ -406,10 +407,17 @@ def build(tree: str | os.PathLike[str] | None = None, jobs: int | None = None,
         t0 = time.monotonic()
         with open(log, "w") as fh:
             try:
-                code = subprocess.run(["make", TARGET], cwd=tree_copy, env=env, stdout=fh,
-                                      stderr=subprocess.STDOUT, start_new_session=True).returncode
+                proc = subprocess.Popen(["make", TARGET], cwd=tree_copy, env=env, stdout=fh,
+                                        stderr=subprocess.STDOUT, start_new_session=True)
             except OSError as e:
                 raise Px4Error(f"cannot run make in {tree_copy}: {e.strerror}") from None
+            try:
+                code = proc.wait()
+            except BaseException:       # Ctrl-C: make, ninja and the compilers all go
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+                raise
         if code != 0 or not done.binary.is_file():
             raise Px4Error(f"the PX4 build of {source} failed (make {TARGET} exited {code}): "
                            f"{first_error_line(log)} (full log: {log})")
