@@ -401,11 +401,10 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
                 on_ground, x_new = True, _at_rest(x_new)
                 below = k + 1 + np.flatnonzero(X_out[2, :nsub - 1] < 0.0)
                 rec.x[below] = x_new
-            if not np.isfinite(x_new).all():
-                rec.n = k + nsub
+            if not np.isfinite(x_new).all():     # kept: the samples before this period
                 rec.partial, rec.reason = True, f"the plant's state is not finite at " \
                                                 f"t = {(k + nsub) * dt:.3f} s"
-                return rec
+                break
             # the accelerometer: the last plant step's change of the ground velocity
             before = X_out[:, nsub - 2] if nsub > 1 else x
             v_before = rotation_matrix(before[3], before[4], before[5]) @ before[6:9]
