@@ -304,6 +304,12 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
     m_air = float(P[IDX["m"]])
     n_sched = schedule.n_steps
     lower, upper = actuation.lower, actuation.upper
+    # the rows where an input of the schedule differs from the row before
+    inputs = np.hstack([schedule.cog, schedule.cog_scale[:, None], schedule.payload,
+                        schedule.wrench])
+    changes = 1 + np.flatnonzero(np.any(inputs[1:] != inputs[:-1], axis=1))
+    last_segment = -1
+    mass = m_air
 
     x = np.zeros(N_STATE)
     R = np.eye(3)
@@ -370,11 +376,16 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
             thrust_cmd = rotors.thrust(controls, armed)
             U = mixer @ thrust_cmd
             pU[:] = U
-            # 4. the plant through the period (the schedule's row of its start held)
+            # 4. the plant through the period (the schedule's row of its start held; its
+            # inputs set again only where the schedule changes)
             row = 0 if k_arm is None else min(k - k_arm, n_sched)
-            pP[:] = truth_parameters(P, schedule.cog_scale[row], schedule.cog[row])
-            pload[:] = schedule.payload[row]
-            pw[:] = schedule.wrench[row]
+            segment = int(np.searchsorted(changes, row, side="right"))
+            if segment != last_segment:
+                pP[:] = truth_parameters(P, schedule.cog_scale[row], schedule.cog[row])
+                pload[:] = schedule.payload[row]
+                pw[:] = schedule.wrench[row]
+                mass = m_air + float(pload[PI_INDEX["m"]])
+                last_segment = segment
             px[:] = x
             pf[:] = f
             step()
@@ -392,7 +403,7 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
             rec.schedule_index[ks] = row
             x_new = X_out[:, nsub - 1].copy()
             if on_ground:
-                if U[0] > (m_air + float(pload[PI_INDEX["m"]])) * g:
+                if U[0] > mass * g:
                     on_ground = False
                 else:
                     x_new = _at_rest(x)

@@ -117,6 +117,8 @@ def free_instance(first: int = 0) -> tuple[int, socket.socket]:
             taken.append(f"{i} (UDP {'/'.join(map(str, px4_ports(i)))} or /tmp/px4_lock-{i})")
             continue
         server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        # a previous run's closed connection may linger in TIME_WAIT on the port
+        server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             server.bind(("127.0.0.1", SIM_PORT + i))
             server.listen(1)
@@ -151,6 +153,7 @@ class Px4Process:
         self.workdir = Path(workdir)
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.log = self.workdir / "px4.log"
+        self.instance = instance
         full = {k: v for k, v in os.environ.items() if not k.startswith("PX4_")}
         full.update(env)
         with open(self.log, "wb") as fh:
@@ -207,12 +210,17 @@ class Px4Process:
         return ""
 
     def stop(self) -> None:
-        """SIGKILL to its process group, then wait for it."""
+        """SIGKILL to its process group, wait for it, and remove the lock file and server
+        socket a killed PX4 leaves in /tmp (a clean shutdown would remove them)."""
         if self.proc.poll() is None:
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(self.proc.pid, signal.SIGKILL)
         with contextlib.suppress(subprocess.TimeoutExpired):
             self.proc.wait(timeout=10)
+        if self.proc.poll() is not None:
+            for leftover in (f"/tmp/px4_lock-{self.instance}", f"/tmp/px4-sock-{self.instance}"):
+                with contextlib.suppress(OSError):
+                    os.unlink(leftover)
 
     def __enter__(self) -> "Px4Process":
         return self

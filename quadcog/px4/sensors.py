@@ -191,6 +191,8 @@ class Sensors:
         self._imu_noise = np.empty((0, 10))
         self._gps_noise = np.empty((0, 6))
         self._k = self._kg = 0
+        self._cols = np.empty((3, 2))                   # [a + g, field] in ground axes
+        self._cols[:, 1] = self.field_up
 
     def _imu(self) -> npt.NDArray[np.float64]:
         if self._k >= len(self._imu_noise):
@@ -234,9 +236,10 @@ class Sensors:
             deg C.
         """
         n = self._imu()
-        a = np.asarray(accel_ground, float)
-        f_body = R.T @ (a + np.array([0.0, 0.0, self.g]))
-        m_body = R.T @ self.field_up
+        cols = self._cols
+        cols[:, 0] = accel_ground
+        cols[2, 0] += self.g
+        f_body, m_body = (R.T @ cols).T                 # specific force and field, body axes
         h = self.home[2] + altitude
         pressure, temperature = isa_pressure(h)
         pressure += n[9]
