@@ -116,6 +116,17 @@ embedded: compile
 # time (two full firmware builds), seconds from the cache.
 crazyflie-app: $(STAMP)
 	$(PY) -m quadcog.embedded.crazyflie_report
+# PX4 in the loop (docs/px4.md): build PX4's px4_sitl_default into quadcog's cache, once per tree
+# (the tree: PX4=PATH, else $$QUADCOG_PX4, else shared/vendor/px4-autopilot.tar.xz next to the checkout); pip
+# installs the build's Python packages (quadcog.px4.tree.BUILD_PACKAGES) where missing.
+.PHONY: px4-build px4
+px4-build: $(STAMP)
+	$(PY) -c 'import sys; from quadcog.px4.tree import main; sys.exit(main())' $(PX4)
+
+# The PX4 tables (speed, identification on PX4's ULogs, side by side): out/px4/px4.md
+px4: px4-build
+	mkdir -p $(OUT)/px4
+	$(PY) bench/px4.py --out $(OUT)/px4 | tee $(OUT)/px4/px4.md
 
 # The documentation site (MkDocs, Material, mkdocstrings) into $(OUT)/docs/; the reference pages
 # (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.

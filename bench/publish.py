@@ -26,6 +26,9 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py precision-float32 [FILE]   # out/bench/precision-float32.md,
     python bench/publish.py precision-isa     [FILE]   # ... -isa.md and -fma.md
     python bench/publish.py precision-fma     [FILE]   # (python bench/precision.py)
+    python bench/publish.py px4-speed    [FILE]   # out/px4/speed.md, identify.md, side.md
+    python bench/publish.py px4-identify [FILE]   # (make px4)
+    python bench/publish.py px4-side     [FILE]
 """
 import json
 from pathlib import Path
@@ -46,7 +49,8 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            "crazyflie-real": OUT / "crazyflie" / "real-flights.md",
            "geometric": OUT / "geometric" / "geometric.json",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
-              for p in ("float32", "isa", "fma")}}
+              for p in ("float32", "isa", "fma")},
+           **{f"px4-{p}": OUT / "px4" / f"{p}.md" for p in ("speed", "identify", "side")}}
 # the page that holds each table block
 PAGES = {"bench": ROOT / "docs" / "performance.md",
          "paper": ROOT / "docs" / "tour" / "paper.md",
@@ -56,7 +60,8 @@ PAGES = {"bench": ROOT / "docs" / "performance.md",
          "crazyflie": ROOT / "docs" / "crazyflie.md",
          "crazyflie-real": ROOT / "docs" / "crazyflie.md",
          "geometric": ROOT / "docs" / "tour" / "geometric.md",
-         **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")}}
+         **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")},
+         **{f"px4-{p}": ROOT / "docs" / "px4.md" for p in ("speed", "identify", "side")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
 COPIES = {"bench": ROOT / "bench" / "results.md",
@@ -66,7 +71,8 @@ COPIES = {"bench": ROOT / "bench" / "results.md",
           "crazyflie": MEASURED / "crazyflie.md",
           "crazyflie-real": MEASURED / "crazyflie-real.md",
           "geometric": MEASURED / "geometric.json",
-          **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")}}
+          **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")},
+          **{f"px4-{p}": MEASURED / f"px4-{p}.md" for p in ("speed", "identify", "side")}}
 VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
                    r"(?P<text>[^<]*)<!-- /value -->")
 

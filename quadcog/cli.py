@@ -23,6 +23,7 @@ __all__ = ["SUBCOMMANDS", "parser", "main",
            "add_animate", "cmd_animate", "add_paper", "cmd_paper", "add_analyze", "cmd_analyze",
            "add_export", "cmd_export", "add_sweep", "cmd_sweep", "add_identify", "cmd_identify",
            "add_targets", "cmd_targets"]
+__all__ += ["add_px4", "cmd_px4"]
 
 _Subparsers = argparse._SubParsersAction  # the type of ``add_subparsers()``: for the hints
 
@@ -580,9 +581,64 @@ def cmd_targets(args: argparse.Namespace) -> None:
     print(f"written: {write_targets(rows, _out_dir(args.out))}")
 
 
+def add_px4(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog px4`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
+    p = sub.add_parser("px4", help="fly a scenario with PX4's estimator and controllers on "
+                                   "quadcog's plant, in lockstep (docs/px4.md)",
+                       description="PX4 (SITL, built into quadcog's cache) flies the "
+                                   "scenario's vehicle, CoG changes and payload events on "
+                                   "quadcog's truth plant; writes the run files, px4.ulg (PX4's "
+                                   "own log) and px4.log.")
+    p.add_argument("scenario", help="px4-hover, px4-payload, or any scenario name or file")
+    p.add_argument("--px4", default=None, metavar="PATH",
+                   help="PX4-Autopilot tree or tarball (default: $QUADCOG_PX4, else "
+                        "shared/vendor/px4-autopilot.tar.xz next to the checkout)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="folder for the results (default: out/<scenario>-px4)")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="KEY=VALUE", help="override a scenario key (as for `quadcog run`)")
+    p.add_argument("--no-build", action="store_true",
+                   help="fail instead of building PX4 when the cache has no build")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_px4)
+
+
+def cmd_px4(args: argparse.Namespace) -> None:
+    """Run `quadcog px4` (``quadcog.px4.fly``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+    from quadcog.px4 import fly, scenario_path
+    name = scenario_path(args.scenario)
+    out = _out_dir(args.out if args.out is not None
+                   else Path("out") / f"{Path(args.scenario).stem}-px4")
+    flight = fly(name, px4=args.px4, out=out, allow_build=not args.no_build,
+                 progress=not args.quiet, overrides=tuple(args.overrides))
+    r = flight.recording
+    line = (f"{flight.scenario.name}: PX4 armed at {r.armed_at:.1f} s, disarmed at "
+            f"{r.disarmed_at:.1f} s; " if r.armed_at is not None and r.disarmed_at is not None
+            else f"{flight.scenario.name}: ")
+    print(f"{line}{r.lockstep_seconds:.1f} s in lockstep in {r.wall_seconds:.1f} s of wall "
+          f"time ({flight.speed:.1f}x real time); wrote {out}/metrics.json, trajectory.csv, "
+          f"px4.ulg, px4.log")
+    if flight.partial:
+        raise QuadcogError(f"the PX4 flight is partial: {r.reason}; kept what was flown, "
+                           f"marked partial, in {out}")
+
+
 SUBCOMMANDS: list[Callable[[_Subparsers[argparse.ArgumentParser]], None]] = [
     add_tour, add_scenarios, add_run, add_animate, add_paper, add_analyze,
     add_export, add_sweep, add_sweeps, add_identify, add_targets]
+SUBCOMMANDS.append(add_px4)
 
 
 def _version() -> str:

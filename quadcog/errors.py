@@ -8,6 +8,7 @@ __all__ = ["QuadcogError", "GeneratedFilesError", "InputError", "ParameterError"
            "PhysicalConsistencyError", "MissingDependencyError", "LogError", "LogFormatError",
            "LogCRCError", "LogSignalError", "IdentificationError", "StackError",
            "FirmwareError", "FirmwareBuildError"]
+__all__ += ["Px4Error", "Px4TimeoutError"]
 
 
 class QuadcogError(Exception):
@@ -157,6 +158,17 @@ class SizeError(InputError):
 class SchedulerError(QuadcogError):
     """A Dask scheduler address of the wrong form, or a scheduler that does not answer within
     the stated time."""
+
+
+class Px4Error(QuadcogError):
+    """PX4 in the loop (quadcog.px4) failed: no PX4 tree where it was looked for, a tree that
+    does not build (the compiler's first error line), no free instance (ports taken), PX4 died
+    or refused the mission; the message names the tree, the port or the log."""
+
+
+class Px4TimeoutError(Px4Error, TimeoutError):
+    """PX4 did not connect to the simulator port, or stopped answering the lockstep (no
+    HIL_ACTUATOR_CONTROLS), within the stated wall-clock time."""
 
 
 class Interrupted(KeyboardInterrupt):
