@@ -388,8 +388,14 @@ class Vehicle:
         -------
         numpy.ndarray, shape of f
             Rotor speeds (rad/s), >= 0.
+
+        Raises
+        ------
+        InputError
+            ``f`` is not real numbers (a string, None, complex, ragged) or not finite.
         """
-        return np.sqrt(np.maximum(np.asarray(f, dtype=float), 0.0) / self.thrust_constant)
+        thrusts = array(f, "f", what="rotor thrusts (N): finite real numbers")
+        return np.sqrt(np.maximum(thrusts, 0.0) / self.thrust_constant)
 
     def hover_input(self) -> npt.NDArray[np.float64]:
         """The input that holds a level hover with this vehicle's CoG

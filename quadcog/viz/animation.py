@@ -6,7 +6,6 @@ reference (dashed) with its current point, and the time. The vehicle is magnifie
 factor, stated in the title, so that it is visible on the scale of the path; the CoG offset is
 drawn with the same factor, so it is to scale with the body.
 """
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -14,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import InputError
+from quadcog.files import read_json
 from quadcog.model import columns as col
 from quadcog.model.conventions import rotation_matrix
 
@@ -41,11 +41,7 @@ def _text(path):
 
 def _json_table(path):
     """The JSON object (dict) of a run file, or an InputError naming it."""
-    try:
-        value = json.loads(_text(path))
-    except ValueError as e:
-        raise InputError(f"{path}: not valid JSON ({e}); write the folder again with "
-                         f"`quadcog run`") from None
+    value = read_json(path, "run file")
     if not isinstance(value, dict):
         raise InputError(f"{path}: expected a JSON object, got {type(value).__name__}")
     return value
