@@ -35,7 +35,7 @@ MAX_SPAN = 86400.0                # s: a log of more than a day is not one fligh
 MAX_BODY_RATE = np.radians(4000.0)   # rad/s: above the largest gyroscope full scale in use
 GRAVITY_FRACTION = 0.3            # |mean vertical acceleration| over the hover, fraction of g
 WEIGHT_RATIO = (0.5, 3.0)         # rotor thrust over the hover / the vehicle's weight
-RATE_MARGIN = 3.0                 # angular acceleration at most this times the rotors' reach
+RATE_MARGIN = 1.0                 # angular acceleration at most this times the rotors' reach
 _SMOOTH_S = 0.1                   # s: rates averaged over this before differencing
 
 # signal: (lowest, highest, unit, what a value beyond says)
@@ -182,7 +182,8 @@ def _rates_within_reach(log, vehicle, mask):
     pos = np.abs(np.asarray(vehicle.rotor_positions))
     f_max = vehicle.max_rotor_thrust if vehicle.max_rotor_thrust > 0 else \
         WEIGHT_RATIO[1] * vehicle.m * vehicle.g / len(pos)
-    reach = np.array([pos[:, 1].sum() * f_max / vehicle.Ixx, pos[:, 0].sum() * f_max / vehicle.Iyy])
+    # the largest moment: the rotors on one side at full thrust, the others off
+    reach = 0.5 * f_max * np.array([pos[:, 1].sum() / vehicle.Ixx, pos[:, 0].sum() / vehicle.Iyy])
     t = log.t[mask]
     w = log.signal("body_rates")[mask, :2]
     n = max(int(round(_SMOOTH_S / float(np.median(np.diff(log.t))))), 1)

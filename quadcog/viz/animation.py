@@ -47,6 +47,9 @@ def _json_table(path):
     return value
 
 
+MAX_TABLE_VALUE = 1e9     # beyond any run's values; matplotlib cannot draw near 1e300
+
+
 def read_table(path: Path) -> np.ndarray:
     """The (N, 37) trajectory table of ``trajectory.csv`` or ``trajectory.parquet``.
 
@@ -117,6 +120,11 @@ def read_table(path: Path) -> np.ndarray:
                          f"a finite number)")
     if np.any(np.diff(table[:, 0]) < 0):
         raise InputError(f"{path}: the time column {names[0]!r} decreases")
+    big = np.abs(table) > MAX_TABLE_VALUE
+    if big.any():        # no run writes such a value (it stops at divergence); none can be drawn
+        r, c = np.argwhere(big)[0]
+        raise InputError(f"{path}: sample {r}, column {names[c]!r} is {table[r, c]:.6g}; a run "
+                         f"writes values within +-{MAX_TABLE_VALUE:g} (a damaged file?)")
     return table
 
 
