@@ -255,8 +255,11 @@ def check_types(logs: Sequence[FlightLog], baseline: Sequence[FlightLog],
     IdentificationError
         Naming the two logs and their types.
     """
-    named = [(log, vehicle_type(log)) for log in list(logs) + list(baseline)]
-    named = [(log, k) for log, k in named if k is not None]
+    named: list[tuple[FlightLog, str]] = []
+    for log in list(logs) + list(baseline):
+        kind = vehicle_type(log)
+        if kind is not None:
+            named.append((log, kind))
     for log, k in named[1:]:
         if not _same_type(k, named[0][1]):
             role = "baseline log" if any(log is b for b in baseline) else "log"

@@ -28,7 +28,7 @@ def _check_format(fmt, where):
     return fmt
 
 
-def _log_path(path, where):
+def _log_path(path: object, where: str) -> Path:
     """``path`` as a Path: a non-empty str or os.PathLike naming a file (not a folder)."""
     if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
         fail(where, "the path of a flight log file (str or os.PathLike)", path, LogError)
@@ -62,7 +62,7 @@ def detect_format(path: str | os.PathLike) -> str:
         The file cannot be opened; ``LogFormatError`` when it is empty or nothing identifies
         its format.
     """
-    path = _log_path(path, "detect_format: path")
+    path = Path(_log_path(path, "detect_format: path"))
     try:
         with open(path, "rb") as f:
             head = f.read(len(ULOG_MAGIC))
@@ -107,7 +107,7 @@ def read_log(path: str | os.PathLike, format: str | None = None) -> "FlightLog":
         Unreadable file; ``LogFormatError`` (damaged content), ``LogCRCError`` (Crazyflie CRC
         mismatch); ``MissingDependencyError`` for Parquet without pyarrow.
     """
-    path = _log_path(path, "read_log: path")
+    path = Path(_log_path(path, "read_log: path"))
     fmt = detect_format(path) if format is None else _check_format(format, f"read_log({path})")
     if not path.is_file():
         raise LogError(f"{path}: no such flight log file")

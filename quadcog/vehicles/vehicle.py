@@ -507,6 +507,7 @@ def _check_payloads(vehicle, where):
     if isinstance(loads, (str, bytes, dict, Payload)) or not hasattr(loads, "__iter__"):
         raise InputError(where(f"payloads must be a sequence of Payload, got {loads!r}"))
     loads = tuple(as_payload(p, where(f"payloads[{k}]")) for k, p in enumerate(loads))
+    names = [p.name for p in loads]
     seen: set[str] = set()
     for p in loads:
         if p.name in seen:
