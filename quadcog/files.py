@@ -366,8 +366,15 @@ def replacing(path: object, what: str = "output file", error: type[Exception] = 
     except OSError as e:
         raise error(f"{what} {target}: cannot write in {target.parent} ({e.strerror})") \
             from None
-    os.close(fd)
     tmp = Path(name)
+    try:
+        # mkstemp makes the file 0600: give it the mode a plain open() would (or the old file's)
+        os.fchmod(fd, stat_mod.S_IMODE(os.stat(target).st_mode) if target.exists()
+                  else 0o666 & ~_umask())
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
     try:
         try:
             yield tmp
@@ -379,6 +386,12 @@ def replacing(path: object, what: str = "output file", error: type[Exception] = 
     finally:
         with contextlib.suppress(OSError):
             tmp.unlink()
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def atomic_write(path: str | os.PathLike[str], text: str, what: str = "output file",

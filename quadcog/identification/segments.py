@@ -265,7 +265,15 @@ def block_means(index: npt.NDArray[np.int_], values: npt.NDArray[np.float64]
     numpy.ndarray, shape (B, ...)
         One mean per block, B = index.max() + 1.
     """
-    return np.asarray([values[index == b].mean(axis=0) for b in range(index.max() + 1)])
+    # one pass over the samples (a mask per block would make it quadratic in the log)
+    n_blocks = int(index.max(initial=-1)) + 1
+    keep = index >= 0
+    idx, flat = index[keep], values[keep].reshape(int(keep.sum()), -1)
+    counts = np.bincount(idx, minlength=n_blocks).astype(float)
+    sums = np.column_stack([np.bincount(idx, weights=flat[:, j], minlength=n_blocks)
+                            for j in range(flat.shape[1])]) if flat.shape[1] else \
+        np.zeros((n_blocks, 0))
+    return (sums / counts[:, None]).reshape((n_blocks,) + values.shape[1:])
 
 
 def t_quantile(dof: int) -> float:
