@@ -40,7 +40,7 @@ G = CRAZYFLIE.g
 
 
 def hover_log(mass=CRAZYFLIE.m, r=(0.002, -0.001), dt=0.01, T=20.0, time_scale=1.0,
-              motors=None, a_z=None, full=False, rates=None, meta=None, fmt="csv"):
+              motors=None, a_z=None, full=False, rates=None, meta=None, fmt="csv", roll=None):
     """A take-off, 0.5 m hover and landing whose rotor thrusts balance ``mass`` with the CoG
     at ``r``: the moment balance [U2, U3] = m g [y_G, -x_G] through the mixer."""
     t = np.arange(0, T, dt)
@@ -55,7 +55,8 @@ def hover_log(mass=CRAZYFLIE.m, r=(0.002, -0.001), dt=0.01, T=20.0, time_scale=1
     if a_z is not None:
         s["acceleration"] = np.column_stack([np.zeros((n, 2)), np.full(n, a_z)])
     if full or rates is not None:
-        s.update(velocity=np.zeros((n, 3)), roll=np.zeros(n), pitch=np.zeros(n),
+        s.update(velocity=np.zeros((n, 3)), roll=np.zeros(n) if roll is None else roll(t),
+                 pitch=np.zeros(n),
                  yaw=np.zeros(n), body_rates=np.zeros((n, 3)) if rates is None else rates(t))
     return FlightLog("hover.csv", fmt, t * time_scale, s, {}, meta or {})
 
@@ -81,6 +82,12 @@ IMPOSSIBLE = [
     ("rates in deg/s", dict(rates=lambda t: np.column_stack(
         [np.degrees(1.0 * np.sin(2 * np.pi * 2 * t)), np.zeros(len(t)), np.zeros(len(t))])),
      r"'body_rates_p_rad_s'.*deg/s"),
+    # a 0.6 deg roll wobble at 1 Hz, its rate logged in deg/s: the rates turn 57 times too far
+    ("small rates in deg/s", dict(roll=lambda t: 0.01 * np.sin(2 * np.pi * t),
+                                  rates=lambda t: np.column_stack(
+                                      [np.degrees(0.01 * 2 * np.pi * np.cos(2 * np.pi * t)),
+                                       np.zeros(len(t)), np.zeros(len(t))])),
+     r"'body_rates_p_rad_s'.*more in roll.*deg/s"),
 ]
 
 
@@ -151,11 +158,16 @@ def test_property_entry_points_refuse_hostile_arguments(value):
                                                               max_speed=value)]
     if value is not None:
         calls += [lambda: identify(log, baseline=value), lambda: identify(log, rotor_model=value)]
-    for call in calls:
-        try:
-            call()
-        except QuadcogError:
-            pass
+    here = os.getcwd()
+    os.chdir(tempfile.mkdtemp(prefix="quadcog-hostile-"))   # a str value is a file name
+    try:
+        for call in calls:
+            try:
+                call()
+            except QuadcogError:
+                pass
+    finally:
+        os.chdir(here)
     with pytest.raises(QuadcogError):
         log.has(value) if not isinstance(value, str) else log.signal(value + "?")
 
@@ -374,3 +386,13 @@ def test_compiled_projection_brings_a_state_outside_the_cone_onto_it():
         assert np.allclose(out[0:3] / np.linalg.norm(out[0:3]), d)
         assert np.allclose(out, law.project_numpy(c.copy()))
         assert np.array_equal(out[4:], c[4:])
+
+
+def test_rates_that_agree_with_the_angles_are_accepted():
+    """The control of the deg/s case: the same wobble with its rate in rad/s (p = d roll/dt
+    at zero pitch, the ZYX kinematics) is identified."""
+    res = identify(hover_log(roll=lambda t: 0.01 * np.sin(2 * np.pi * t),
+                             rates=lambda t: np.column_stack(
+                                 [0.01 * 2 * np.pi * np.cos(2 * np.pi * t),
+                                  np.zeros(len(t)), np.zeros(len(t))])), method="static")
+    assert res.mass == pytest.approx(CRAZYFLIE.m, rel=1e-3)

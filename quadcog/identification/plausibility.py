@@ -14,7 +14,9 @@ the log and the column, instead of giving a number that means nothing.
   ``WEIGHT_RATIO`` (motors off, a vehicle standing or carried by hand, or a rotor model of
   another vehicle fail here), and the angular
   acceleration of the logged rates must be one the airframe's rotors can give
-  (``RATE_MARGIN``: deg/s read as rad/s fails here);
+  (``RATE_MARGIN``) and the rates integrated over ``AGREE_SECONDS`` must turn the logged
+  roll and pitch as far as they turn (ZYX kinematics, to ``AGREE_TOLERANCE``): deg/s read as
+  rad/s fails here;
 - the vehicle: logs and baseline logs that name their vehicle (a Crazyflie uSD log, a PX4
   ULog's hardware, ``meta["vehicle"]``) must name the same type (``vehicle_type``).
 """
@@ -28,7 +30,7 @@ from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_BODY_RATE",
-           "column_name", "check_log", "hover_physics", "vehicle_type", "check_types"]
+           "AGREE_SECONDS", "AGREE_TOLERANCE", "column_name", "check_log", "hover_physics", "vehicle_type", "check_types"]
 
 RATE_HZ = (2.0, 1e5)              # a logger's sample rate (median step), Hz
 MAX_SPAN = 86400.0                # s: a log of more than a day is not one flight
@@ -37,6 +39,8 @@ GRAVITY_FRACTION = 0.3            # |mean vertical acceleration| over the hover,
 WEIGHT_RATIO = (0.5, 3.0)         # rotor thrust over the hover / the vehicle's weight
 RATE_MARGIN = 1.0                 # angular acceleration at most this times the rotors' reach
 _SMOOTH_S = 0.1                   # s: rates averaged over this before differencing
+AGREE_SECONDS = 0.5               # s: the rates integrated over this ...
+AGREE_TOLERANCE = 0.3             # rad: ... turn the logged roll and pitch to within this
 
 # signal: (lowest, highest, unit, what a value beyond says)
 LIMITS = {
@@ -174,6 +178,8 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
             f"{WEIGHT_RATIO[1]:g} times (another vehicle's log, or motor outputs in other units?)")
     if log.has("body_rates"):
         _rates_within_reach(log, vehicle, mask)
+        if log.has("roll") and log.has("pitch"):
+            _rates_agree_with_angles(log, mask)
 
 
 def _rates_within_reach(log, vehicle, mask):
@@ -205,6 +211,35 @@ def _rates_within_reach(log, vehicle, mask):
                 f"{worst[i]:.3g} rad/s^2 over the hover, {worst[i] / reach[i]:.3g} times the "
                 f"angular acceleration the rotors of {vehicle.name!r} can give "
                 f"({reach[i]:.3g} rad/s^2); are the rates in deg/s? (quadcog reads rad/s)")
+
+
+def _rates_agree_with_angles(log, mask):
+    """The roll and pitch the body rates integrate to (ZYX kinematics) against the logged
+    angles, over ``AGREE_SECONDS``: rates in deg/s read as rad/s turn 57 times too far."""
+    t = log.t[mask]
+    if len(t) < 3:
+        return
+    phi, theta = log.signal("roll")[mask], log.signal("pitch")[mask]
+    p, q, r = log.signal("body_rates")[mask].T
+    rates = np.column_stack([p + np.tan(theta) * (q * np.sin(phi) + r * np.cos(phi)),
+                             q * np.cos(phi) - r * np.sin(phi)])
+    h = np.diff(t)
+    turned = np.vstack([np.zeros(2), np.cumsum(0.5 * (rates[1:] + rates[:-1]) * h[:, None],
+                                               axis=0)])
+    angles = np.unwrap(np.column_stack([phi, theta]), axis=0)
+    n = max(int(round(AGREE_SECONDS / float(np.median(h)))), 1)
+    if len(t) <= n:
+        return
+    contiguous = (t[n:] - t[:-n]) < 2 * AGREE_SECONDS      # not across two plateaus
+    miss = np.abs((turned[n:] - turned[:-n]) - (angles[n:] - angles[:-n]))[contiguous]
+    if miss.size and miss.max() > AGREE_TOLERANCE:
+        j = int(np.argmax(miss.max(axis=0)))
+        name = ("roll", "pitch")[j]
+        raise IdentificationError(
+            f"{log.source}: {column_name(log, 'body_rates', j)}: the body rates turn the "
+            f"vehicle {float(miss.max()):.3g} rad more in {name} over {AGREE_SECONDS:g} s than "
+            f"{column_name(log, name)} shows (expected within {AGREE_TOLERANCE:g} rad): are "
+            "the rates in deg/s? (quadcog reads rad/s)")
 
 
 def vehicle_type(log: FlightLog) -> str | None:
