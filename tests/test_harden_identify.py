@@ -396,3 +396,42 @@ def test_rates_that_agree_with_the_angles_are_accepted():
                                  [0.01 * 2 * np.pi * np.cos(2 * np.pi * t),
                                   np.zeros(len(t)), np.zeros(len(t))])), method="static")
     assert res.mass == pytest.approx(CRAZYFLIE.m, rel=1e-3)
+
+
+@settings(**SETTINGS)
+@given(seed=st.integers(0, 2 ** 32 - 1))
+def test_property_payload_sample_in_one_pass_equals_the_tracks(seed):
+    """PayloadProfile.sample (one pass over the events, linear) against the sum over every
+    payload's track sampled at each time (the earlier payloads x samples form), for random
+    attach, move (instant or sliding) and drop events at distinct times."""
+    from quadcog.vehicles.payload import Payload
+    rng = np.random.default_rng(seed)
+    carried = (Payload(0.01, (0.01, 0.0, 0.0), (0.01, 0.02, 0.0), "c"),)
+    ev, on, busy, t0 = [], ["c"], {}, 0.0
+    for k in range(int(rng.integers(1, 12))):
+        t0 += float(rng.uniform(0.01, 0.5))
+        action = rng.choice(["attach", "move", "drop"]) if on else "attach"
+        if action == "attach":
+            ev.append(dict(t=t0, action="attach", name=f"p{k}", mass=float(rng.uniform(1e-3, 0.1)),
+                           position=rng.uniform(-0.1, 0.1, 3).tolist(),
+                           size=rng.uniform(0, 0.05, 3).tolist()))
+            on.append(f"p{k}")
+            continue
+        name = on[int(rng.integers(len(on)))]
+        if busy.get(name, -1.0) > t0:
+            continue
+        if action == "drop":
+            on.remove(name)
+            ev.append(dict(t=t0, action="drop", name=name))
+        else:
+            ramp = float(rng.choice([0.0, rng.uniform(0, 0.4)]))
+            ev.append(dict(t=t0, action="move", name=name,
+                           position=rng.uniform(-0.1, 0.1, 3).tolist(), ramp=ramp))
+            busy[name] = t0 + ramp
+    profile = PayloadProfile(ev, carried)
+    t = np.sort(np.concatenate([rng.uniform(-0.1, t0 + 1, 50), [e["t"] for e in ev],
+                                [e["t"] + e.get("ramp", 0.0) for e in ev]]))
+    tracks = np.zeros((t.size, 10))
+    for p, r, mask in profile._tracks(t):
+        tracks[mask] += p.inertial_parameters(r[mask])
+    assert np.allclose(profile.sample(t), tracks, rtol=1e-12, atol=1e-15)
