@@ -30,7 +30,8 @@ from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_BODY_RATE",
-           "AGREE_SECONDS", "AGREE_TOLERANCE", "column_name", "check_log", "hover_physics", "vehicle_type", "check_types"]
+           "AGREE_SECONDS", "AGREE_TOLERANCE", "column_name", "check_log", "hover_physics",
+           "vehicle_type", "check_types"]
 
 RATE_HZ = (2.0, 1e5)              # a logger's sample rate (median step), Hz
 MAX_SPAN = 86400.0                # s: a log of more than a day is not one flight
