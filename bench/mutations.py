@@ -178,8 +178,8 @@ MUTATIONS = [
              "if not 0.05 <= 1.0 / step <= RATE_HZ[1]:",
              "identification accepts a time column in milliseconds (0.1 Hz)"),
     Mutation("identify_rates_against_angles_off", "quadcog/identification/plausibility.py",
-             "if miss.size and miss.max() > AGREE_TOLERANCE:",
-             "if miss.size and miss.max() > 100 * AGREE_TOLERANCE:",
+             "        if miss.size and miss.max() > AGREE_TOLERANCE:",
+             "        if miss.size and miss.max() > 100 * AGREE_TOLERANCE:",
              "identification accepts body rates in deg/s that turn 57 times further than the "
              "logged angles"),
     Mutation("payload_after_end_silent", "quadcog/sim/prepare.py",

@@ -40,7 +40,7 @@ GRAVITY_FRACTION = 0.3            # |mean vertical acceleration| over the hover,
 WEIGHT_RATIO = (0.5, 3.0)         # rotor thrust over the hover / the vehicle's weight
 RATE_MARGIN = 1.0                 # angular acceleration at most this times the rotors' reach
 _SMOOTH_S = 0.1                   # s: rates averaged over this before differencing
-AGREE_SECONDS = 0.5               # s: the rates integrated over this ...
+AGREE_SECONDS = 0.5               # s: the rates integrated over this (and 1/5, 1/2 of it) ...
 AGREE_TOLERANCE = 0.3             # rad: ... turn the logged roll and pitch to within this
 
 # signal: (lowest, highest, unit, what a value beyond says)
@@ -228,19 +228,22 @@ def _rates_agree_with_angles(log, mask):
     turned = np.vstack([np.zeros(2), np.cumsum(0.5 * (rates[1:] + rates[:-1]) * h[:, None],
                                                axis=0)])
     angles = np.unwrap(np.column_stack([phi, theta]), axis=0)
-    n = max(int(round(AGREE_SECONDS / float(np.median(h)))), 1)
-    if len(t) <= n:
-        return
-    contiguous = (t[n:] - t[:-n]) < 2 * AGREE_SECONDS      # not across two plateaus
-    miss = np.abs((turned[n:] - turned[:-n]) - (angles[n:] - angles[:-n]))[contiguous]
-    if miss.size and miss.max() > AGREE_TOLERANCE:
-        j = int(np.argmax(miss.max(axis=0)))
-        name = ("roll", "pitch")[j]
-        raise IdentificationError(
-            f"{log.source}: {column_name(log, 'body_rates', j)}: the body rates turn the "
-            f"vehicle {float(miss.max()):.3g} rad more in {name} over {AGREE_SECONDS:g} s than "
-            f"{column_name(log, name)} shows (expected within {AGREE_TOLERANCE:g} rad): are "
-            "the rates in deg/s? (quadcog reads rad/s)")
+    # over several spans, so that no rotation period hides a turn (a span of one period
+    # integrates a sine to 0)
+    for span in (0.2 * AGREE_SECONDS, 0.5 * AGREE_SECONDS, AGREE_SECONDS):
+        n = max(int(round(span / float(np.median(h)))), 1)
+        if len(t) <= n:
+            continue
+        contiguous = (t[n:] - t[:-n]) < 2 * span        # not across two plateaus
+        miss = np.abs((turned[n:] - turned[:-n]) - (angles[n:] - angles[:-n]))[contiguous]
+        if miss.size and miss.max() > AGREE_TOLERANCE:
+            j = int(np.argmax(miss.max(axis=0)))
+            name = ("roll", "pitch")[j]
+            raise IdentificationError(
+                f"{log.source}: {column_name(log, 'body_rates', j)}: the body rates turn the "
+                f"vehicle {float(miss.max()):.3g} rad more in {name} over {span:g} s than "
+                f"{column_name(log, name)} shows (expected within {AGREE_TOLERANCE:g} rad): "
+                "are the rates in deg/s? (quadcog reads rad/s)")
 
 
 def vehicle_type(log: FlightLog) -> str | None:
