@@ -510,6 +510,8 @@ def read_json(path: str | os.PathLike[str], what: str = "JSON file",
         raise error(f"{what}: expected a file name (str or os.PathLike), got "
                     f"{type(path).__name__} {path!r:.60}")
     p = Path(path)
+    if p.exists() and not p.is_file():      # a folder, a FIFO or a device: never read
+        raise error(f"{p}: is not a regular file; expected a {what}")
     try:
         size = p.stat().st_size
         if size > MAX_JSON_BYTES:

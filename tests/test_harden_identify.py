@@ -5,6 +5,7 @@ compiled projection of payload_adaptive from outside the consistency cone). Orac
 written here: the firmware's units (deg/s, V), the thrust balance m = sum f / g, the cone
 m r^T Sigma_O^-1 r <= 1 - margin with Sigma_O = tr(I_O)/2 - I_O (Wensing et al. 2017)."""
 import os
+from pathlib import Path
 import stat
 import struct
 import tempfile
@@ -176,6 +177,16 @@ def test_property_entry_points_refuse_hostile_arguments(value):
 def test_rotor_speeds_refuse_what_is_not_a_thrust(bad):
     with pytest.raises(InputError, match="f"):
         CRAZYFLIE.rotor_speeds(bad)
+
+
+def test_a_fifo_or_a_device_is_never_read_as_a_log_or_a_json(tmp_path):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)                       # opening it to read would block for ever
+    for path in (fifo, Path("/dev/zero")):
+        with pytest.raises(LogError, match="not a regular file"):
+            read_log(path)
+        with pytest.raises(IdentificationError, match="not a regular file"):
+            identified_cog(path)
 
 
 def test_identified_json_of_absurd_shape_is_refused(tmp_path):

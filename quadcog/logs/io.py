@@ -38,6 +38,9 @@ def _log_path(path: object, where: str) -> Path:
     p = Path(text)
     if p.is_dir():
         raise LogError(f"{p}: is a folder; expected a flight log file")
+    if p.exists() and not p.is_file():     # a FIFO or a device would block or never end
+        raise LogError(f"{p}: is not a regular file (a FIFO, a device or a socket); expected "
+                       "a flight log file")
     return p
 
 
