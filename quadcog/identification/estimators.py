@@ -37,6 +37,7 @@ from quadcog.identification.segments import (
     block_mean_ci95,
     block_means,
     body_velocity,
+    check_arguments,
     hover_window,
     rotor_thrusts,
     speed_corrected,
@@ -47,6 +48,7 @@ from quadcog.logs.flightlog import FlightLog
 from quadcog.model.conventions import B_U, rotation_matrix
 from quadcog.model.functions import load
 from quadcog.model.parameters import with_cog
+from quadcog.validate import nonnegative, positive
 from quadcog.vehicles.rotor_model import RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -179,6 +181,7 @@ def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | s
     IdentificationError
         Missing signals or too few hover samples.
     """
+    check_arguments("static_balance", log, vehicle)
     window = hover_window(log) if window is None else window
     f_all, rotor, _ = rotor_thrusts(log, vehicle, rotor_model)
     notes: list[str] = []
@@ -279,6 +282,11 @@ def regression(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str |
     IdentificationError
         Missing signals or too few samples.
     """
+    check_arguments("regression", log, vehicle)
+    filter_rate = positive(filter_rate, "regression: filter_rate", "1/s", IdentificationError)
+    min_tilt = nonnegative(min_tilt, "regression: min_tilt", "rad", IdentificationError)
+    if mass is not None:
+        mass = positive(mass, "regression: mass", "kg", IdentificationError)
     missing = missing_for(log, REGRESSION_SIGNALS)
     if missing:
         raise IdentificationError(f"{log.source}: the whole-flight least squares needs "
