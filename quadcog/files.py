@@ -251,14 +251,18 @@ class RunFiles:
             if not tmp.is_file():
                 raise QuadcogError(f"{self.out / name}: was not written (internal error)")
         names = list(self._pending)
+        for name in names:                  # only regular files are replaced
+            if os.path.lexists(self.out / name):
+                output_path(self.out / name, "run file", QuadcogError)
         marked = self.owned and COMPLETE_MARKER in self.owned
         if marked:
             with contextlib.suppress(FileNotFoundError):
                 (self.out / COMPLETE_MARKER).unlink()
         for stale in self.owned:
             if stale not in self._pending:
-                with contextlib.suppress(FileNotFoundError, IsADirectoryError):
-                    (self.out / stale).unlink()
+                with contextlib.suppress(OSError):     # a link, a folder, ...: left alone
+                    if stat_mod.S_ISREG(os.lstat(self.out / stale).st_mode):
+                        (self.out / stale).unlink()
         last = [n for n in names if n == COMPLETE_MARKER] if marked else []
         for name in [n for n in names if n not in last] + last:
             os.replace(self._pending[name], self.out / name)

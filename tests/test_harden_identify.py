@@ -446,3 +446,15 @@ def test_property_payload_sample_in_one_pass_equals_the_tracks(seed):
     for p, r, mask in profile._tracks(t):
         tracks[mask] += p.inertial_parameters(r[mask])
     assert np.allclose(profile.sample(t), tracks, rtol=1e-12, atol=1e-15)
+
+
+def test_a_run_folder_never_replaces_a_link_with_a_file(tmp_path):
+    from quadcog.files import RunFiles
+    real = tmp_path / "real.json"
+    real.write_text("keep")
+    (tmp_path / "metrics.json").symlink_to(real)
+    with pytest.raises(QuadcogError, match="symbolic link"):
+        with RunFiles(tmp_path) as files:
+            files.path("metrics.json").write_text("{}")
+    assert (tmp_path / "metrics.json").is_symlink() and real.read_text() == "keep"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["metrics.json", "real.json"]
