@@ -289,6 +289,11 @@ def check_types(logs: Sequence[FlightLog], baseline: Sequence[FlightLog],
     vehicle : Vehicle, optional
         A preset the user named (its name's first word is its type).
 
+    Returns
+    -------
+    None
+        The logs agree.
+
     Raises
     ------
     IdentificationError

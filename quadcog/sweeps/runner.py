@@ -207,7 +207,10 @@ def _dask(jobs, workers, scheduler, fingerprint, on_done):
         else:
             with children_without_sigint():     # Ctrl-C reaches this process only
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, silence_logs=logging.ERROR,
+                                       # a failed task reaches us as its exception;
+                                       # the workers' own log lines (a heartbeat that
+                                       # finds the scheduler closed on Ctrl-C) are noise
+                                       dashboard_address=None, silence_logs=logging.CRITICAL,
                                        preload=["quadcog.sweeps.worker_setup"])
                 client = Client(cluster)
         with client:
