@@ -49,6 +49,8 @@ DEFAULT_TESTS = [
     "tests/test_regressor.py", "tests/test_lie.py", "tests/test_bad_input.py",
     "tests/test_simulate.py", "tests/test_controllers.py", "tests/test_inertial_pinocchio.py",
     "tests/test_inertial_model.py", "tests/test_inertial_consistency.py",
+    # the newer layers: log readers, identification, payloads, the payload law (issue 33)
+    "tests/test_harden_identify.py",
 ]
 
 
@@ -149,6 +151,41 @@ MUTATIONS = [
              "along the velocity in dynamics and truth_dynamics",
              bypass=(("derive/latex.py", 'raise AssertionError("linearization at the trim is '
                       'not -M^{-1}[dg_G/deta, D]")', "pass"),)),
+    # -- the newer layers (issue 33): log readers, identification, payloads, the payload law
+    Mutation("crazyflie_gyro_deg_as_rad", "quadcog/logs/crazyflie.py",
+             "s[\"body_rates\"] = np.column_stack([raw[n] for n in names]) * _DEG",
+             "s[\"body_rates\"] = np.column_stack([raw[n] for n in names])",
+             "the Crazyflie reader takes gyro.x/y/z (deg/s) as rad/s"),
+    Mutation("crazyflie_vbat_as_mv", "quadcog/logs/crazyflie.py",
+             "s[\"battery_voltage\"] = raw[\"pm.vbat\"].copy()",
+             "s[\"battery_voltage\"] = raw[\"pm.vbat\"] * 1e-3",
+             "the Crazyflie reader takes pm.vbat (V) as millivolts"),
+    Mutation("mass_change_sign", "quadcog/identification/core.py",
+             "mass_change, samples = m - mb, samples + sb",
+             "mass_change, samples = mb - m, samples + sb",
+             "identify's mass_change with its sign flipped (baseline minus flights)"),
+    Mutation("payload_project_short_of_the_cone", "quadcog/controllers/payload_adaptive.py",
+             "r = ca.if_else(q > keep, r * ca.sqrt(keep / ca.fmax(q, 1e-300)), r)",
+             "r = ca.if_else(q > keep, r * ca.sqrt(ca.sqrt(keep / ca.fmax(q, 1e-300))), r)",
+             "payload_adaptive's compiled project() scales r_hat only part of the way, "
+             "leaving it outside the consistency cone"),
+    Mutation("identify_gravity_check_off", "quadcog/identification/plausibility.py",
+             "if abs(mean_a) > GRAVITY_FRACTION * g:",
+             "if abs(mean_a) > 10 * GRAVITY_FRACTION * g:",
+             "identification accepts a vertical acceleration that counts gravity (+-g)"),
+    Mutation("identify_time_unit_check_off", "quadcog/identification/plausibility.py",
+             "if not RATE_HZ[0] <= 1.0 / step <= RATE_HZ[1] or span > MAX_SPAN:",
+             "if not 0.05 <= 1.0 / step <= RATE_HZ[1]:",
+             "identification accepts a time column in milliseconds (0.1 Hz)"),
+    Mutation("identify_rates_against_angles_off", "quadcog/identification/plausibility.py",
+             "        if miss.size and miss.max() > AGREE_TOLERANCE:",
+             "        if miss.size and miss.max() > 100 * AGREE_TOLERANCE:",
+             "identification accepts body rates in deg/s that turn 57 times further than the "
+             "logged angles"),
+    Mutation("payload_after_end_silent", "quadcog/sim/prepare.py",
+             "if duration is not None and e.t > duration:",
+             "if duration is not None and e.t > 10 * duration:",
+             "a payload event after the end of the run is accepted silently"),
 ]
 
 PROBE = '''"""Loaded by bench/mutations.py with -p: records which quadcog, derive and report this

@@ -517,12 +517,15 @@ def cmd_identify(args: argparse.Namespace) -> None:
     args : argparse.Namespace
         The parsed command line.
     """
-    from quadcog.files import RunFiles, atomic_write, strict_json
+    from quadcog.files import RunFiles, atomic_write, output_path, strict_json
     from quadcog.identification import identify
     from quadcog.identification.figure import plot_identification
-    for path in list(args.logs) + list(args.baseline or []):
+    inputs = list(args.logs) + list(args.baseline or [])
+    for path in inputs:
         if not path.is_file():
             raise QuadcogError(f"{path}: no such log file")
+    if args.json is not None:      # refused before the work: a link, a FIFO, a device, a log
+        output_path(args.json, "--json", protect=inputs)
     result = identify(args.logs, vehicle=args.vehicle, baseline=args.baseline,
                       method=args.method, rotor_model=args.rotor_model)
     print(result.summary())
@@ -534,7 +537,7 @@ def cmd_identify(args: argparse.Namespace) -> None:
             plot_identification(result, files.path(path.name), title=title)
         print(f"wrote {path}")
     if args.json is not None:
-        atomic_write(args.json, strict_json(result.as_json()))
+        atomic_write(args.json, strict_json(result.as_json()), "--json", protect=inputs)
         print(f"wrote {args.json}")
 
 

@@ -17,6 +17,7 @@ import os
 from pathlib import Path
 import platform
 import signal
+import stat as stat_mod
 import threading
 from types import TracebackType
 from typing import Any, Literal, TextIO
@@ -24,10 +25,12 @@ from typing import Any, Literal, TextIO
 import numpy as np
 import numpy.typing as npt
 
-from quadcog.errors import QuadcogError
+from quadcog.errors import InputError, QuadcogError
 
 __all__ = ["CSV_BLOCK", "CSV_DECIMALS", "plain_value", "strict_json", "rounded", "write_csv",
-           "plot_text", "RunFiles", "atomic_write", "cpu_model", "run_stamp"]
+           "plot_text", "RunFiles", "atomic_write", "atomic_write_bytes", "output_path",
+           "replacing", "read_json", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "cpu_model",
+           "run_stamp"]
 
 CSV_BLOCK = 1024            # rows formatted at a time
 CSV_DECIMALS = 10           # values are rounded to this many decimals ...
@@ -248,14 +251,18 @@ class RunFiles:
             if not tmp.is_file():
                 raise QuadcogError(f"{self.out / name}: was not written (internal error)")
         names = list(self._pending)
+        for name in names:                  # only regular files are replaced
+            if os.path.lexists(self.out / name):
+                output_path(self.out / name, "run file", QuadcogError)
         marked = self.owned and COMPLETE_MARKER in self.owned
         if marked:
             with contextlib.suppress(FileNotFoundError):
                 (self.out / COMPLETE_MARKER).unlink()
         for stale in self.owned:
             if stale not in self._pending:
-                with contextlib.suppress(FileNotFoundError, IsADirectoryError):
-                    (self.out / stale).unlink()
+                with contextlib.suppress(OSError):     # a link, a folder, ...: left alone
+                    if stat_mod.S_ISREG(os.lstat(self.out / stale).st_mode):
+                        (self.out / stale).unlink()
         last = [n for n in names if n == COMPLETE_MARKER] if marked else []
         for name in [n for n in names if n not in last] + last:
             os.replace(self._pending[name], self.out / name)
@@ -266,28 +273,265 @@ class RunFiles:
                 tmp.unlink()
 
 
-def atomic_write(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename (all or nothing).
+def output_path(path: object, what: str = "output file", error: type[Exception] = InputError,
+                protect: Sequence[str | os.PathLike[str]] = ()) -> Path:
+    """``path`` checked as a file that may be replaced: a non-empty str or os.PathLike whose
+    folder exists, that is not a folder, not a symbolic link, FIFO, device or socket (only a
+    regular file is ever replaced), and none of ``protect`` (the command's own input files).
+
+    Parameters
+    ----------
+    path : object
+        What the caller passed.
+    what : str
+        What the file is, for the message (``"--json"``, ``"write_log path"``).
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+    protect : sequence of str or os.PathLike
+        Files that must not be overwritten (the inputs).
+
+    Returns
+    -------
+    pathlib.Path
+        The path.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) naming the path and why it is refused; nothing is written.
+    """
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
+        raise error(f"{what}: expected a file name (str or os.PathLike), got "
+                    f"{type(path).__name__} {path!r:.60}")
+    target = Path(os.fspath(path))
+    if not str(path) or target.name in ("", ".", ".."):
+        raise error(f"{what}: expected a file name, got {str(path)!r}")
+    folder = target.parent
+    if not folder.is_dir():
+        raise error(f"{what} {target}: the folder {folder} does not exist (create it first)")
+    try:
+        st = os.lstat(target)
+    except FileNotFoundError:
+        st = None
+    except OSError as e:
+        raise error(f"{what} {target}: cannot be checked ({e.strerror})") from None
+    if st is not None:
+        mode = st.st_mode
+        kinds = ((stat_mod.S_ISDIR, "a folder"), (stat_mod.S_ISLNK, "a symbolic link"),
+                 (stat_mod.S_ISFIFO, "a FIFO (named pipe)"), (stat_mod.S_ISCHR, "a device"),
+                 (stat_mod.S_ISBLK, "a device"), (stat_mod.S_ISSOCK, "a socket"))
+        for test, kind in kinds:
+            if test(mode):
+                raise error(f"{what} {target}: is {kind}; quadcog replaces only regular files "
+                            "(give the name of a new or regular file)")
+        for other in protect:
+            with contextlib.suppress(OSError):
+                if os.path.samefile(target, other):
+                    raise error(f"{what} {target}: is the input file {other}; it would be "
+                                "overwritten (give another file name)")
+    return target
+
+
+@contextlib.contextmanager
+def replacing(path: object, what: str = "output file", error: type[Exception] = InputError,
+              protect: Sequence[str | os.PathLike[str]] = ()) -> Iterator[Path]:
+    """Write a file all or nothing: yields a hidden temporary path in the same folder (same
+    suffix), renamed onto ``path`` when the block ends without an exception (Ctrl-C held off
+    during the rename); on any exception the temporary file is removed and ``path`` keeps
+    what it had. ``path`` is checked first (``output_path``).
+
+    Parameters
+    ----------
+    path : object
+        The file to write.
+    what : str
+        What the file is, for messages.
+    error : type, optional
+        Exception class raised for a refused path or a failed write (default InputError).
+    protect : sequence of str or os.PathLike
+        Input files that must not be overwritten.
+
+    Yields
+    ------
+    pathlib.Path
+        Where to write the content.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) for a refused path, or an OSError while writing (disk full, no
+        permission), naming the file.
+    """
+    import tempfile
+    target = output_path(path, what, error, protect)
+    try:
+        fd, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.",
+                                    suffix=f".partial{target.suffix}")
+    except OSError as e:
+        raise error(f"{what} {target}: cannot write in {target.parent} ({e.strerror})") \
+            from None
+    tmp = Path(name)
+    try:
+        # mkstemp makes the file 0600: give it the mode a plain open() would (or the old file's)
+        os.fchmod(fd, stat_mod.S_IMODE(os.stat(target).st_mode) if target.exists()
+                  else 0o666 & ~_umask())
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+    try:
+        try:
+            yield tmp
+            with _no_interrupt():
+                output_path(target, what, error, protect)   # nothing took its place meanwhile
+                os.replace(tmp, target)
+        except OSError as e:
+            raise error(f"{what} {target}: cannot be written ({e.strerror or e})") from None
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def atomic_write(path: str | os.PathLike[str], text: str, what: str = "output file",
+                 error: type[Exception] = InputError,
+                 protect: Sequence[str | os.PathLike[str]] = ()) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename (all or nothing;
+    ``replacing``).
 
     Parameters
     ----------
     path : str or os.PathLike
-        The file to write.
+        The file to write: a new or a regular file (``output_path``).
     text : str
         Its new content.
+    what : str
+        What the file is, for messages.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+    protect : sequence of str or os.PathLike
+        Input files that must not be overwritten.
 
     Returns
     -------
     None
         ``path`` holds ``text`` after the rename.
     """
-    tmp = Path(str(path) + ".tmp")
+    with replacing(path, what, error, protect) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, what: str = "output file",
+                       error: type[Exception] = InputError,
+                       protect: Sequence[str | os.PathLike[str]] = ()) -> None:
+    """Write ``data`` to ``path`` all or nothing (``replacing``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write: a new or a regular file (``output_path``).
+    data : bytes
+        Its new content.
+    what : str
+        What the file is, for messages.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+    protect : sequence of str or os.PathLike
+        Input files that must not be overwritten.
+
+    Returns
+    -------
+    None
+        ``path`` holds ``data`` after the rename.
+    """
+    with replacing(path, what, error, protect) as tmp:
+        tmp.write_bytes(data)
+
+
+MAX_JSON_BYTES = 64 * 2 ** 20      # the JSON files quadcog reads are kilobytes
+MAX_JSON_DEPTH = 64                # nesting: quadcog's own files nest 3 deep
+
+
+def _reject_constant(name):
+    raise ValueError(f"{name} is not a JSON number (JSON has no NaN or Infinity)")
+
+
+def _depth(text: str) -> int:
+    """The deepest nesting of brackets in JSON text, outside strings (a linear scan)."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for ch in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif ch in "]}":
+            depth -= 1
+    return deepest
+
+
+def read_json(path: str | os.PathLike[str], what: str = "JSON file",
+              error: type[Exception] = InputError) -> Any:
+    """The data of a JSON file written by quadcog (or by hand), refused with ``error``
+    naming the file when it is not such data: unreadable, not UTF-8, not JSON, over
+    ``MAX_JSON_BYTES``, nested deeper than ``MAX_JSON_DEPTH`` (Python's parser would recurse
+    until RecursionError), holding NaN or Infinity, or an integer of more digits than Python
+    converts (4300).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What the file is, for the message.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+
+    Returns
+    -------
+    object
+        The parsed JSON value.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) naming the file and what is wrong.
+    """
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or not str(path):
+        raise error(f"{what}: expected a file name (str or os.PathLike), got "
+                    f"{type(path).__name__} {path!r:.60}")
+    p = Path(path)
+    if p.exists() and not p.is_file():      # a folder, a FIFO or a device: never read
+        raise error(f"{p}: is not a regular file; expected a {what}")
     try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
+        size = p.stat().st_size
+        if size > MAX_JSON_BYTES:
+            raise error(f"{p}: {size:,} bytes; a {what} is at most {MAX_JSON_BYTES:,}")
+        text = p.read_bytes().decode("utf-8")
+    except OSError as e:
+        raise error(f"{p}: cannot read the {what} ({e.strerror})") from None
+    except UnicodeDecodeError as e:
+        raise error(f"{p}: the {what} is not UTF-8 text (byte {e.start})") from None
+    if _depth(text) > MAX_JSON_DEPTH:
+        raise error(f"{p}: the {what} nests more than {MAX_JSON_DEPTH} levels deep; not a "
+                    "file quadcog writes")
+    try:
+        return json.loads(text, parse_constant=_reject_constant)
+    except (ValueError, RecursionError) as e:       # bad JSON, huge integers
+        raise error(f"{p}: the {what} is not valid JSON ({str(e)[:200]})") from None
 
 
 def cpu_model() -> str:

@@ -8,6 +8,8 @@ quadcog's worker processes: on Linux it asks the kernel for SIGKILL when the par
 (``prctl(PR_SET_PDEATHSIG)``), elsewhere a daemon thread polls the parent's pid; either way a
 worker does not outlive a killed ``quadcog sweep`` by more than ``WATCHDOG_PERIOD`` seconds.
 """
+from collections.abc import Iterator
+import contextlib
 import ctypes
 import ctypes.util
 import os
@@ -18,7 +20,7 @@ import threading
 from quadcog.errors import Interrupted
 
 __all__ = ["HANDLED", "WATCHDOG_PERIOD", "install_handlers", "restore_handlers", "die_with_parent",
-           "received"]
+           "received", "children_without_sigint"]
 
 HANDLED = (signal.SIGINT, signal.SIGTERM)
 WATCHDOG_PERIOD = 1.0       # s between two looks at the parent's pid (non-Linux fallback)
@@ -114,3 +116,28 @@ def die_with_parent() -> None:
             pass
     threading.Thread(target=_watchdog, args=(parent,), daemon=True,
                      name="quadcog-parent-watchdog").start()
+
+
+@contextlib.contextmanager
+def children_without_sigint() -> Iterator[None]:
+    """Start processes in the block with SIGINT blocked, so that they never see Ctrl-C.
+
+    A terminal's Ctrl-C goes to the whole foreground process group: Dask's nannies and
+    workers (started by ``multiprocessing``, which keeps the signal mask across fork and
+    exec) would each print a KeyboardInterrupt traceback under the parent's clean line. With
+    SIGINT blocked they are ended by the parent only (it closes the cluster on the way out).
+    In the parent the signal is held for the block and delivered right after it.
+
+    Yields
+    ------
+    None
+    """
+    main = threading.current_thread() is threading.main_thread()
+    if not (main and hasattr(signal, "pthread_sigmask")):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)

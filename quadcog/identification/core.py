@@ -11,6 +11,7 @@ distance from O toward it).
 """
 from collections.abc import Sequence
 from dataclasses import dataclass
+import os
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +26,9 @@ from quadcog.identification.estimators import (
     regression,
     static_balance,
 )
+from quadcog.identification.plausibility import check_log, check_types, hover_physics
 from quadcog.logs.flightlog import FlightLog
+from quadcog.validate import fail, plain
 from quadcog.vehicles.rotor_model import RotorModel
 from quadcog.vehicles.vehicle import PRESETS, Vehicle
 
@@ -157,7 +160,7 @@ def as_vehicle(vehicle: str | Vehicle) -> Vehicle:
         return vehicle
     if isinstance(vehicle, str) and vehicle in PRESETS:
         return PRESETS[vehicle]
-    raise IdentificationError(f"vehicle {vehicle!r} is unknown; expected one of "
+    raise IdentificationError(f"vehicle {plain(vehicle)} is unknown; expected one of "
                               f"{', '.join(PRESETS)} or a quadcog Vehicle")
 
 
@@ -185,23 +188,30 @@ def as_logs(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
         An empty sequence or an item of another type; the readers' LogError for bad files.
     """
     from quadcog.logs import FlightLog, read_log
-    items = [logs] if isinstance(logs, (str, Path, FlightLog)) else list(logs)
+    expected = "a FlightLog, a log file's path, or a list of them"
+    if isinstance(logs, (str, os.PathLike, FlightLog)):
+        items = [logs]
+    elif isinstance(logs, (list, tuple)):
+        items = list(logs)
+    else:
+        fail(what, expected, logs, IdentificationError)
     if not items:
         raise IdentificationError(f"{what}: expected at least one flight log, got none")
     out = []
-    for item in items:
+    for i, item in enumerate(items):
         if isinstance(item, FlightLog):
             out.append(item)
-        elif isinstance(item, (str, Path)):
+        elif isinstance(item, (str, os.PathLike)) and not isinstance(item, bytes):
             out.append(read_log(item))
         else:
-            raise IdentificationError(f"{what}: expected FlightLogs or paths, got {item!r}")
+            fail(f"{what}[{i}]" if len(items) > 1 or not isinstance(logs, FlightLog) else what,
+                 "a FlightLog or a log file's path", item, IdentificationError)
     return out
 
 
 def _choose(method: str, logs: list[FlightLog]) -> tuple[str, str]:
-    if method not in METHODS:
-        raise IdentificationError(f"method {method!r} is unknown; expected one of "
+    if not isinstance(method, str) or method not in METHODS:
+        raise IdentificationError(f"method {plain(method)} is unknown; expected one of "
                                   f"{', '.join(METHODS)}")
     lacking = {log.source: missing_for(log, REGRESSION_SIGNALS) for log in logs}
     lacking = {k: v for k, v in lacking.items() if v}
@@ -288,10 +298,18 @@ def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
         Unknown vehicle or method, a log without the signals the method needs, too few hover
         samples; LogError for a file that cannot be read.
     """
+    preset = isinstance(vehicle, str)
     vehicle = as_vehicle(vehicle)
+    if rotor_model is not None and not isinstance(rotor_model, (str, RotorModel)):
+        fail("rotor_model", "a RotorModel, a name of quadcog.vehicles.rotor_model.ROTOR_MODELS "
+             "or None", rotor_model, IdentificationError)
     logs = as_logs(logs)
     base = None if baseline is None else as_logs(baseline, "baseline")
     chosen, described = _choose(method, logs + (base or []))
+    # the units and the physics of every log, before any estimate
+    check_types(logs, base or [], vehicle if preset else None)
+    for log in logs + (base or []):
+        _check_physics(log, vehicle, rotor_model)
     flights = _estimate(logs, vehicle, chosen, rotor_model)
     r, half, m, m_half, samples = pooled_estimate(flights)
     base_est = ()
@@ -306,6 +324,7 @@ def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
     limit = IDENTIFIABLE_FRACTION * vehicle.arm_length
     ok = tuple(n for n, h in zip(R_G_NAMES, half)
                if np.isfinite(h) and h < limit and n not in NEVER_DETERMINED)
+    _check_answer(logs, vehicle, r, half, m, m_half, mass_change)
     conditions = [e.condition for e in flights + list(base_est) if e.condition is not None]
     condition = max(conditions) if conditions else None
     verdict = _verdict(vehicle, flights, half, ok, limit, condition, base is not None)
@@ -315,6 +334,34 @@ def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
         mass=m, mass_ci95=m_half, mass_change=None if mass_change is None else
         float(mass_change), samples=int(samples), identifiable=ok, method=described,
         verdict=verdict, flights=tuple(flights), baseline=base_est, condition=condition)
+
+
+def _check_physics(log, vehicle, rotor_model):
+    """The plausibility checks of one log (quadcog.identification.plausibility)."""
+    from quadcog.identification.segments import hover_window, rotor_thrusts, vertical_acceleration
+    check_log(log)
+    window = hover_window(log)
+    thrusts, _, _ = rotor_thrusts(log, vehicle, rotor_model)
+    a_z, a_from = vertical_acceleration(log)
+    hover_physics(log, vehicle, window.mask, thrusts, a_z, a_from)
+
+
+def _check_answer(logs, vehicle, r, half, m, m_half, mass_change):
+    """Never an answer of inf, NaN or a CoG beyond the rotors: say what the data lack."""
+    names = ", ".join(log.source for log in logs)
+    values = [m, m_half] + list(r) + ([] if mass_change is None else [mass_change])
+    estimated = [h for h in half if not np.isnan(h)]
+    if not (np.isfinite(values).all() and np.isfinite(estimated).all() and m > 0):
+        raise IdentificationError(
+            f"{names}: the estimate is not a number (mass {m!r} kg, r_G {list(r)!r} m): the "
+            "logs do not determine the CoG; check their units and signals")
+    arm = vehicle.arm_length
+    if np.abs(r[:2]).max() > arm:
+        raise IdentificationError(
+            f"{names}: the estimate puts the CoG {1e3 * float(np.abs(r[:2]).max()):.3g} mm from "
+            f"O, beyond the rotors of {vehicle.name!r} (arm {1e3 * arm:.3g} mm), where no "
+            "vehicle hovers: the motor outputs, the rotor model or the rotor order are not "
+            "this vehicle's")
 
 
 def _verdict(vehicle, flights, half, ok, limit, condition, with_baseline):

@@ -7,7 +7,7 @@ their estimate (``AdaptiveFeedbackLinearization.initial_state``: r_hat(0) is the
 Scenario files say ``[vehicle] identified = "file.json"`` (the truth) or ``[controller_model]
 identified = "file.json"`` (the seed); ``quadcog run SCENARIO --identified FILE`` sets both.
 """
-import json
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -15,6 +15,9 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
+from quadcog.files import read_json
+from quadcog.model.parameters import LARGEST
+from quadcog.validate import fail, vector
 
 if TYPE_CHECKING:
     from quadcog.identification.core import Identification
@@ -44,19 +47,23 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
     from quadcog.identification.core import Identification
     if isinstance(source, Identification):
         return np.array(source.r_G, dtype=float)
+    if isinstance(source, bytes) or not isinstance(source, (str, os.PathLike)):
+        fail("identified_cog", "an Identification or the path of the JSON of `quadcog "
+             "identify --json`", source, IdentificationError)
     path = Path(source)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as e:
-        raise IdentificationError(f"{path}: cannot read the identification ({e.strerror})") \
-            from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
-        raise IdentificationError(f"{path}: not the JSON of `quadcog identify --json` ({e})") \
-            from None
+    if path.is_dir():
+        raise IdentificationError(f"{path}: is a folder; expected the JSON file of `quadcog "
+                                  "identify --json`")
+    data = read_json(path, "identification (the JSON of `quadcog identify --json`)",
+                     IdentificationError)
     r = data.get("r_G") if isinstance(data, dict) else None
-    ok = (isinstance(r, list) and len(r) == 3 and all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in r))
-    if not ok:
-        raise IdentificationError(f"{path}: key 'r_G': expected 3 finite numbers (m), got "
-                                  f"{r!r}")
-    return np.array(r, dtype=float)
+    where, what = f"{path}: key 'r_G'", "3 finite numbers (m)"
+    if not isinstance(r, list):
+        fail(where, what, r, IdentificationError)
+    try:
+        r_G = vector(r, where, 3, error=IdentificationError)
+    except IdentificationError:
+        fail(where, what, r, IdentificationError)
+    if not np.abs(r_G).max() <= LARGEST:
+        fail(where, f"3 numbers within +-{LARGEST:g} m", r, IdentificationError)
+    return r_G

@@ -16,10 +16,11 @@ import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
 from quadcog.logs.flightlog import FlightLog
+from quadcog.validate import fail, real
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "MIN_BLOCKS", "HoverWindow",
+__all__ = ["check_arguments", "HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "MIN_BLOCKS", "HoverWindow",
            "hover_window", "rotor_thrusts", "vertical_acceleration", "block_means",
            "block_mean_ci95", "ar1_inflation", "speed_corrected", "body_velocity",
            "SPEED_SPREAD", "t_quantile"]
@@ -104,6 +105,30 @@ class HoverWindow:
         return index
 
 
+def check_arguments(where: str, log: object, vehicle: object = None) -> None:
+    """Refuse a ``log`` that is not a FlightLog and a ``vehicle`` (when given) that is not a
+    Vehicle, with the IdentificationError of quadcog.validate's grammar.
+
+    Parameters
+    ----------
+    where : str
+        The function's name, for the message.
+    log : object
+        What was passed as the log.
+    vehicle : object, optional
+        What was passed as the vehicle (None: not checked).
+
+    Raises
+    ------
+    IdentificationError
+        Naming the argument and what was expected.
+    """
+    if not isinstance(log, FlightLog):
+        fail(f"{where}: log", "a quadcog.logs.FlightLog", log, IdentificationError)
+    if vehicle is not None and not isinstance(vehicle, Vehicle):
+        fail(f"{where}: vehicle", "a quadcog Vehicle", vehicle, IdentificationError)
+
+
 def hover_window(log: FlightLog, band: float = HOVER_BAND, trim: float = HOVER_TRIM
                  ) -> HoverWindow:
     """The hover window of ``log`` (module docstring: plateaus of the height, trimmed).
@@ -128,6 +153,10 @@ def hover_window(log: FlightLog, band: float = HOVER_BAND, trim: float = HOVER_T
         The log has no position, never leaves the ground, or its plateaus hold fewer than
         ``MIN_BLOCKS`` blocks of ``BLOCK_SECONDS`` after the trim.
     """
+    check_arguments("hover_window", log)
+    band = real(band, "hover_window: band", lo=0.0, hi=1.0, lo_open=True,
+                error=IdentificationError)
+    trim = real(trim, "hover_window: trim", lo=0.0, unit="s", error=IdentificationError)
     if not log.has("position"):
         raise IdentificationError(f"{log.source}: no 'position' signal, so the hover (take-off "
                                   "and landing free) part cannot be found from the height")
@@ -195,6 +224,7 @@ def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | st
         No rotor model, or the log lacks the signals it needs and no fallback applies (the
         message names the signals).
     """
+    check_arguments("rotor_thrusts", log, vehicle)
     model = vehicle.rotor_model if rotor_model is None else rotor_model
     if isinstance(model, str):
         if model not in ROTOR_MODELS:
@@ -265,7 +295,15 @@ def block_means(index: npt.NDArray[np.int_], values: npt.NDArray[np.float64]
     numpy.ndarray, shape (B, ...)
         One mean per block, B = index.max() + 1.
     """
-    return np.asarray([values[index == b].mean(axis=0) for b in range(index.max() + 1)])
+    # one pass over the samples (a mask per block would make it quadratic in the log)
+    n_blocks = int(index.max(initial=-1)) + 1
+    keep = index >= 0
+    idx, flat = index[keep], values[keep].reshape(int(keep.sum()), -1)
+    counts = np.bincount(idx, minlength=n_blocks).astype(float)
+    sums = np.column_stack([np.bincount(idx, weights=flat[:, j], minlength=n_blocks)
+                            for j in range(flat.shape[1])]) if flat.shape[1] else \
+        np.zeros((n_blocks, 0))
+    return (sums / counts[:, None]).reshape((n_blocks,) + values.shape[1:])
 
 
 def t_quantile(dof: int) -> float:

@@ -18,6 +18,7 @@ import sys
 from typing import Any
 
 from quadcog.errors import QuadcogError
+from quadcog.files import atomic_write
 from quadcog.identification.core import identify
 from quadcog.logs import read_log
 from quadcog.vehicles.rotor_model import ROTOR_MODELS
@@ -199,14 +200,14 @@ def main(argv: list[str] | None = None) -> int:
     try:
         text = tables(args.root)
         if args.out is not None:
-            args.out.write_text(text)
+            atomic_write(args.out, text, "--out")
         if args.update is not None:
             doc = args.update.read_text()
             if BEGIN not in doc or END not in doc:
                 raise QuadcogError(f"{args.update}: no {BEGIN} ... {END} markers")
             head, rest = doc.split(BEGIN, 1)
             _, tail = rest.split(END, 1)
-            args.update.write_text(f"{head}{BEGIN}\n{text}{END}{tail}")
+            atomic_write(args.update, f"{head}{BEGIN}\n{text}{END}{tail}", "--update")
     except (QuadcogError, OSError) as e:
         print(f"survey: error: {e}", file=sys.stderr)
         return 2

@@ -53,8 +53,10 @@ import zlib
 
 import numpy as np
 
-from quadcog.errors import LogCRCError, LogFormatError, LogSignalError
+from quadcog.errors import LogCRCError, LogError, LogFormatError, LogSignalError
+from quadcog.files import atomic_write_bytes
 from quadcog.logs.flightlog import FlightLog
+from quadcog.logs.limits import check_range, microsecond_ticks
 
 __all__ = ["read_usd", "write_usd", "parse_usd", "GRAVITY", "FULL_SCALE",
            "FIXED_FREQUENCY_ID"]
@@ -68,6 +70,7 @@ _TYPES = {"B": "<u1", "b": "<i1", "H": "<u2", "h": "<i2", "I": "<u4", "i": "<i4"
           "f": "<f4", "e": "<f2"}
 _STAMP = {1: ("<u4", 1e-3), 2: ("<u8", 1e-6)}          # version: (dtype, s per tick)
 _DEG = np.pi / 180.0
+_RESERVED = ("_id", "_tick")          # the fields of every record before its variables
 
 
 def _cstring(data, i, path, what):
@@ -143,6 +146,11 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
         if event_id in layouts:
             raise LogFormatError(f"{path}: event id {event_id} declared twice")
         names = [f for f, _ in fields]
+        reserved = [f for f in names if f in _RESERVED]
+        if reserved:
+            raise LogFormatError(f"{path}: event {name!r} has a variable named {reserved[0]!r}; "
+                                 f"a Crazyflie variable is 'group.name' (the names "
+                                 f"{', '.join(_RESERVED)} are the record's own fields)")
         if len(set(names)) != len(names):
             raise LogFormatError(f"{path}: event {name!r} repeats a variable: {names}")
         stamp = _STAMP[version][0]
@@ -351,10 +359,7 @@ def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
         raise LogSignalError(f"{log.source}: no signal a Crazyflie log carries (it has "
                              f"{', '.join(log.signals) or 'none'})", source=log.source,
                              available=tuple(log.signals))
-    ticks = np.round(log.t * 1e6)
-    if not (np.diff(ticks) > 0).all():
-        raise LogSignalError(f"{log.source}: samples closer than 1 us cannot be written as "
-                             "Crazyflie time stamps (integer us)", source=log.source)
+    ticks = microsecond_ticks(log, 0, "Crazyflie")
     fields = [("_id", "<u2"), ("_tick", "<u8")]
     columns = []
     for name, typ, values in variables:
@@ -365,11 +370,13 @@ def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
                 raise LogSignalError(
                     f"{log.source}: {name} would be {values.min():g}..{values.max():g}, "
                     f"outside the 0..{hi:g} the Crazyflie logs", source=log.source)
+        else:
+            check_range(log, name, values, "Crazyflie")
         fields.append((name, _TYPES[typ]))
         columns.append(values)
     rec = np.zeros(log.n_samples, dtype=np.dtype(fields))
     rec["_id"] = FIXED_FREQUENCY_ID
-    rec["_tick"] = ticks.astype(np.uint64)
+    rec["_tick"] = ticks
     for (name, _, _), values in zip(variables, columns):
         rec[name] = values
     header = bytearray(struct.pack("<BHH", _MAGIC, 2, 1))
@@ -378,7 +385,6 @@ def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
     for name, typ, _ in variables:
         header += f"{name}({typ})".encode() + b"\x00"
     body = bytes(header) + rec.tobytes()
-    tmp = path.with_name(path.name + ".part")
-    tmp.write_bytes(body + struct.pack("<I", zlib.crc32(body) & 0xFFFFFFFF))
-    os.replace(tmp, path)
+    atomic_write_bytes(path, body + struct.pack("<I", zlib.crc32(body) & 0xFFFFFFFF),
+                       "write_log path", LogError)
     return path

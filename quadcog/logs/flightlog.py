@@ -8,6 +8,7 @@ import numpy as np
 
 from quadcog.errors import InputError, LogFormatError, LogSignalError
 from quadcog.logs.signals import LOG_FORMATS, SIGNALS
+from quadcog.validate import plain
 
 __all__ = ["FlightLog"]
 
@@ -16,6 +17,14 @@ def _frozen(a):
     a = np.array(a, dtype=np.float64)        # a copy: the log owns its arrays
     a.setflags(write=False)
     return a
+
+
+def _signal_name(name, where):
+    """``name`` if it is a string (a signal name), else a LogSignalError."""
+    if not isinstance(name, str):
+        raise LogSignalError(f"{where}: expected a signal name (a str, one of "
+                             f"{', '.join(SIGNALS)}), got {plain(name)}", signal=None)
+    return name
 
 
 def _first_bad(a):
@@ -69,11 +78,11 @@ class FlightLog:
     def __post_init__(self):
         src = str(self.source)
         object.__setattr__(self, "source", src)
-        if self.format not in LOG_FORMATS:
+        if not isinstance(self.format, str) or self.format not in LOG_FORMATS:
             raise InputError(f"{src}: format {self.format!r} is not one of {LOG_FORMATS}")
         try:
             t = _frozen(self.t)
-        except (TypeError, ValueError) as e:
+        except (TypeError, ValueError, OverflowError) as e:
             raise LogFormatError(f"{src}: time is not numeric ({e})") from None
         if t.ndim != 1 or t.size < 2:
             raise LogFormatError(f"{src}: time must be (N,) with N >= 2 samples, got shape "
@@ -107,7 +116,7 @@ class FlightLog:
     def _array(self, value, what, shape):
         try:
             a = _frozen(value)
-        except (TypeError, ValueError) as e:
+        except (TypeError, ValueError, OverflowError) as e:
             raise LogFormatError(f"{self.source}: {what} is not numeric ({e})") from None
         if a.shape != shape:
             raise LogFormatError(f"{self.source}: {what} has shape {a.shape}, expected {shape} "
@@ -135,8 +144,13 @@ class FlightLog:
         -------
         bool
             True when ``signals`` holds it.
+
+        Raises
+        ------
+        LogSignalError
+            ``name`` is not a string.
         """
-        return name in self.signals
+        return _signal_name(name, "FlightLog.has") in self.signals
 
     def signal(self, name: str) -> np.ndarray:
         """The standard signal ``name`` (read-only float64 array on ``t``).
@@ -157,12 +171,13 @@ class FlightLog:
             The log lacks the signal (or it is not a standard signal); the message names the
             signal, the log and the signals it has.
         """
-        if name in self.signals:
+        if _signal_name(name, "FlightLog.signal") in self.signals:
             return self.signals[name]
         has = tuple(self.signals)
         what = ("is not a standard signal (quadcog.logs.SIGNALS: "
                 f"{', '.join(SIGNALS)})" if name not in SIGNALS else "is not in this log")
-        if name in self.meta.get("signals_dropped", ""):
+        dropped = self.meta.get("signals_dropped", "")
+        if name and name in dropped.replace(",", " ").split():
             what += f" (the reader left out {self.meta['signals_dropped']})"
         raise LogSignalError(
             f"signal {name!r} {what}: {self.format} log {self.source} has "

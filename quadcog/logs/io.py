@@ -4,8 +4,10 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from quadcog.errors import InputError, LogError, LogFormatError
+from quadcog.errors import LogError, LogFormatError
+from quadcog.files import output_path
 from quadcog.logs.signals import LOG_FORMATS
+from quadcog.validate import fail, plain
 
 if TYPE_CHECKING:
     from quadcog.logs.flightlog import FlightLog
@@ -21,9 +23,25 @@ _EXTENSIONS = {".csv": "csv", ".parquet": "parquet", ".pq": "parquet", ".ulg": "
 
 
 def _check_format(fmt, where):
-    if fmt not in LOG_FORMATS:
-        raise InputError(f"{where}: format {fmt!r} is not one of {LOG_FORMATS}")
+    if not isinstance(fmt, str) or fmt not in LOG_FORMATS:
+        raise LogError(f"{where}: format {plain(fmt)} is not one of {LOG_FORMATS}")
     return fmt
+
+
+def _log_path(path: object, where: str) -> Path:
+    """``path`` as a Path: a non-empty str or os.PathLike naming a file (not a folder)."""
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
+        fail(where, "the path of a flight log file (str or os.PathLike)", path, LogError)
+    text = os.fspath(path)
+    if not isinstance(text, str) or not text:
+        fail(where, "the path of a flight log file (str or os.PathLike)", path, LogError)
+    p = Path(text)
+    if p.is_dir():
+        raise LogError(f"{p}: is a folder; expected a flight log file")
+    if p.exists() and not p.is_file():     # a FIFO or a device would block or never end
+        raise LogError(f"{p}: is not a regular file (a FIFO, a device or a socket); expected "
+                       "a flight log file")
+    return p
 
 
 def detect_format(path: str | os.PathLike) -> str:
@@ -47,7 +65,7 @@ def detect_format(path: str | os.PathLike) -> str:
         The file cannot be opened; ``LogFormatError`` when it is empty or nothing identifies
         its format.
     """
-    path = Path(path)
+    path = Path(_log_path(path, "detect_format: path"))
     try:
         with open(path, "rb") as f:
             head = f.read(len(ULOG_MAGIC))
@@ -92,8 +110,9 @@ def read_log(path: str | os.PathLike, format: str | None = None) -> "FlightLog":
         Unreadable file; ``LogFormatError`` (damaged content), ``LogCRCError`` (Crazyflie CRC
         mismatch); ``MissingDependencyError`` for Parquet without pyarrow.
     """
+    path = Path(_log_path(path, "read_log: path"))
     fmt = detect_format(path) if format is None else _check_format(format, f"read_log({path})")
-    if not Path(path).is_file():
+    if not path.is_file():
         raise LogError(f"{path}: no such flight log file")
     if fmt == "crazyflie-usd":
         from quadcog.logs.crazyflie import read_usd
@@ -133,11 +152,12 @@ def write_log(log: "FlightLog", path: str | os.PathLike, format: str) -> Path:
         cannot carry the log (e.g. a Crazyflie log without position).
     """
     from quadcog.logs.flightlog import FlightLog
-    fmt = _check_format(format, f"write_log({path})")
+    fmt = _check_format(format, f"write_log({path!r:.80})")
     if not isinstance(log, FlightLog):
-        raise InputError(f"write_log: log must be a quadcog.logs.FlightLog, got "
-                         f"{type(log).__name__}")
-    path = Path(os.fspath(path))
+        raise LogError(f"write_log: log must be a quadcog.logs.FlightLog, got "
+                       f"{type(log).__name__}")
+    # checked before any work: a folder, a link, a FIFO or a device is never replaced
+    path = output_path(path, "write_log path", LogError)
     if fmt == "crazyflie-usd":
         from quadcog.logs.crazyflie import write_usd
         return write_usd(log, path)

@@ -8,14 +8,17 @@ Time is taken as written, shifted to start at 0 (``meta["time_offset_s"]`` is th
 ``t_s``); rows are not resampled. An empty cell, ``nan``, text, or time that does not increase
 is refused with the row and column named.
 """
+from collections import Counter
 import csv
 import os
 from pathlib import Path
 from types import ModuleType
+import warnings
 
 import numpy as np
 
-from quadcog.errors import LogFormatError
+from quadcog.errors import LogError, LogFormatError
+from quadcog.files import CSV_BLOCK, replacing
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns, table_columns
 from quadcog.validate import import_extra
@@ -77,44 +80,100 @@ def _from_columns(path, fmt, columns, meta):
     return FlightLog(str(path), fmt, t_abs - t_abs[0], signals, raw, meta)
 
 
+# The longest cell read: a float64 written with every digit takes 24 characters; anything
+# much longer is not a number (Python's csv module stops at 131,072 with its own error).
+MAX_CELL = 1000
+
+
 def _read_csv(path):
+    """Header by the csv module, data rows by numpy's C parser (time and memory linear in
+    the file: one float64 per cell); a file it cannot parse is read again cell by cell to
+    name the first bad cell."""
     try:
         with open(path, newline="", encoding="utf-8") as f:
-            rows = list(csv.reader(f))
+            header, lines_before = _header(path, f)
+            try:
+                with warnings.catch_warnings():      # a header without rows: said below
+                    warnings.simplefilter("ignore", UserWarning)
+                    data = np.loadtxt(f, delimiter=",", dtype=np.float64, ndmin=2,
+                                      quotechar='"')
+                ok = data.shape[1] == len(header) or data.size == 0
+            except (ValueError, OverflowError):
+                ok = False
     except UnicodeDecodeError as e:
         raise LogFormatError(f"{path}: not a text (UTF-8) CSV file ({e.reason} at byte "
                              f"{e.start})") from None
-    rows = [r for r in rows if r and any(c.strip() for c in r)]
-    if not rows:
-        raise LogFormatError(f"{path}: empty CSV file; expected a header row with "
-                             f"{TIME_COLUMN!r} and signal columns")
-    header = [c.strip() for c in rows[0]]
-    dup = sorted({c for c in header if header.count(c) > 1})
-    if dup:
-        raise LogFormatError(f"{path}: repeated column names {dup}")
-    try:                                  # fast path; the loop below names a bad cell
-        data = np.array(rows[1:], dtype=np.float64).reshape(len(rows) - 1, len(header))
-    except ValueError:
-        data = _cells(path, header, rows)
+    if not ok:
+        data = _cells(path, header, lines_before)
+    data = data.reshape(-1, len(header))
     cols = {h: data[:, j].copy() for j, h in enumerate(header)}
     return _from_columns(path, "csv", cols, {"columns": str(len(header))})
 
 
-def _cells(path, header, rows):
+def _header(path, f):
+    """The header row (names stripped) of an open CSV file, and the lines it took."""
+    count = 0
+    for line in f:
+        count += 1
+        if line.strip(" ,\r\n\t"):
+            break
+    else:
+        raise LogFormatError(f"{path}: empty CSV file; expected a header row with "
+                             f"{TIME_COLUMN!r} and signal columns")
+    if len(line) > MAX_CELL * 100_000:
+        raise LogFormatError(f"{path}: line {count} (the header) has {len(line):,} characters")
+    try:
+        cells = next(csv.reader([line]))
+    except csv.Error as e:
+        raise LogFormatError(f"{path}: line {count} (the header) is not CSV ({e})") from None
+    header = [c.strip() for c in cells]
+    long = [c for c in header if len(c) > MAX_CELL]
+    if long:
+        raise LogFormatError(f"{path}: the header has a column name of {len(long[0]):,} "
+                             f"characters ({long[0][:20]!r}...); expected names of at most "
+                             f"{MAX_CELL}")
+    seen = Counter(header)
+    dup = sorted(c for c, k in seen.items() if k > 1)
+    if dup:
+        raise LogFormatError(f"{path}: repeated column names {dup[:10]}")
+    return header, count
+
+
+def _cells(path, header, skip):
     """The data rows as floats, cell by cell: the first bad cell raises with its place."""
-    data = np.empty((len(rows) - 1, len(header)))
-    for i, row in enumerate(rows[1:]):
-        if len(row) != len(header):
-            raise LogFormatError(f"{path}: line {i + 2} has {len(row)} cells, the header "
-                                 f"{len(header)}")
-        for j, cell in enumerate(row):
-            text = cell.strip()
+    rows = []
+    with open(path, newline="", encoding="utf-8") as f:
+        for _ in range(skip):
+            next(f)
+        reader = csv.reader(f)
+        while True:
             try:
-                data[i, j] = float(text)
-            except ValueError:
-                raise LogFormatError(f"{path}: line {i + 2}, column {header[j]!r}: {text!r} "
-                                     "is not a number") from None
-    return data
+                row = next(reader)
+            except StopIteration:
+                break
+            except csv.Error as e:
+                raise LogFormatError(f"{path}: line {skip + reader.line_num}: not CSV ({e}); "
+                                     f"expected numbers of at most {MAX_CELL} characters") \
+                    from None
+            line = skip + reader.line_num
+            if not row or not any(c.strip() for c in row):
+                continue
+            if len(row) != len(header):
+                raise LogFormatError(f"{path}: line {line} has {len(row)} cells, the header "
+                                     f"{len(header)}")
+            values = []
+            for j, cell in enumerate(row):
+                text = cell.strip()
+                if len(text) > MAX_CELL:
+                    raise LogFormatError(f"{path}: line {line}, column {header[j]!r}: a cell "
+                                         f"of {len(text):,} characters; expected a number")
+                try:
+                    values.append(float(text))
+                except ValueError:
+                    raise LogFormatError(f"{path}: line {line}, column {header[j]!r}: "
+                                         f"{text[:40]!r} is not a number") from None
+            rows.append(values)
+    return np.array(rows, dtype=np.float64).reshape(len(rows), len(header))
 
 
 def _read_parquet(path):
@@ -181,20 +240,20 @@ def write_table(log: FlightLog, path: str | os.PathLike, fmt: str) -> Path:
     pathlib.Path
         The file written.
     """
-    path = Path(path)
     names = table_columns(log.signals)
     blocks = [log.t[:, None]] + [log.signals[n].reshape(log.n_samples, -1)
                                 for n in SIGNALS if n in log.signals]
     data = np.hstack(blocks)
-    tmp = path.with_name(path.name + ".part")
-    if fmt == "csv":
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            w = csv.writer(f, lineterminator="\n")
-            w.writerow(names)
-            w.writerows([[repr(float(x)) for x in row] for row in data])
-    else:
-        pq = require_pyarrow()
-        import pyarrow as pa
-        pq.write_table(pa.table({n: data[:, j] for j, n in enumerate(names)}), tmp)
-    os.replace(tmp, path)
-    return path
+    pq = require_pyarrow() if fmt == "parquet" else None
+    with replacing(path, "write_log path", LogError) as tmp:
+        if pq is None:
+            with open(tmp, "w", newline="", encoding="utf-8") as f:
+                w = csv.writer(f, lineterminator="\n")
+                w.writerow(names)
+                for start in range(0, len(data), CSV_BLOCK):
+                    w.writerows([[repr(float(x)) for x in row]
+                                 for row in data[start:start + CSV_BLOCK].tolist()])
+        else:
+            import pyarrow as pa
+            pq.write_table(pa.table({n: data[:, j] for j, n in enumerate(names)}), tmp)
+    return Path(path)

@@ -52,8 +52,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadcog.errors import LogFormatError, LogSignalError
+from quadcog.errors import LogError, LogFormatError, LogSignalError
+from quadcog.files import atomic_write_bytes
 from quadcog.logs.flightlog import FlightLog
+from quadcog.logs.limits import check_range, check_unit_signals, microsecond_ticks
 
 __all__ = ["read_ulog", "write_ulog", "px4_to_quadcog_quaternion", "quaternion_to_euler",
            "euler_to_quaternion", "TOPICS", "QUADX_ORDER"]
@@ -432,10 +434,8 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
                              "without them (dataclasses.replace(log, signals=...))",
                              source=log.source, available=tuple(s))
     n = log.n_samples
-    ts = np.round(log.t * 1e6).astype(np.int64) + _START_US
-    if not (np.diff(ts) > 0).all():
-        raise LogSignalError(f"{log.source}: samples closer than 1 us cannot be written as "
-                             "ULog time stamps (integer us)", source=log.source)
+    check_unit_signals(log, "ULog")
+    ts = microsecond_ticks(log, _START_US, "ULog")
     topics = {}          # name -> [(field name, ctype, values (n,) or (n, k))]
     lp = [(f, s[sig] * _FLIP) for f, sig in (("p", "position"), ("v", "velocity"),
                                              ("a", "acceleration")) if sig in s]
@@ -498,11 +498,10 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
         rec["size"], rec["type"], rec["id"], rec["timestamp"] = dt.itemsize - 3, ord("D"), \
             msg_id, ts
         for f, _, v in flds:
+            check_range(log, f"{name}.{f}", v[np.isfinite(v)], "ULog")
             rec[f] = v
         rows.append(rec.view(np.uint8).reshape(n, dt.itemsize))
     # interleave the topics sample by sample, as a logger writes them
     out += b"".join(r[k].tobytes() for k in range(n) for r in rows)
-    tmp = path.with_name(path.name + ".part")
-    tmp.write_bytes(bytes(out))
-    os.replace(tmp, path)
+    atomic_write_bytes(path, bytes(out), "write_log path", LogError)
     return path

@@ -208,6 +208,14 @@ class Model:
                 for k, v in enumerate(buf):
                     nonnegative(v, f"c[{k}]", error=ParameterError)
         call()
+        for (oname, _), o in zip(spec_out, call.outputs):
+            if not np.isfinite(o).all():    # never a silent NaN: overflow at extreme inputs
+                given = ", ".join(f"max |{a}| = {float(np.abs(b).max()):.3g}"
+                                  for (a, _), b in zip(spec_in, call.inputs))
+                raise InputError(
+                    f"{name}: {oname} is not finite (it overflows) at {given}; expected "
+                    "inputs within the model's range (states, inputs and parameters of a "
+                    "vehicle that flies)")
         if out is None:
             results = [o.copy() for o in call.outputs]
         else:

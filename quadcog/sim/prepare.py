@@ -18,7 +18,8 @@ from quadcog.codegen.fastcall import evaluate
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import IDX, N_STATE, R_G, rotation_matrix
-from quadcog.model.inertial_parameters import check_physically_consistent
+from quadcog.model.inertial_parameters import N_PI, check_physically_consistent
+from quadcog.model.inertial_parameters import is_physically_consistent as consistency_ok
 from quadcog.model.parameters import LARGEST, check_parameters, with_cog
 from quadcog.sim.closed_loop import ACCUMULATORS
 from quadcog.sim.divergence import Limits, first_divergence
@@ -30,6 +31,7 @@ from quadcog.sim.user_controller import user_state
 from quadcog.trajectories.analytic import POS, VEL, YAW
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.validate import positive, step_count
+from quadcog.vehicles.payload import PAYLOAD_REACH
 from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
 __all__ = ["RK4_LIMIT", "FlightSetup", "prepare_flight", "batch_start", "check_time",
@@ -154,7 +156,7 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     loads = as_payload_profile(payloads, vehicle)
     P = vehicle.airframe.parameters()        # the payloads reach the truth through the schedule
     check_cog_changes(P, cog)
-    check_payload_events(vehicle, loads)
+    check_payload_events(vehicle, loads, duration)
     schedule = Schedule.build(trajectory, duration, dt, cog, disturbances, payloads=loads)
     x0 = start_at_reference(schedule.ref[0]) if x0 is None else validate.vector(x0, "x0", 12)
     if not np.abs(x0).max() <= LARGEST:
@@ -423,15 +425,20 @@ def as_payload_profile(payloads: Any, vehicle: Vehicle) -> PayloadProfile:
     return PayloadProfile(list(payloads), vehicle.payloads)
 
 
-def check_payload_events(vehicle: Vehicle, loads: PayloadProfile) -> None:
-    """Raise PhysicalConsistencyError if the airframe with what is on board after any event is
-    not physically consistent.
+def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
+                         duration: float | None = None) -> None:
+    """Raise if a payload event cannot happen as written: after the end of the run (it would
+    never happen), a payload placed farther from O than ``PAYLOAD_REACH`` arm lengths (not
+    carried on the vehicle), or the airframe with what is on board after an event not
+    physically consistent.
 
     Adding a payload of positive mass to a consistent body keeps it consistent wherever the
     payload sits (the pseudo-inertia matrices add, and a payload's is positive semidefinite),
     so the check at the events' ends covers the moves between them; it fails only when the
     airframe itself is not a rigid body's (a CoG offset that the paper's model holds with
-    I_O fixed, beyond what any mass distribution allows).
+    I_O fixed, beyond what any mass distribution allows). The events are walked once in time
+    order with the sum of the payloads' pi kept up to date, so the cost is linear in the
+    number of events.
 
     Parameters
     ----------
@@ -439,23 +446,69 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile) -> None:
         The truth vehicle (its airframe at its own CoG).
     loads : PayloadProfile
         The payloads over the run.
+    duration : float, optional
+        The run's length (s): an event after it is refused.
 
     Raises
     ------
+    quadcog.InputError
+        An event after the end of the run, or a payload beyond the vehicle's reach.
     quadcog.PhysicalConsistencyError
         Naming the event after which the whole body is not physically consistent.
     """
     if not loads.events:
         return
-    airframe = vehicle.airframe.inertial_parameters()
+    import heapq
+    reach = PAYLOAD_REACH * vehicle.arm_length
+    on_board = {p.name: (p, p.inertial_parameters()) for p in loads.carried}
+    total = vehicle.airframe.inertial_parameters() + sum(
+        (pi for _, pi in on_board.values()), np.zeros(N_PI))
+    ends: list = []                  # (end time, index, name, target) of sliding moves
+
+    def place(name, payload):
+        nonlocal total
+        if name in on_board:
+            total = total - on_board.pop(name)[1]
+        if payload is not None:
+            pi = payload.inertial_parameters()
+            on_board[name] = (payload, pi)
+            total = total + pi
+
+    def check(i, e, when):
+        if not consistency_ok(total):
+            check_physically_consistent(
+                total, f"payload[{i}] ({e.action} {e.name!r}): the airframe with "
+                f"{list(on_board)} on board at t = {when:g} s")
+
     for i, e in enumerate(loads.events):
-        for when in sorted({e.t, e.t + e.ramp}):
-            on_board = loads.on_board(when)
-            if on_board:
-                pi = airframe + sum(p.inertial_parameters() for p in on_board)
-                check_physically_consistent(
-                    pi, f"payload[{i}] ({e.action} {e.name!r}): the airframe with "
-                        f"{[p.name for p in on_board]} on board at t = {when:g} s")
+        where = f"payload[{i}] ({e.action} {e.name!r} at t = {e.t:g} s)"
+        if duration is not None and e.t > duration:
+            raise InputError(f"{where}: after the end of the run (duration {duration:g} s), "
+                             "so it would never happen; expected t <= duration")
+        if e.position is not None and not np.linalg.norm(e.position) <= reach:
+            raise InputError(f"{where}: position {list(e.position)} m is "
+                             f"{np.linalg.norm(e.position):.3g} m from O, beyond "
+                             f"{PAYLOAD_REACH:g} arm lengths of {vehicle.name!r} ({reach:.3g} m); "
+                             "a payload is carried on the vehicle")
+        while ends and ends[0][0] <= e.t:
+            end, j, name, target = heapq.heappop(ends)
+            if name in on_board:
+                place(name, on_board[name][0].moved(target))
+                check(j, loads.events[j], end)
+        if e.action == "attach":
+            place(e.name, e.payload())
+        elif e.action == "drop":
+            place(e.name, None)
+        elif e.ramp > 0:
+            heapq.heappush(ends, (e.t + e.ramp, i, e.name, e.position))
+        else:
+            place(e.name, on_board[e.name][0].moved(e.position))
+        check(i, e, e.t)
+    while ends:
+        end, j, name, target = heapq.heappop(ends)
+        if name in on_board:
+            place(name, on_board[name][0].moved(target))
+            check(j, loads.events[j], end)
 
 
 def whole_body(p: npt.NDArray[np.float64], payload: npt.NDArray[np.float64]

@@ -455,6 +455,43 @@ class PayloadProfile:
             kg m^2); zeros where nothing is on board.
         """
         t = np.atleast_1d(np.asarray(t, dtype=float))
+        if t.size > 1 and not (np.diff(t) >= 0).all():
+            return self._sampled_by_tracks(t)
+        # one pass over the events: each adds the change of pi from its first sample on (a
+        # running sum), a sliding move also its in-between positions over its ramp; the cost
+        # is linear in the events and the samples (the tracks were payloads x samples)
+        step = np.zeros((t.size + 1, N_PI))
+        out = np.zeros((t.size, N_PI))
+        where: dict[str, tuple[Payload, tuple]] = {}
+
+        def pi_at(payload, position):
+            return payload.inertial_parameters(np.array([position], dtype=float))[0]
+
+        for p in self.carried:
+            step[0] += pi_at(p, p.position)
+            where[p.name] = (p, p.position)
+        for e in self.events:
+            k = int(np.searchsorted(t, e.t, side="left"))       # the first sample at t >= e.t
+            if e.action == "attach":
+                p = e.payload()
+                step[k] += pi_at(p, p.position)
+                where[e.name] = (p, p.position)
+            elif e.action == "drop":
+                p, at = where.pop(e.name)
+                step[k] -= pi_at(p, at)
+            else:
+                p, start = where[e.name]
+                end = int(np.searchsorted(t, e.t + e.ramp, side="left")) if e.ramp > 0 else k
+                if end > k:
+                    s = (t[k:end] - e.t) / e.ramp
+                    r = np.asarray(start) + s[:, None] * (np.asarray(e.position) - start)
+                    out[k:end] += p.inertial_parameters(r) - pi_at(p, start)
+                step[end] += pi_at(p, e.position) - pi_at(p, start)
+                where[e.name] = (p, e.position)
+        return out + np.cumsum(step[:-1], axis=0)
+
+    def _sampled_by_tracks(self, t: np.ndarray) -> npt.NDArray[np.float64]:
+        """``sample`` at times in any order, track by track (payloads x samples)."""
         out = np.zeros((t.size, N_PI))
         for p, r, on in self._tracks(t):
             out[on] += p.inertial_parameters(r[on])

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from quadcog import validate
 from quadcog.errors import QuadcogError, SchedulerError, SizeError
 from quadcog.files import atomic_write
-from quadcog.interrupts import die_with_parent
+from quadcog.interrupts import children_without_sigint, die_with_parent
 from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.flights import make_job, run_chunk
 from quadcog.sweeps.integrity import SweepLock, chunk_metadata, columns_of_table, verify_chunk
@@ -205,9 +205,14 @@ def _dask(jobs, workers, scheduler, fingerprint, on_done):
             except (OSError, TimeoutError) as e:
                 raise SchedulerError(f"--scheduler {scheduler}: cannot connect ({e})") from None
         else:
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
-            client = Client(cluster)
+            with children_without_sigint():     # Ctrl-C reaches this process only
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                       # a failed task reaches us as its exception;
+                                       # the workers' own log lines (a heartbeat that
+                                       # finds the scheduler closed on Ctrl-C) are noise
+                                       dashboard_address=None, silence_logs=logging.CRITICAL,
+                                       preload=["quadcog.sweeps.worker_setup"])
+                client = Client(cluster)
         with client:
             futures = {client.submit(run_chunk, job, key=f"quadcog-{fingerprint[:16]}-"
                                      f"{job['chunk']}", retries=3): job["chunk"]

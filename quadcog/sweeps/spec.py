@@ -29,6 +29,7 @@ from quadcog.scenarios.scenario import Scenario, ScenarioError, parse
 from quadcog.sim.flight import check_cog_changes
 from quadcog.sim.prepare import check_payload_events
 from quadcog.sweeps.groups import CONTROLLERS_BY_GROUP, group_key
+from quadcog.validate import plain
 
 __all__ = ["MODES", "TOP", "SOURCES", "DEFAULT_CHUNK", "DEFAULT_THRESHOLD", "Dimension",
            "Flight", "Sweep", "cog_admissible", "from_dict", "sweep_names", "sweep_path",
@@ -324,6 +325,19 @@ def _range_values(spec, where, source):
     return [start + i * step for i in range(count)]
 
 
+def _finite(v, source, where, field):
+    """A sampler's bound as a finite float, else the SweepError naming the field."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise _field_err(source, where, f"{field}: expected a finite number, got {v!r:.40}")
+    try:
+        x = float(v)
+    except OverflowError:
+        x = float("inf")
+    if not math.isfinite(x):
+        raise _field_err(source, where, f"{field}: expected a finite number, got {plain(v)}")
+    return x
+
+
 def _dimension(i, spec, source, mode):
     where = f"dimension[{i}]"
     if not isinstance(spec, dict):
@@ -357,21 +371,31 @@ def _dimension(i, spec, source, mode):
         return Dimension(key, kind, values=values)
     if kind == "uniform":
         _table(value, w, source, ("low", "high"), ("n",))
-        lo, hi = float(value["low"]), float(value["high"])
+        lo = _finite(value["low"], source, w, "low")
+        hi = _finite(value["high"], source, w, "high")
         if not hi > lo:
             raise _field_err(source, w, f"empty range: low = {lo} must be below high = {hi}")
+        if not np.isfinite(hi - lo):
+            raise _field_err(source, w, f"low = {lo}, high = {hi}: a range wider than the "
+                             "float range (high - low overflows)")
         return Dimension(key, kind, sampler=lambda rng, n: rng.uniform(lo, hi, n).tolist(),
                          n=_count(value, w, source, mode), random=True)
     if kind == "normal":
         _table(value, w, source, ("mean", "std"), ("n",))
-        mu, sd = float(value["mean"]), float(value["std"])
+        mu = _finite(value["mean"], source, w, "mean")
+        sd = _finite(value["std"], source, w, "std")
+        if not abs(mu) + 10 * sd < 1e300:
+            raise _field_err(source, w, f"mean = {mu}, std = {sd}: draws would overflow the "
+                             "float range")
         if not sd > 0:
             raise _field_err(source, w, f"std: expected a positive number, got {sd}")
         return Dimension(key, kind, sampler=lambda rng, n: rng.normal(mu, sd, n).tolist(),
                          n=_count(value, w, source, mode), random=True)
     # ball: uniform inside a ball of CoG offsets (3-vectors), optionally in the rotor plane
     _table(value, w, source, ("radius",), ("n", "plane"))
-    radius = float(value["radius"])
+    radius = _finite(value["radius"], source, w, "radius")
+    if not radius < 1e300:
+        raise _field_err(source, w, f"radius = {radius}: beyond the float range of a draw")
     plane = value.get("plane", "xyz")
     if plane not in ("xyz", "xy"):
         raise _field_err(source, w, f"plane: expected \"xy\" or \"xyz\", got {plane!r}")

@@ -20,8 +20,10 @@ vehicle can follow).
 import numpy as np
 import numpy.typing as npt
 
+from quadcog import validate
 from quadcog.errors import InputError
 from quadcog.kinds import Number, Points, Vector
+from quadcog.model.parameters import LARGEST
 from quadcog.trajectories.analytic import Trajectory
 
 __all__ = ["MinimumSnap", "allocate_times", "DEGREE"]
@@ -102,13 +104,17 @@ class MinimumSnap(Trajectory):
                  times: Vector | npt.NDArray[np.float64] | None = None,
                  max_speed: Number = 1.0, max_acceleration: Number = 1.0,
                  yaw: Number = 0.0) -> None:
-        pts = np.asarray(waypoints, dtype=float)
-        if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2 or not np.isfinite(pts).all():
-            raise InputError(f"waypoints: expected at least 2 rows of 3 finite numbers (m), got "
-                             f"{np.asarray(waypoints).tolist()!r}")
-        for name, value in (("max_speed", max_speed), ("max_acceleration", max_acceleration)):
-            if not (np.isfinite(value) and value > 0):
-                raise InputError(f"{name}: expected a positive number, got {value!r}")
+        what = "at least 2 rows of 3 finite numbers (m)"
+        pts = validate.array(waypoints, "waypoints", (None, 3), what=what)
+        if pts.shape[0] < 2:
+            validate.fail("waypoints", what, waypoints)
+        if not np.abs(pts).max() <= LARGEST:
+            validate.fail("waypoints", f"coordinates within +-{LARGEST:g} m", waypoints)
+        if not np.any(np.diff(pts, axis=0)):
+            validate.fail("waypoints", "at least two different points (m)", waypoints)
+        max_speed = validate.positive(max_speed, "max_speed", unit="m/s")
+        max_acceleration = validate.positive(max_acceleration, "max_acceleration", unit="m/s^2")
+        yaw = validate.real(yaw, "yaw", unit="rad")
         if times is None:
             T = allocate_times(pts, max_speed, max_acceleration)
             if not (np.isfinite(T).all() and T.max() <= MAX_SEGMENT_TIME):
@@ -117,7 +123,7 @@ class MinimumSnap(Trajectory):
                                  f"{float(T.max()):.3g} s; expected speeds and accelerations "
                                  f"that give segments of at most {MAX_SEGMENT_TIME:g} s")
             times = np.r_[0.0, np.cumsum(T)]
-        times = np.asarray(times, dtype=float)
+        times = validate.array(times, "times", what=f"{len(pts)} increasing finite numbers (s)")
         if times.shape != (len(pts),) or not np.isfinite(times).all() or np.any(
                 np.diff(times) <= 0):
             raise InputError(f"times: expected {len(pts)} increasing finite numbers (s), one "

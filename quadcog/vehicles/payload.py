@@ -17,7 +17,11 @@ from quadcog.errors import InputError, ParameterError
 from quadcog.model.inertial_parameters import placed
 from quadcog.model.parameters import LARGEST
 
-__all__ = ["Payload", "as_payload"]
+__all__ = ["Payload", "as_payload", "PAYLOAD_REACH"]
+
+# A payload is carried on the vehicle: its centre at most this many arm lengths from O (a
+# sling load hangs a few arm lengths below; 100 km away is a typing error, refused)
+PAYLOAD_REACH = 10.0
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ from quadcog.model.inertial_parameters import check_physically_consistent, from_
 from quadcog.model.parameters import check_parameters
 from quadcog.numerics import exact_inverse
 from quadcog.validate import array, plain, real, vector
-from quadcog.vehicles.payload import Payload, as_payload
+from quadcog.vehicles.payload import PAYLOAD_REACH, Payload, as_payload
 from quadcog.vehicles.rotor_model import CRAZYFLIE_21_PLUS_CUBIC, CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "CRAZYFLIE_21", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
@@ -388,8 +388,14 @@ class Vehicle:
         -------
         numpy.ndarray, shape of f
             Rotor speeds (rad/s), >= 0.
+
+        Raises
+        ------
+        InputError
+            ``f`` is not real numbers (a string, None, complex, ragged) or not finite.
         """
-        return np.sqrt(np.maximum(np.asarray(f, dtype=float), 0.0) / self.thrust_constant)
+        thrusts = array(f, "f", what="rotor thrusts (N): finite real numbers")
+        return np.sqrt(np.maximum(thrusts, 0.0) / self.thrust_constant)
 
     def hover_input(self) -> npt.NDArray[np.float64]:
         """The input that holds a level hover with this vehicle's CoG
@@ -502,10 +508,19 @@ def _check_payloads(vehicle, where):
         raise InputError(where(f"payloads must be a sequence of Payload, got {loads!r}"))
     loads = tuple(as_payload(p, where(f"payloads[{k}]")) for k, p in enumerate(loads))
     names = [p.name for p in loads]
-    for name in names:
-        if names.count(name) > 1:
-            raise InputError(where(f"payloads: two payloads are named {name!r}; expected "
+    seen: set[str] = set()
+    for p in loads:
+        if p.name in seen:
+            raise InputError(where(f"payloads: two payloads are named {p.name!r}; expected "
                                    "unique names"))
+        seen.add(p.name)
+    arm = max(float(np.hypot(x, y)) for x, y in vehicle.rotor_positions)
+    for p in loads:
+        if not np.linalg.norm(p.position) <= PAYLOAD_REACH * arm:
+            raise InputError(where(f"payload {p.name!r}: its centre {list(p.position)} m is "
+                                   f"{np.linalg.norm(p.position):.3g} m from O, beyond "
+                                   f"{PAYLOAD_REACH:g} arm lengths ({PAYLOAD_REACH * arm:.3g} m); "
+                                   "a payload is carried on the vehicle"))
     object.__setattr__(vehicle, "payloads", loads)
     if loads:
         check_physically_consistent(vehicle.inertial_parameters(),

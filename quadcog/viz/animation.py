@@ -6,7 +6,6 @@ reference (dashed) with its current point, and the time. The vehicle is magnifie
 factor, stated in the title, so that it is visible on the scale of the path; the CoG offset is
 drawn with the same factor, so it is to scale with the body.
 """
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -14,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import InputError
+from quadcog.files import read_json
 from quadcog.model import columns as col
 from quadcog.model.conventions import rotation_matrix
 
@@ -41,14 +41,13 @@ def _text(path):
 
 def _json_table(path):
     """The JSON object (dict) of a run file, or an InputError naming it."""
-    try:
-        value = json.loads(_text(path))
-    except ValueError as e:
-        raise InputError(f"{path}: not valid JSON ({e}); write the folder again with "
-                         f"`quadcog run`") from None
+    value = read_json(path, "run file")
     if not isinstance(value, dict):
         raise InputError(f"{path}: expected a JSON object, got {type(value).__name__}")
     return value
+
+
+MAX_TABLE_VALUE = 1e9     # beyond any run's values; matplotlib cannot draw near 1e300
 
 
 def read_table(path: Path) -> np.ndarray:
@@ -121,6 +120,11 @@ def read_table(path: Path) -> np.ndarray:
                          f"a finite number)")
     if np.any(np.diff(table[:, 0]) < 0):
         raise InputError(f"{path}: the time column {names[0]!r} decreases")
+    big = np.abs(table) > MAX_TABLE_VALUE
+    if big.any():        # no run writes such a value (it stops at divergence); none can be drawn
+        r, c = np.argwhere(big)[0]
+        raise InputError(f"{path}: sample {r}, column {names[c]!r} is {table[r, c]:.6g}; a run "
+                         f"writes values within +-{MAX_TABLE_VALUE:g} (a damaged file?)")
     return table
 
 

@@ -1,0 +1,460 @@
+"""Issue 33: identification that refuses impossible logs, log readers and writers that
+refuse what they cannot hold, writers that leave no damage, and the tests that catch the
+mutations the earlier tests missed (the Crazyflie gyro in deg/s, the sign of mass_change, the
+compiled projection of payload_adaptive from outside the consistency cone). Oracles are
+written here: the firmware's units (deg/s, V), the thrust balance m = sum f / g, the cone
+m r^T Sigma_O^-1 r <= 1 - margin with Sigma_O = tr(I_O)/2 - I_O (Wensing et al. 2017)."""
+import os
+from pathlib import Path
+import stat
+import struct
+import tempfile
+import zlib
+
+import casadi as ca
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.configuration import set_hypothesis_home_dir
+import numpy as np
+import pytest
+
+import quadcog
+from quadcog.controllers.payload_adaptive import PayloadAdaptive
+from quadcog.errors import IdentificationError, InputError, LogError, QuadcogError
+from quadcog.identification import identify
+from quadcog.identification.identified import identified_cog
+from quadcog.logs import FlightLog, read_log, write_log
+from quadcog.sim.prepare import as_payload_profile, check_payload_events
+from quadcog.sim.timeline import PayloadProfile
+from quadcog.trajectories.waypoints import MinimumSnap
+from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND
+from quadcog.vehicles.vehicle import CRAZYFLIE, HUMMINGBIRD
+
+set_hypothesis_home_dir(tempfile.mkdtemp(prefix="quadcog-hypothesis-"))
+SETTINGS = dict(derandomize=True, database=None, deadline=None, max_examples=40,
+                suppress_health_check=list(HealthCheck))
+HOSTILE = st.one_of(st.none(), st.booleans(), st.integers(), st.just(10 ** 400), st.floats(),
+                    st.complex_numbers(), st.binary(max_size=4), st.text(max_size=4),
+                    st.lists(st.floats(), max_size=4), st.just({"a": 1}), st.just(object()),
+                    st.just([[1.0, 2.0], [3.0]]))
+G = CRAZYFLIE.g
+
+
+def hover_log(mass=CRAZYFLIE.m, r=(0.002, -0.001), dt=0.01, T=20.0, time_scale=1.0,
+              motors=None, a_z=None, full=False, rates=None, meta=None, fmt="csv", roll=None):
+    """A take-off, 0.5 m hover and landing whose rotor thrusts balance ``mass`` with the CoG
+    at ``r``: the moment balance [U2, U3] = m g [y_G, -x_G] through the mixer."""
+    t = np.arange(0, T, dt)
+    n = len(t)
+    z = np.clip(np.minimum(t - 1, T - 1 - t), 0, 0.5)
+    U = np.column_stack([np.full(n, mass * G), np.full(n, mass * G * r[1]),
+                         np.full(n, -mass * G * r[0]), np.zeros(n)])
+    f = U @ np.linalg.inv(CRAZYFLIE.mixer()).T
+    u = CRAZYFLIE_FIRMWARE_COMMAND.command(f) if motors is None else np.broadcast_to(
+        motors, (n, 4))
+    s = {"position": np.column_stack([np.zeros((n, 2)), z]), "motor_command": u}
+    if a_z is not None:
+        s["acceleration"] = np.column_stack([np.zeros((n, 2)), np.full(n, a_z)])
+    if full or rates is not None:
+        s.update(velocity=np.zeros((n, 3)), roll=np.zeros(n) if roll is None else roll(t),
+                 pitch=np.zeros(n),
+                 yaw=np.zeros(n), body_rates=np.zeros((n, 3)) if rates is None else rates(t))
+    return FlightLog("hover.csv", fmt, t * time_scale, s, {}, meta or {})
+
+
+def test_the_hover_log_is_identified():
+    res = identify(hover_log())
+    assert np.allclose(res.r_G[:2], (0.002, -0.001), atol=1e-9)
+    assert res.mass == pytest.approx(CRAZYFLIE.m, rel=1e-6)
+
+
+# -- answers from impossible data: refused in the log's terms -----------------------------
+IMPOSSIBLE = [
+    ("motors off (all zero)", dict(motors=0.0), r"0 % of the weight.*motors are off"),
+    ("motors negative", dict(motors=-0.1), r"'motor_command_m1' is -0.1.*0..1"),
+    ("motor outputs in percent", dict(motors=40.0), r"'motor_command_m1' is 40"),
+    ("a vehicle of a tenth of the weight", dict(mass=CRAZYFLIE.m / 10), r"10 % of the weight"),
+    ("acceleration with gravity removed twice", dict(a_z=-G), r"averages -9.81 m/s\^2"),
+    ("acceleration with gravity in it", dict(a_z=G), r"averages 9.81 m/s\^2"),
+    ("time in milliseconds", dict(time_scale=1e3), r"'t_s'.*milliseconds"),
+    ("time in microseconds", dict(time_scale=1e6), r"'t_s'.*microseconds"),
+    ("rates beyond a gyroscope", dict(rates=lambda t: np.full((len(t), 3), 1e200)),
+     r"'body_rates_p_rad_s' is 1e\+200"),
+    ("rates in deg/s", dict(rates=lambda t: np.column_stack(
+        [np.degrees(1.0 * np.sin(2 * np.pi * 2 * t)), np.zeros(len(t)), np.zeros(len(t))])),
+     r"'body_rates_p_rad_s'.*deg/s"),
+    # a 0.6 deg roll wobble at 1 Hz, its rate logged in deg/s: the rates turn 57 times too far
+    ("small rates in deg/s", dict(roll=lambda t: 0.01 * np.sin(2 * np.pi * t),
+                                  rates=lambda t: np.column_stack(
+                                      [np.degrees(0.01 * 2 * np.pi * np.cos(2 * np.pi * t)),
+                                       np.zeros(len(t)), np.zeros(len(t))])),
+     r"'body_rates_p_rad_s'.*more in roll.*deg/s"),
+]
+
+
+@pytest.mark.parametrize("what, kw, message", IMPOSSIBLE, ids=[c[0] for c in IMPOSSIBLE])
+@pytest.mark.parametrize("method", ["static", "auto"])
+def test_impossible_logs_are_refused_naming_the_log_and_the_column(what, kw, message, method):
+    log = hover_log(**kw)
+    if method == "auto" and "rates" not in kw:
+        log = hover_log(full=True, **kw)
+    with pytest.raises(IdentificationError, match=message) as e:
+        identify(log, method=method)
+    assert "hover.csv" in str(e.value)
+
+
+@settings(**SETTINGS)
+@given(scale=st.sampled_from([1e-9, 1e-6, 1e-3, 1e3, 1e6, 1e9]),
+       field=st.sampled_from(["velocity", "position", "acceleration", "body_rates"]))
+def test_property_values_in_other_units_never_give_an_answer(scale, field):
+    """A signal scaled by a unit's factor gives a refusal or a finite answer, never inf, NaN
+    or a traceback; velocity and rates beyond a quadrotor's reach are refused."""
+    log = hover_log(full=True, a_z=0.0)
+    s = dict(log.signals)
+    s[field] = s[field] + 1e-3 * scale      # an offset in the other unit
+    bad = FlightLog("hover.csv", "csv", log.t, s, {}, {})
+    try:
+        res = identify(bad)
+    except IdentificationError:
+        return
+    j = res.as_json()
+    assert np.isfinite([j["mass"], j["mass_ci95"], *j["r_G"]]).all() and j["mass"] > 0
+
+
+def test_a_baseline_of_another_vehicle_type_is_refused():
+    cf = hover_log(meta={"vehicle": "Crazyflie"})
+    px4 = hover_log(meta={"vehicle": "x500"})
+    with pytest.raises(IdentificationError, match="same vehicle type"):
+        identify(cf, baseline=px4)
+    ulog = FlightLog("b.ulg", "ulog", cf.t, dict(cf.signals), {}, {"sys_name": "PX4"})
+    with pytest.raises(IdentificationError, match="'px4'.*'crazyflie'|same vehicle type"):
+        identify(cf, baseline=ulog)
+    with pytest.raises(IdentificationError, match="identified as 'AscTec Hummingbird'"):
+        identify(cf, vehicle="hummingbird")
+
+
+def test_mass_change_is_the_payload_mass_with_its_sign():
+    """Flown 3 g heavier than the baseline: mass_change = +3 g (the thrust balance m = sum f /
+    g of each), and -3 g the other way round; the CoG shift is the difference of the two."""
+    heavy = hover_log(mass=CRAZYFLIE.m + 0.003, r=(0.003, 0.0))
+    base = hover_log(mass=CRAZYFLIE.m, r=(0.001, 0.0))
+    up = identify(heavy, baseline=base, method="static")
+    assert up.mass_change == pytest.approx(+0.003, rel=1e-6)
+    assert up.r_G[0] == pytest.approx(0.002, abs=1e-9)
+    down = identify(base, baseline=heavy, method="static")
+    assert down.mass_change == pytest.approx(-0.003, rel=1e-6)
+
+
+# -- raw exceptions: every entry point refuses wrong types with a typed error --------------
+@settings(**SETTINGS)
+@given(value=HOSTILE)
+def test_property_entry_points_refuse_hostile_arguments(value):
+    log = hover_log()
+    calls = [lambda: identify(value), lambda: identify(log, vehicle=value),
+             lambda: identify(log, method=value), lambda: read_log(value),
+             lambda: identified_cog(value), lambda: log.signal(value),
+             lambda: write_log(log, value, "csv"), lambda: write_log(value, "x.csv", "csv"),
+             lambda: write_log(log, "x.csv", value), lambda: CRAZYFLIE.rotor_speeds(value),
+             lambda: MinimumSnap(value), lambda: MinimumSnap([[0, 0, 0], [1, 1, 1]],
+                                                              max_speed=value)]
+    if value is not None:
+        calls += [lambda: identify(log, baseline=value), lambda: identify(log, rotor_model=value)]
+    here = os.getcwd()
+    os.chdir(tempfile.mkdtemp(prefix="quadcog-hostile-"))   # a str value is a file name
+    try:
+        for call in calls:
+            try:
+                call()
+            except QuadcogError:
+                pass
+    finally:
+        os.chdir(here)
+    with pytest.raises(QuadcogError):
+        log.has(value) if not isinstance(value, str) else log.signal(value + "?")
+
+
+@pytest.mark.parametrize("bad", [[np.nan] * 4, [np.inf] * 4, "abcd", [[1, 2], [3]], [1j] * 4])
+def test_rotor_speeds_refuse_what_is_not_a_thrust(bad):
+    with pytest.raises(InputError, match="f"):
+        CRAZYFLIE.rotor_speeds(bad)
+
+
+def test_a_fifo_or_a_device_is_never_read_as_a_log_or_a_json(tmp_path):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)                       # opening it to read would block for ever
+    for path in (fifo, Path("/dev/zero")):
+        with pytest.raises(LogError, match="not a regular file"):
+            read_log(path)
+        with pytest.raises(IdentificationError, match="not a regular file"):
+            identified_cog(path)
+
+
+def test_identified_json_of_absurd_shape_is_refused(tmp_path):
+    cases = {"digits": '{"r_G": [' + "1" * 401 + ", 0, 0]}",
+             "deep": "[" * 200_000 + "]" * 200_000, "nan": '{"r_G": [NaN, 0, 0]}',
+             "far": '{"r_G": [1e9, 0, 0]}', "text": '{"r_G": ["1", 0, 0]}'}
+    for name, text in cases.items():
+        p = tmp_path / f"{name}.json"
+        p.write_text(text)
+        with pytest.raises(IdentificationError, match=str(p)):
+            identified_cog(p)
+
+
+@pytest.mark.parametrize("name", ["_id", "_tick"])
+def test_a_crazyflie_variable_with_a_reserved_name_is_refused(tmp_path, name):
+    p = _usd(tmp_path, [(name, "f")], [[0.5], [0.5], [0.5]])
+    with pytest.raises(LogError, match=f"'{name}'"):
+        read_log(p)
+
+
+def test_csv_cells_and_columns_beyond_reason_are_refused(tmp_path):
+    p = tmp_path / "a.csv"
+    for text, message in [("t_s,x\n0," + "a" * 200_000 + "\n1,2\n", "line 2"),
+                          ("t_s," + "a" * 200_000 + "\n0,1\n1,2\n", "the header"),
+                          ("t_s,x\n0," + "9" * 400 + "\n1,2\n", "not a finite number")]:
+        p.write_text(text)
+        with pytest.raises(LogError, match=message):
+            read_log(p)
+    n = 5000                                     # many columns: read (linear in the columns)
+    p.write_text("t_s," + ",".join(f"c{k}" for k in range(n)) + "\n"
+                 + "\n".join(",".join(["%d" % i] + ["1"] * n) for i in range(3)) + "\n")
+    assert len(read_log(p).raw) == n
+
+
+# -- silent NaN ---------------------------------------------------------------------------
+@pytest.mark.parametrize("entry, value", [(9, 1e308), (6, 1e200), (3, 1e160)])
+def test_the_model_at_extreme_inputs_raises_rather_than_returns_nan(entry, value):
+    m = quadcog.load()
+    x = np.zeros(12)
+    x[entry] = value
+    for call in (m.dynamics, m.linearization):
+        try:
+            out = call(x, HUMMINGBIRD.hover_input(), HUMMINGBIRD.parameters())
+        except InputError as e:
+            assert "not finite" in str(e)
+            continue
+        arrays = out if isinstance(out, tuple) else (out,)
+        assert all(np.isfinite(a).all() for a in arrays)
+
+
+# -- damage left behind -------------------------------------------------------------------
+def _targets(tmp_path):
+    real = tmp_path / "real.csv"
+    real.write_text("keep")
+    link = tmp_path / "link.csv"
+    link.symlink_to(real)
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    out = {"symlink": link, "fifo": fifo, "folder": tmp_path}
+    dev = tmp_path / "dev.csv"
+    try:
+        os.mknod(dev, stat.S_IFCHR | 0o666, os.makedev(1, 3))      # as /dev/null
+        out["device"] = dev
+    except (OSError, AttributeError):
+        pass
+    return out, real
+
+
+@pytest.mark.parametrize("fmt", ["csv", "crazyflie-usd", "ulog", "parquet"])
+def test_writers_never_replace_what_is_not_a_regular_file(tmp_path, fmt):
+    pytest.importorskip("pyarrow") if fmt == "parquet" else None
+    log = hover_log(T=3.0)
+    targets, real = _targets(tmp_path)
+    for kind, target in targets.items():
+        mode = os.lstat(target).st_mode
+        with pytest.raises(LogError, match="regular file|folder"):
+            write_log(log, target, fmt)
+        assert os.lstat(target).st_mode == mode, kind
+    assert real.read_text() == "keep"
+    with pytest.raises(LogError, match="does not exist"):
+        write_log(log, tmp_path / "missing" / "x", fmt)
+    assert not [p for p in tmp_path.iterdir() if "part" in p.name]
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_part(tmp_path):
+    target = tmp_path / "x.bin"
+    target.write_bytes(b"old")
+    n = 5
+    far = FlightLog("far", "csv", 1e14 + np.arange(n), {"position": np.zeros((n, 3))}, {}, {})
+    for fmt in ("crazyflie-usd", "ulog"):
+        with pytest.raises(LogError, match="uint64"):
+            write_log(far, target, fmt)
+        assert target.read_bytes() == b"old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.bin"]
+
+
+@pytest.mark.parametrize("fmt", ["crazyflie-usd", "ulog"])
+@pytest.mark.parametrize("signal, value, message", [
+    ("position", 1e39, "float32"), ("motor_pwm", 1.5, "0.."), ("motor_pwm", -0.5, "0.."),
+    ("motor_command", 2.0, "0..")])
+def test_binary_writers_refuse_what_their_readers_refuse(tmp_path, fmt, signal, value, message):
+    n = 20
+    shape = (n,) + quadcog.logs.SIGNALS[signal].shape
+    s = {"position": np.zeros((n, 3)), signal: np.full(shape, value)}
+    log = FlightLog("w", "csv", np.arange(n) * 0.01, s, {}, {})
+    with pytest.raises(LogError, match=message):
+        write_log(log, tmp_path / "w", fmt)
+    assert not list(tmp_path.iterdir())
+
+
+def test_identify_json_never_overwrites_a_log_a_link_or_a_fifo(tmp_path, capsys):
+    from quadcog.cli import main
+    log = write_log(hover_log(), tmp_path / "log.csv", "csv")
+    before = log.read_bytes()
+    targets, real = _targets(tmp_path)
+    for target in [log] + list(targets.values()):
+        mode = os.lstat(target).st_mode
+        assert main(["identify", str(log), "--json", str(target)]) != 0
+        assert os.lstat(target).st_mode == mode
+    assert log.read_bytes() == before and real.read_text() == "keep"
+    assert "Traceback" not in capsys.readouterr().err
+
+
+# -- payloads: said, and linear -----------------------------------------------------------
+def test_a_payload_event_after_the_end_or_far_away_is_refused():
+    from quadcog import simulate
+    from quadcog.controllers.registry import make_controller
+    late = [{"t": 5.0, "action": "attach", "name": "a", "mass": 0.05, "position": [0, 0, 0]}]
+    with pytest.raises(InputError, match="after the end of the run"):
+        simulate(make_controller("adaptive"), "hover", duration=1.0,
+                 payloads=late)
+    far = [{"t": 0.1, "action": "attach", "name": "a", "mass": 0.05, "position": [1e5, 0, 0]}]
+    with pytest.raises(InputError, match="arm lengths"):
+        check_payload_events(HUMMINGBIRD, as_payload_profile(far, HUMMINGBIRD), 1.0)
+    with pytest.raises(InputError, match="arm lengths"):
+        HUMMINGBIRD.with_payload({"mass": 0.05, "position": [1e5, 0, 0]})
+
+
+def test_payload_events_are_checked_in_one_pass(monkeypatch):
+    """The check walks the events once: it never rebuilds every payload's track per event
+    (PayloadProfile._tracks), which made it quadratic; and it still refuses what it must."""
+    def no_tracks(self, t):
+        raise AssertionError("_tracks called by the check")
+    n = 400
+    ev = [{"t": 0.01 * k, "action": "attach", "name": f"p{k}", "mass": 1e-4,
+           "position": [0.01, 0, 0]} for k in range(n)]
+    ev += [{"t": 10 + 0.01 * k, "action": "move", "name": f"p{k}", "position": [0, 0.01, 0],
+            "ramp": 0.001} for k in range(n)]
+    loads = as_payload_profile(ev, HUMMINGBIRD)
+    monkeypatch.setattr(PayloadProfile, "_tracks", no_tracks)
+    check_payload_events(HUMMINGBIRD, loads)
+
+
+# -- the three mutations the tests missed ---------------------------------------------------
+def _usd(tmp_path, variables, rows):
+    """A Crazyflie uSD log (version 2) written here from the format (crazyflie-firmware
+    usddeck.c): magic, version, one fixed-frequency event, records of (id, tick us, values)."""
+    hdr = bytearray(struct.pack("<BHH", 0xBC, 2, 1)) + struct.pack("<H", 0xFFFF)
+    hdr += b"fixedFrequency\x00" + struct.pack("<H", len(variables))
+    for name, typ in variables:
+        hdr += f"{name}({typ})".encode() + b"\x00"
+    body = bytes(hdr)
+    for k, row in enumerate(rows):
+        body += struct.pack("<HQ", 0xFFFF, 10_000 * k)
+        body += b"".join(struct.pack(f"<{typ}", v) for (_, typ), v in zip(variables, row))
+    p = tmp_path / "gyro.bin"
+    p.write_bytes(body + struct.pack("<I", zlib.crc32(body) & 0xFFFFFFFF))
+    return p
+
+
+def test_crazyflie_gyro_is_read_in_deg_per_s_and_vbat_in_volts(tmp_path):
+    """The firmware logs gyro.x, y, z in deg/s (body frame, x forward, y left, z up, as
+    quadcog's) and pm.vbat in V: 90 deg/s is pi/2 rad/s, 3.7 V is 3.7 V."""
+    rows = [[90.0, -45.0, 180.0, 3.7], [30.0, 0.0, -60.0, 3.6], [0.0, 10.0, 0.0, 3.5]]
+    p = _usd(tmp_path, [("gyro.x", "f"), ("gyro.y", "f"), ("gyro.z", "f"), ("pm.vbat", "f")],
+             rows)
+    log = read_log(p)
+    deg = np.array(rows)[:, :3]
+    assert np.allclose(log.signal("body_rates"), deg * np.pi / 180, rtol=1e-6)
+    assert np.allclose(log.signal("battery_voltage"), np.array(rows)[:, 3], rtol=1e-6)
+    assert np.allclose(log.t, [0.0, 0.01, 0.02])
+
+
+def test_compiled_projection_brings_a_state_outside_the_cone_onto_it():
+    """From states beyond the rim (m r^T Sigma_O^-1 r up to 50 times 1 - margin) and beyond
+    the mass bounds, the compiled project() gives the point of the cone along the same r
+    direction and the mass clipped, as project_numpy does: the cone is written here."""
+    law = PayloadAdaptive(HUMMINGBIRD)
+    I_O = np.diag([HUMMINGBIRD.Ixx, HUMMINGBIRD.Iyy, HUMMINGBIRD.Izz])
+    sigma_inv = np.linalg.inv(0.5 * np.trace(I_O) * np.eye(3) - I_O)
+    keep = 1.0 - law.consistency_margin
+    lo, hi = law.mass_bounds * HUMMINGBIRD.m
+    c_sym = ca.SX.sym("c", law.n_state)
+    project = ca.Function("project", [c_sym], [law.project(c_sym)])
+    rng = np.random.default_rng(3)
+    for k in range(40):
+        c = law.initial_state()
+        c[3] = HUMMINGBIRD.m * rng.uniform(0.2, 3.0)
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        m = min(max(c[3], lo), hi)
+        rim = np.sqrt(keep / (m * d @ sigma_inv @ d))
+        c[0:3] = d * rim * rng.uniform(1.01, 7.0)          # outside the cone
+        out = np.array(project(c)).ravel()
+        assert out[3] == pytest.approx(m)
+        q = out[3] * out[0:3] @ sigma_inv @ out[0:3]
+        assert q == pytest.approx(keep, rel=1e-9), k      # on the rim, not beyond
+        assert np.allclose(out[0:3] / np.linalg.norm(out[0:3]), d)
+        assert np.allclose(out, law.project_numpy(c.copy()))
+        assert np.array_equal(out[4:], c[4:])
+
+
+def test_rates_that_agree_with_the_angles_are_accepted():
+    """The control of the deg/s case: the same wobble with its rate in rad/s (p = d roll/dt
+    at zero pitch, the ZYX kinematics) is identified."""
+    res = identify(hover_log(roll=lambda t: 0.01 * np.sin(2 * np.pi * t),
+                             rates=lambda t: np.column_stack(
+                                 [0.01 * 2 * np.pi * np.cos(2 * np.pi * t),
+                                  np.zeros(len(t)), np.zeros(len(t))])), method="static")
+    assert res.mass == pytest.approx(CRAZYFLIE.m, rel=1e-3)
+
+
+@settings(**SETTINGS)
+@given(seed=st.integers(0, 2 ** 32 - 1))
+def test_property_payload_sample_in_one_pass_equals_the_tracks(seed):
+    """PayloadProfile.sample (one pass over the events, linear) against the sum over every
+    payload's track sampled at each time (the earlier payloads x samples form), for random
+    attach, move (instant or sliding) and drop events at distinct times."""
+    from quadcog.vehicles.payload import Payload
+    rng = np.random.default_rng(seed)
+    carried = (Payload(0.01, (0.01, 0.0, 0.0), (0.01, 0.02, 0.0), "c"),)
+    ev, on, busy, t0 = [], ["c"], {}, 0.0
+    for k in range(int(rng.integers(1, 12))):
+        t0 += float(rng.uniform(0.01, 0.5))
+        action = rng.choice(["attach", "move", "drop"]) if on else "attach"
+        if action == "attach":
+            ev.append(dict(t=t0, action="attach", name=f"p{k}", mass=float(rng.uniform(1e-3, 0.1)),
+                           position=rng.uniform(-0.1, 0.1, 3).tolist(),
+                           size=rng.uniform(0, 0.05, 3).tolist()))
+            on.append(f"p{k}")
+            continue
+        name = on[int(rng.integers(len(on)))]
+        if busy.get(name, -1.0) > t0:
+            continue
+        if action == "drop":
+            on.remove(name)
+            ev.append(dict(t=t0, action="drop", name=name))
+        else:
+            ramp = float(rng.choice([0.0, rng.uniform(0, 0.4)]))
+            ev.append(dict(t=t0, action="move", name=name,
+                           position=rng.uniform(-0.1, 0.1, 3).tolist(), ramp=ramp))
+            busy[name] = t0 + ramp
+    profile = PayloadProfile(ev, carried)
+    t = np.sort(np.concatenate([rng.uniform(-0.1, t0 + 1, 50), [e["t"] for e in ev],
+                                [e["t"] + e.get("ramp", 0.0) for e in ev]]))
+    tracks = np.zeros((t.size, 10))
+    for p, r, mask in profile._tracks(t):
+        tracks[mask] += p.inertial_parameters(r[mask])
+    assert np.allclose(profile.sample(t), tracks, rtol=1e-12, atol=1e-15)
+
+
+def test_a_run_folder_never_replaces_a_link_with_a_file(tmp_path):
+    from quadcog.files import RunFiles
+    real = tmp_path / "real.json"
+    real.write_text("keep")
+    (tmp_path / "metrics.json").symlink_to(real)
+    with pytest.raises(QuadcogError, match="symbolic link"):
+        with RunFiles(tmp_path) as files:
+            files.path("metrics.json").write_text("{}")
+    assert (tmp_path / "metrics.json").is_symlink() and real.read_text() == "keep"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["metrics.json", "real.json"]
