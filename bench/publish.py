@@ -12,7 +12,8 @@ wrote, never typed:
 Each file is also copied to ``COPIES[name]`` (tracked), which tests/test_readme_numbers.py
 checks every block and value against, so a page that disagrees with its command fails there.
 
-    python bench/publish.py bench    [FILE]   # default out/bench/results.md (make bench)
+    python bench/publish.py bench             # every out/bench/results-ISA.md (make bench)
+    python bench/publish.py bench-avx2 [FILE] # one ISA's (QUADCOG_KERNEL_ISA=avx2 make bench)
     python bench/publish.py paper    [FILE]   # default out/paper/readme_table.md (quadcog paper)
     python bench/publish.py beyond   [FILE]   # default out/paper/beyond/beyond.md (quadcog paper)
     python bench/publish.py analysis [FILE]   # default out/analysis/analysis.json (quadcog analyze)
@@ -31,7 +32,9 @@ import sys
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "out"
-SOURCES = {"bench": OUT / "bench" / "results.md",
+# the ISAs whose `make bench` table docs/performance.md keeps, each with its machine
+BENCH_ISAS = ("avx512", "avx2")
+SOURCES = {**{f"bench-{isa}": OUT / "bench" / f"results-{isa}.md" for isa in BENCH_ISAS},
            "paper": OUT / "paper" / "readme_table.md",
            "beyond": OUT / "paper" / "beyond" / "beyond.md",
            "analysis": OUT / "analysis" / "analysis.json",
@@ -41,7 +44,7 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
               for p in ("float32", "isa", "fma")}}
 # the page that holds each table block
-PAGES = {"bench": ROOT / "docs" / "performance.md",
+PAGES = {**{f"bench-{isa}": ROOT / "docs" / "performance.md" for isa in BENCH_ISAS},
          "paper": ROOT / "docs" / "tour" / "paper.md",
          "beyond": ROOT / "docs" / "tour" / "beyond.md",
          "embedded": ROOT / "docs" / "tour" / "flight-controller.md",
@@ -49,7 +52,7 @@ PAGES = {"bench": ROOT / "docs" / "performance.md",
          **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
-COPIES = {"bench": ROOT / "bench" / "results.md",
+COPIES = {**{f"bench-{isa}": ROOT / "bench" / f"results-{isa}.md" for isa in BENCH_ISAS},
           "analysis": MEASURED / "analysis.json",
           "verify": MEASURED / "verification.json",
           "embedded": MEASURED / "embedded.json",
@@ -173,6 +176,13 @@ def pages():
 
 
 if __name__ == "__main__":
+    if sys.argv[1:] == ["bench"]:         # each ISA's table that a run wrote
+        found = [f"bench-{isa}" for isa in BENCH_ISAS if SOURCES[f"bench-{isa}"].is_file()]
+        if not found:
+            raise SystemExit("no out/bench/results-ISA.md: run make bench first")
+        for name in found:
+            publish(name, SOURCES[name])
+        raise SystemExit(0)
     if len(sys.argv) not in (2, 3) or sys.argv[1] not in SOURCES:
         raise SystemExit(__doc__)
     publish(sys.argv[1], sys.argv[2] if len(sys.argv) == 3 else SOURCES[sys.argv[1]])
