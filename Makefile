@@ -69,8 +69,8 @@ targets: compile
 test: $(STAMP)
 	$(PY) -m pytest
 
-# Timing tables (no assertions); writes out/bench/results.md (`python bench/publish.py bench`
-# copies it into docs/performance.md and bench/results.md).
+# Timing tables (no assertions); writes out/bench/results-ISA.md, ISA the kernel build (QUADCOG_KERNEL_ISA=avx2 pins one;
+# `python bench/publish.py bench` copies each into docs/performance.md and bench/).
 bench: compile
 	$(PY) bench/run.py
 

@@ -24,20 +24,90 @@ from quadcog.sim.closed_loop import monitored_step, packed  # noqa: E402
 from quadcog.sim.divergence import Limits  # noqa: E402
 from quadcog.sim.plant import Actuation  # noqa: E402
 
-__all__ = ["step_loop_counts"]
+__all__ = ["MCA_MODELS", "VARIANTS", "mca_cycles", "step_loop_counts"]
+
+# llvm-mca's CPU model for each ISA's estimate: AMD family 25 (Zen 3), the AVX2 EPYC of the
+# issue's 420 ns; and an AVX-512 core (llvm-mca 14 has no Zen 4 or 5 model)
+MCA_MODELS = {"avx2": "znver3", "avx512": "skylake-avx512"}
 
 _DIVISION = re.compile(r"^v?div[ps]d$")
 
 
-def step_loop_counts(isa, hoisted=True, controller=None):
+VARIANTS = {"previous": "the previous kernel (not hoisted, no pressure scheduling)",
+            "unhoisted": "not hoisted (pressure scheduling)",
+            "built": "as built (hoisted, reciprocals, pressure scheduling)"}
+
+
+def _flags(isa, variant):
+    return [f for f in qk.vector_flags(isa) if f not in ("-shared", "-fPIC")
+            and (variant != "previous" or f not in qk.SCHEDULE_FLAGS)]
+
+
+def _marked(isa, hoisted, controller, begin, end):
+    """The kernel's C with ``begin`` and ``end`` (asm text) around its step loop."""
+    ctl = controller or quadcog.AdaptiveFeedbackLinearization()
+    step = packed(monitored_step(ctl, Actuation.of(ctl.vehicle), Limits()))
+    kw = dict(slow=slow_row_entries()) if hoisted else dict(reciprocals=False)
+    src = qk.emit_c(step, lanes=qk.lanes_for(isa), **kw)
+    i = src.rindex("#pragma omp simd")          # the step loop is the last simd loop
+    src = src[:i] + f'__asm__ volatile("{begin}");\n      ' + src[i:]
+    j = src.index("      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];")
+    return src[:j] + f'      __asm__ volatile("{end}");\n' + src[j:]
+
+
+def mca_cycles(isa, variant="built", controller=None, iterations=10):
+    """llvm-mca's estimate of the step loop's cycles per flight-step on ``MCA_MODELS[isa]``:
+    the loop's code alone (a libmvec call counts as one instruction; their insides are not
+    modelled), load-independent.
+
+    Parameters
+    ----------
+    isa : str
+        "avx2" or "avx512".
+    variant : str
+        One of ``VARIANTS``, as for ``step_loop_counts``.
+    controller : Controller, optional
+        Default: the adaptive feedback linearization.
+    iterations : int
+        llvm-mca's iterations of the loop's code.
+
+    Returns
+    -------
+    dict or None
+        cycles (per flight-step), throughput (llvm-mca's block reciprocal throughput per
+        flight-step: the bound of the busiest resource), resource (that resource), model;
+        None without llvm-mca.
+    """
+    import shutil
+    exe = shutil.which("llvm-mca") or shutil.which("llvm-mca-14")
+    if exe is None:
+        return None
+    src = _marked(isa, variant == "built", controller, "# LLVM-MCA-BEGIN step",
+                  "# LLVM-MCA-END step")
+    flags = _flags(isa, variant)
+    with tempfile.TemporaryDirectory() as tmp:
+        c, asm = Path(tmp) / "k.c", Path(tmp) / "k.s"
+        c.write_text(src)
+        subprocess.run(["cc", *flags, "-S", str(c), "-o", str(asm)], check=True)
+        out = subprocess.run([exe, f"-mcpu={MCA_MODELS[isa]}", f"-iterations={iterations}",
+                              str(asm)], capture_output=True, text=True, check=True).stdout
+    lanes = qk.VECTOR_BITS[isa] // 64
+    total = int(re.search(r"Total Cycles:\s+(\d+)", out).group(1))
+    rthroughput = float(re.search(r"Block RThroughput:\s+([\d.]+)", out).group(1))
+    return {"cycles": total / iterations / lanes, "throughput": rthroughput / lanes,
+            "model": MCA_MODELS[isa]}
+
+
+def step_loop_counts(isa, variant="built", controller=None):
     """Instructions of the batch kernel's step loop, from its object code.
 
     Parameters
     ----------
     isa : str
         One of ``quadcog.codegen.vector_kernel.ISAS`` (compiled only: this CPU need not run it).
-    hoisted : bool
-        The kernel as built (True) or the same step without hoisting and reciprocals.
+    variant : str
+        One of ``VARIANTS``: the kernel as built, the same step without hoisting and
+        reciprocals, or that without the pressure scheduling flags (the previous kernel).
     controller : Controller, optional
         Default: the adaptive feedback linearization.
 
@@ -47,15 +117,8 @@ def step_loop_counts(isa, hoisted=True, controller=None):
         instructions (of the loop's code), divisions (vector and scalar div), calls ({name:
         count}, e.g. {"_ZGVdN4v_sin": 13}), lanes (flights per pass of the code: one vector).
     """
-    ctl = controller or quadcog.AdaptiveFeedbackLinearization()
-    step = packed(monitored_step(ctl, Actuation.of(ctl.vehicle), Limits()))
-    kw = dict(slow=slow_row_entries()) if hoisted else dict(reciprocals=False)
-    src = qk.emit_c(step, lanes=qk.lanes_for(isa), **kw)
-    i = src.rindex("#pragma omp simd")          # the step loop is the last simd loop
-    src = src[:i] + '__asm__ volatile("qc_step_begin:");\n      ' + src[i:]
-    j = src.index("      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];")
-    src = src[:j] + '      __asm__ volatile("qc_step_end:");\n' + src[j:]
-    flags = [f for f in qk.vector_flags(isa) if f not in ("-shared", "-fPIC")]
+    src = _marked(isa, variant == "built", controller, "qc_step_begin:", "qc_step_end:")
+    flags = _flags(isa, variant)
     with tempfile.TemporaryDirectory() as tmp:
         c, o = Path(tmp) / "k.c", Path(tmp) / "k.o"
         c.write_text(src)
@@ -77,7 +140,37 @@ def step_loop_counts(isa, hoisted=True, controller=None):
             "calls": dict(sorted(calls.items())), "lanes": qk.VECTOR_BITS[isa] // 64}
 
 
+def main():
+    import argparse
+    import platform
+    import time
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("isas", nargs="*", default=["avx2", "avx512"])
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench" / "objcode.md")
+    args = ap.parse_args()
+    lines = ["| build | step loop | instructions per flight-step | divisions per flight-step "
+             "| libmvec calls per pass | llvm-mca cycles per flight-step (model) |",
+             "|---|---|---|---|---|---|"]
+    for isa in args.isas:
+        for variant, label in VARIANTS.items():
+            c = step_loop_counts(isa, variant)
+            m = mca_cycles(isa, variant)
+            calls = ", ".join(f"{n} {name}" for name, n in c["calls"].items())
+            mca = (f"{m['cycles']:.0f} (throughput bound {m['throughput']:.0f}; {m['model']})"
+                   if m else "no llvm-mca")
+            lines.append(f"| {isa} | {label} "
+                         f"| {c['instructions'] / c['lanes']:.0f} "
+                         f"| {c['divisions'] / c['lanes']:.1f} | {calls} | {mca} |")
+    table = "\n".join(lines)
+    print(table)
+    from quadcog.codegen.compiler import _compiler_identity, find_compiler
+    compiler = _compiler_identity(find_compiler())
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text("# Object code of the batch kernel's step loop\n\nMeasured by "
+                        f"`python bench/objcode.py` ({platform.machine()}, {compiler}, "
+                        f"{time.strftime('%Y-%m-%d')}; compiled, not run: any x86-64 machine "
+                        "gives the same table with the same compiler).\n\n" + table + "\n")
+
+
 if __name__ == "__main__":
-    for isa in sys.argv[1:] or ["avx2", "avx512"]:
-        for hoisted in (False, True):
-            print(isa, "hoisted" if hoisted else "not hoisted", step_loop_counts(isa, hoisted))
+    main()

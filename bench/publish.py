@@ -20,6 +20,7 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py verify   [FILE]   # default out/report/verification.json (make report)
     python bench/publish.py embedded [FILE]   # default out/embedded/costs.json (make embedded)
     python bench/publish.py targets  [FILE]   # default out/targets/targets.md (quadcog targets)
+    python bench/publish.py objcode  [FILE]   # default out/bench/objcode.md (bench/objcode.py)
     python bench/publish.py precision-float32 [FILE]   # out/bench/precision-float32.md,
     python bench/publish.py precision-isa     [FILE]   # ... -isa.md and -fma.md
     python bench/publish.py precision-fma     [FILE]   # (python bench/precision.py)
@@ -41,6 +42,7 @@ SOURCES = {**{f"bench-{isa}": OUT / "bench" / f"results-{isa}.md" for isa in BEN
            "verify": OUT / "report" / "verification.json",
            "embedded": OUT / "embedded" / "costs.json",
            "targets": OUT / "targets" / "targets.md",
+           "objcode": OUT / "bench" / "objcode.md",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
               for p in ("float32", "isa", "fma")}}
 # the page that holds each table block
@@ -49,6 +51,7 @@ PAGES = {**{f"bench-{isa}": ROOT / "docs" / "performance.md" for isa in BENCH_IS
          "beyond": ROOT / "docs" / "tour" / "beyond.md",
          "embedded": ROOT / "docs" / "tour" / "flight-controller.md",
          "targets": ROOT / "docs" / "targets.md",
+         "objcode": ROOT / "docs" / "performance.md",
          **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
@@ -56,6 +59,7 @@ COPIES = {**{f"bench-{isa}": ROOT / "bench" / f"results-{isa}.md" for isa in BEN
           "analysis": MEASURED / "analysis.json",
           "verify": MEASURED / "verification.json",
           "embedded": MEASURED / "embedded.json",
+          "objcode": MEASURED / "objcode.md",
           **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")}}
 VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
                    r"(?P<text>[^<]*)<!-- /value -->")

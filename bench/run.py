@@ -365,7 +365,7 @@ def bench_object_code(isa):
     against the same step emitted without hoisting and reciprocals (bench/objcode.py)."""
     from bench.objcode import step_loop_counts
     try:
-        new, old = step_loop_counts(isa), step_loop_counts(isa, hoisted=False)
+        new, old = step_loop_counts(isa), step_loop_counts(isa, "previous")
     except (OSError, subprocess.CalledProcessError) as e:        # no objdump
         record("object code: step loop", "absent", "", "", "", f"objdump failed: {e}")
         return
