@@ -409,7 +409,8 @@ def bench_isa(n_flights, duration=20.0):
         worst = float(np.max(np.abs(r.final_state - rb.final_state)
                              / np.maximum(np.abs(rb.final_state), 1e-300)))
         where = ("the CPU's native build" if isa == native else
-                 f"on this {native} CPU, not on an {isa} CPU")
+                 f"on this {native} CPU, not on an {isa} CPU" if isa != "portable" else
+                 f"the compiler's default target, on this {native} CPU")
         record(f"batch: {isa} build ({qk.lanes_for(isa)} lanes), 1 thread",
                f"{c / steps * 1e9:.0f}", "ns per flight-step (CPU)",
                f"{c / max(cb, 1e-9):.2f}x {built}", "<= 150 ns" if isa == "avx2" else "",
