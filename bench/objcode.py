@@ -142,6 +142,7 @@ def step_loop_counts(isa, variant="built", controller=None):
 
 def main():
     import argparse
+    import os
     import platform
     import time
     ap = argparse.ArgumentParser(description=__doc__)
@@ -167,7 +168,8 @@ def main():
     compiler = _compiler_identity(find_compiler())
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("# Object code of the batch kernel's step loop\n\nMeasured by "
-                        f"`python bench/objcode.py` ({platform.machine()}, {compiler}, "
+                        f"`python bench/objcode.py` on {platform.machine()}, "
+                        f"{os.cpu_count()} cores ({compiler}, "
                         f"{time.strftime('%Y-%m-%d')}; compiled, not run: any x86-64 machine "
                         "gives the same table with the same compiler).\n\n" + table + "\n")
 

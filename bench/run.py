@@ -662,8 +662,8 @@ def main():
     out = args.out or ROOT / "out" / "bench" / f"results-{m['isa']}.md"
     out.parent.mkdir(parents=True, exist_ok=True)
     build = (f"kernels built for {m['isa']}, the CPU's widest" if m["isa"] == m["native"] else
-             f"kernels built for {m['isa']} on a CPU that runs {m['native']}: not a "
-             f"{m['isa']} CPU")
+             f"kernels built for {m['isa']} on a CPU that runs {m['native']}: not a CPU "
+             f"whose widest is {m['isa']}")
     out.write_text("# `make bench` results\n\nMedian of repeats, measured in one run on "
                    f"{m['cpu']} ({m['cores']} cores, {m['machine']}, {build}), "
                    f"{time.strftime('%Y-%m-%d')}.\n\n" + table + "\n")

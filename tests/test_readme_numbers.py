@@ -153,4 +153,5 @@ def test_every_published_markdown_table_is_its_tracked_copy():
         if f"<!-- BEGIN {name}-machine -->" in page:
             assert pub.block(page, f"{name}-machine") == machine, name
         checked.append(name)
-    assert {"bench", "precision-float32", "precision-isa", "precision-fma"} <= set(checked)
+    assert {"bench-avx512", "bench-avx2", "objcode", "precision-float32", "precision-isa",
+            "precision-fma"} <= set(checked)
