@@ -78,8 +78,8 @@ crazyflie: compile
 	$(PY) bench/crazyflie_real.py $(OUT)/crazyflie/real-flights.md
 	$(PY) bench/publish.py crazyflie-real $(OUT)/crazyflie/real-flights.md
 
-# Timing tables (no assertions); writes out/bench/results.md (`python bench/publish.py bench`
-# copies it into docs/performance.md and bench/results.md).
+# Timing tables (no assertions); writes out/bench/results-ISA.md, ISA the kernel build (QUADCOG_KERNEL_ISA=avx2 pins one;
+# `python bench/publish.py bench` copies each into docs/performance.md and bench/).
 bench: compile
 	$(PY) bench/run.py
 

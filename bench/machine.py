@@ -90,7 +90,8 @@ def machine():
     dict
         cpu (model name), identity (``cpu_identity``), cores (os.cpu_count), features (the
         VECTOR_FEATURES it has, space separated), compiler (first line of ``cc --version``),
-        isa (``kernel_isa()``), lanes (flights per float64 block), flags (the kernel's
+        isa (``kernel_isa()``), native (``detect_isa()``: the CPU's widest), isa_env (the
+        variable that pins the ISA), lanes (flights per float64 block), flags (the kernel's
         compiler flags).
     """
     feats = qk.cpu_features()
@@ -100,6 +101,7 @@ def machine():
             "machine": platform.machine(),
             "features": " ".join(f for f in VECTOR_FEATURES if f in feats) or "none listed",
             "compiler": _compiler_identity(cc) if cc else "none", "isa": isa,
+            "native": qk.detect_isa(), "isa_env": qk.ISA_ENV,
             "lanes": qk.lanes_for(isa),
             "flags": " ".join(f for f in qk.vector_flags(isa) if f not in ("-shared", "-fPIC"))}
 

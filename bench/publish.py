@@ -12,7 +12,8 @@ wrote, never typed:
 Each file is also copied to ``COPIES[name]`` (tracked), which tests/test_readme_numbers.py
 checks every block and value against, so a page that disagrees with its command fails there.
 
-    python bench/publish.py bench    [FILE]   # default out/bench/results.md (make bench)
+    python bench/publish.py bench             # every out/bench/results-ISA.md (make bench)
+    python bench/publish.py bench-avx2 [FILE] # one ISA's (QUADCOG_KERNEL_ISA=avx2 make bench)
     python bench/publish.py paper    [FILE]   # default out/paper/readme_table.md (quadcog paper)
     python bench/publish.py beyond   [FILE]   # default out/paper/beyond/beyond.md (quadcog paper)
     python bench/publish.py analysis [FILE]   # default out/analysis/analysis.json (quadcog analyze)
@@ -23,6 +24,7 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py crazyflie-real [FILE]  # out/crazyflie/real-flights.md (make crazyflie)
     python bench/publish.py geometric [FILE]  # out/geometric/geometric.json
                                               # (python -m quadcog.studies.geometric)
+    python bench/publish.py objcode  [FILE]   # default out/bench/objcode.md (bench/objcode.py)
     python bench/publish.py precision-float32 [FILE]   # out/bench/precision-float32.md,
     python bench/publish.py precision-isa     [FILE]   # ... -isa.md and -fma.md
     python bench/publish.py precision-fma     [FILE]   # (python bench/precision.py)
@@ -38,7 +40,9 @@ import sys
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "out"
-SOURCES = {"bench": OUT / "bench" / "results.md",
+# the ISAs whose `make bench` table docs/performance.md keeps, each with its machine
+BENCH_ISAS = ("avx512", "avx2")
+SOURCES = {**{f"bench-{isa}": OUT / "bench" / f"results-{isa}.md" for isa in BENCH_ISAS},
            "paper": OUT / "paper" / "readme_table.md",
            "beyond": OUT / "paper" / "beyond" / "beyond.md",
            "analysis": OUT / "analysis" / "analysis.json",
@@ -48,15 +52,17 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            "crazyflie": OUT / "crazyflie" / "side-by-side.md",
            "crazyflie-real": OUT / "crazyflie" / "real-flights.md",
            "geometric": OUT / "geometric" / "geometric.json",
+           "objcode": OUT / "bench" / "objcode.md",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
               for p in ("float32", "isa", "fma")},
            **{f"px4-{p}": OUT / "px4" / f"{p}.md" for p in ("speed", "identify", "side")}}
 # the page that holds each table block
-PAGES = {"bench": ROOT / "docs" / "performance.md",
+PAGES = {**{f"bench-{isa}": ROOT / "docs" / "performance.md" for isa in BENCH_ISAS},
          "paper": ROOT / "docs" / "tour" / "paper.md",
          "beyond": ROOT / "docs" / "tour" / "beyond.md",
          "embedded": ROOT / "docs" / "tour" / "flight-controller.md",
          "targets": ROOT / "docs" / "targets.md",
+         "objcode": ROOT / "docs" / "performance.md",
          "crazyflie": ROOT / "docs" / "crazyflie.md",
          "crazyflie-real": ROOT / "docs" / "crazyflie.md",
          "geometric": ROOT / "docs" / "tour" / "geometric.md",
@@ -64,10 +70,11 @@ PAGES = {"bench": ROOT / "docs" / "performance.md",
          **{f"px4-{p}": ROOT / "docs" / "px4.md" for p in ("speed", "identify", "side")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
-COPIES = {"bench": ROOT / "bench" / "results.md",
+COPIES = {**{f"bench-{isa}": ROOT / "bench" / f"results-{isa}.md" for isa in BENCH_ISAS},
           "analysis": MEASURED / "analysis.json",
           "verify": MEASURED / "verification.json",
           "embedded": MEASURED / "embedded.json",
+          "objcode": MEASURED / "objcode.md",
           "crazyflie": MEASURED / "crazyflie.md",
           "crazyflie-real": MEASURED / "crazyflie-real.md",
           "geometric": MEASURED / "geometric.json",
@@ -192,6 +199,13 @@ def pages():
 
 
 if __name__ == "__main__":
+    if sys.argv[1:] == ["bench"]:         # each ISA's table that a run wrote
+        found = [f"bench-{isa}" for isa in BENCH_ISAS if SOURCES[f"bench-{isa}"].is_file()]
+        if not found:
+            raise SystemExit("no out/bench/results-ISA.md: run make bench first")
+        for name in found:
+            publish(name, SOURCES[name])
+        raise SystemExit(0)
     if len(sys.argv) not in (2, 3) or sys.argv[1] not in SOURCES:
         raise SystemExit(__doc__)
     publish(sys.argv[1], sys.argv[2] if len(sys.argv) == 3 else SOURCES[sys.argv[1]])

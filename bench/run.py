@@ -1,7 +1,9 @@
 """`make bench`: timings in one run, medians of repeats, ratios beside absolute times.
 
-Prints a Markdown table and writes it to out/bench/results.md (``--out``); the tracked
-bench/results.md and the table of docs/performance.md change only through ``python bench/publish.py bench``.
+Prints a Markdown table and writes it to out/bench/results-ISA.md (``--out``), ISA the
+batch kernel's build (the CPU's widest, or what $QUADCOG_KERNEL_ISA pins: an AVX2 build on
+an AVX-512 CPU is labelled as such); the tracked bench/results-ISA.md and the tables of
+docs/performance.md change only through ``python bench/publish.py bench``.
 No assertion: these machines are noisy, so what counts is the ratios measured side by side in
 the same run.
 """
@@ -10,6 +12,7 @@ import os
 from pathlib import Path
 import platform
 import statistics
+import subprocess
 import sys
 import time
 import timeit
@@ -353,21 +356,41 @@ def bench_vector_limits(ns_per_flight_step, seconds=1.0):
     nbytes = (2 * step.nnz_in(0) * 2 + step.nnz_in(1)) * 8
     record("vector step: memory traffic", f"{nbytes}", "bytes per flight-step", "", "",
            f"{nbytes / ns_per_flight_step:.1f} GB/s per thread, from L1")
+    bench_object_code(roof["isa"])
     return roof
 
 
+def bench_object_code(isa):
+    """The step loop's vector divisions and libmvec calls in the object code of this build,
+    against the same step emitted without hoisting and reciprocals (bench/objcode.py)."""
+    from bench.objcode import step_loop_counts
+    try:
+        new, old = step_loop_counts(isa), step_loop_counts(isa, "previous")
+    except (OSError, subprocess.CalledProcessError) as e:        # no objdump
+        record("object code: step loop", "absent", "", "", "", f"objdump failed: {e}")
+        return
+    calls = lambda c: ", ".join(f"{n} {name}" for name, n in c["calls"].items())
+    record(f"object code: step loop ({isa}), divisions", f"{new['divisions']}",
+           f"per pass of {new['lanes']} flights", f"{old['divisions']} not hoisted", "",
+           f"{new['instructions']} instructions per pass ({old['instructions']} not hoisted); "
+           f"calls: {calls(new)} (not hoisted: {calls(old)})")
+
+
 def bench_isa(n_flights, duration=20.0):
-    """The same batch (1 thread) from the portable build (SSE2 on x86-64) and from the native
-    one: CPU time per flight-step and whether the final states agree bit for bit."""
+    """The same batch (1 thread) from every build this CPU runs (its native ISA, AVX2 where
+    that is narrower, the portable build): CPU time per flight-step, and how many final
+    states differ from the build of this run. A narrower build on a wider CPU runs on that
+    CPU's units and clock: an AVX2 build on an AVX-512 CPU is not an AVX2 CPU."""
     import quadcog.codegen.vector_kernel as qk
-    native = qk.detect_isa()
+    native, built = qk.detect_isa(), qk.kernel_isa()
     ctl = AdaptiveFeedbackLinearization()
     vehicles = _batch_vehicles(n_flights)
     kw = dict(trajectory="hover", duration=duration, cog_shape=lambda t: float(t >= 1.0),
               threads=1)
-    print(f"{n_flights} flights of {duration:g} s: portable against {native} build")
+    isas = [i for i in qk.ISAS[qk.ISAS.index(native):] if i in (native, "avx2", "portable")]
+    print(f"{n_flights} flights of {duration:g} s: builds {', '.join(isas)}")
     out = {}
-    for isa in dict.fromkeys(("portable", native)):
+    for isa in isas:
         pinned = qk.kernel_isa
         qk.kernel_isa = lambda _isa=isa: _isa
         try:
@@ -379,15 +402,20 @@ def bench_isa(n_flights, duration=20.0):
             qk.kernel_isa = pinned
         out[isa] = (r, (c1.user - c0.user) + (c1.system - c0.system))
     steps = n_flights * int(round(duration / 1e-3))
-    (rp, cp), (rn, cn) = out["portable"], out[native]
-    differ = int(np.sum(np.any(rp.final_state != rn.final_state, axis=1)))
-    worst = float(np.max(np.abs(rp.final_state - rn.final_state)
-                         / np.maximum(np.abs(rn.final_state), 1e-300)))
-    record(f"batch: portable build ({qk.lanes_for('portable')} lanes), 1 thread",
-           f"{cp / steps * 1e9:.0f}", "ns per flight-step (CPU)",
-           f"{cp / max(cn, 1e-9):.2f}x {native}", "",
-           f"{native} ({qk.lanes_for(native)} lanes): {cn / steps * 1e9:.0f} ns; final states "
-           f"differ in {differ} of {n_flights} flights, at most {worst:.1e} relative")
+    rb, cb = out[built]
+    for isa in isas:
+        r, c = out[isa]
+        differ = int(np.sum(np.any(r.final_state != rb.final_state, axis=1)))
+        worst = float(np.max(np.abs(r.final_state - rb.final_state)
+                             / np.maximum(np.abs(rb.final_state), 1e-300)))
+        where = ("the CPU's native build" if isa == native else
+                 f"on this {native} CPU, not on an {isa} CPU" if isa != "portable" else
+                 f"the compiler's default target, on this {native} CPU")
+        record(f"batch: {isa} build ({qk.lanes_for(isa)} lanes), 1 thread",
+               f"{c / steps * 1e9:.0f}", "ns per flight-step (CPU)",
+               f"{c / max(cb, 1e-9):.2f}x {built}", "<= 150 ns" if isa == "avx2" else "",
+               f"{where}; final states differ from the {built} build's in {differ} of "
+               f"{n_flights} flights, at most {worst:.1e} relative")
 
 
 def bench_float32(n_flights, duration=20.0):
@@ -481,18 +509,28 @@ def bench_crazyflow(n_flights, n_steps, quadcog_rate):
     cmd = np.zeros((n_flights, 1, 16))
     cmd[..., 2], cmd[..., 12] = 1.0, 1.0           # hover at 1 m, identity quaternion
     sim.state_control(cmd)
-    sim.step(n_steps)                               # compiles (jit per step count)
-    jax.block_until_ready(sim.data.states.pos)
-    t0 = time.perf_counter()
-    sim.step(n_steps)
-    jax.block_until_ready(sim.data.states.pos)
-    t = time.perf_counter() - t0
+    # the exact call timed, repeated until it stops compiling: the first sim.step(n) traces
+    # and compiles, the second traces and compiles again (it sees other array types); the
+    # timed call is the fourth, with the third's time beside it
+    calls = []
+    for _ in range(4):
+        t0 = time.perf_counter()
+        sim.step(n_steps)
+        jax.block_until_ready(sim.data.states.pos)
+        calls.append(time.perf_counter() - t0)
+    t = calls[-1]
     rate = n_flights * n_steps / t
     record(f"peer: crazyflow {version('crazyflow')}, {n_flights} flights x {n_steps} steps",
            f"{t:.2f}", "s", "", "", f"{rate:.0f} flight-steps/s, JAX {jax.__version__} CPU, "
-           "float64, first-principles + state control, RK4")
-    record("peer: quadcog vector kernel / crazyflow", f"{quadcog_rate / rate:.0f}",
-           "x (flight-steps/s)", "", "", "same flight count, 1 kHz, one run")
+           f"float64, first-principles + state control, RK4; the 4th call of sim.step("
+           f"{n_steps}) (the 3rd took {calls[2]:.2f} s)")
+    record("peer: crazyflow compile (first two calls less two warm ones)",
+           f"{calls[0] + calls[1] - 2 * t:.1f}", "s", "", "",
+           f"calls of sim.step({n_steps}): " + ", ".join(f"{c:.2f}" for c in calls)
+           + " s; JAX traces and compiles on the first two")
+    record("peer: quadcog vector kernel / crazyflow", f"{quadcog_rate / rate:.1f}",
+           "x (flight-steps/s)", "", "", "same flight count and horizon, 1 kHz, both warm, "
+           "wall time on the same cores, one run")
     return rate
 
 
@@ -524,20 +562,26 @@ def bench_rotorpy_batched(n_flights, seconds, quadcog_rate):
             "rotor_speeds": torch.full((B, 4), hover, dtype=torch.double)}
     vehicle = BatchedMultirotor(params, B, init, dev, control_abstraction="cmd_motor_speeds",
                                 integrator="rk4")
-    t0 = time.perf_counter()
-    rotorpy_batch(World.empty([-10, 10, -10, 10, -10, 10]), init, vehicle,
-                  BatchedSE3Control(params, B, dev),
-                  BatchedTrajectory([HoverTraj() for _ in range(B)], dev), BatchedNoWind(B),
-                  BatchedImu(B, device=dev), np.full(B, seconds), 0.001, 0.25,
-                  terminate=False, check_collisions=False)
-    t = time.perf_counter() - t0
+    def run():
+        t0 = time.perf_counter()
+        rotorpy_batch(World.empty([-10, 10, -10, 10, -10, 10]), init, vehicle,
+                      BatchedSE3Control(params, B, dev),
+                      BatchedTrajectory([HoverTraj() for _ in range(B)], dev), BatchedNoWind(B),
+                      BatchedImu(B, device=dev), np.full(B, seconds), 0.001, 0.25,
+                      terminate=False, check_collisions=False)
+        return time.perf_counter() - t0
+    first = run()                 # the same call once before (torch has no compile step)
+    t = run()
     steps = int(round(seconds / 0.001))
     rate = B * steps / t
     record(f"peer: rotorpy simulate_batch, {B} flights x {steps} steps", f"{t:.1f}", "s", "", "",
            f"{rate:.0f} flight-steps/s, torch {torch.__version__}, {torch.get_num_threads()} "
-           f"threads; 20 s extrapolated: {t * 20 / seconds:.0f} s")
+           f"threads; the 2nd of two equal calls (the 1st {first:.1f} s); not quadcog's "
+           f"horizon: its arrays grow with every step, so 20 s would take at least "
+           f"{t * 20 / seconds:.0f} s (extrapolated)")
     record("peer: quadcog vector kernel / rotorpy batched", f"{quadcog_rate / rate:.0f}",
-           "x (flight-steps/s)", "", "", "same flight count and step, one run")
+           "x (flight-steps/s)", "", "", "same flight count and step, one run; RotorPy at "
+           f"{steps} steps, quadcog at 20,000")
 
 
 def bench_rotorpy(quadcog_seconds):
@@ -556,9 +600,12 @@ def bench_rotorpy(quadcog_seconds):
     from rotorpy.vehicles.multirotor import Multirotor
     env = Environment(vehicle=Multirotor(quad_params), controller=SE3Control(quad_params),
                       trajectory=HoverTraj(), sim_rate=1000)
+    kw = dict(use_mocap=False, terminate=False, plot=False, animate_bool=False, verbose=False)
+    env.run(t_final=0.1, **kw)                 # the same call once, short, before the timed one
+    env = Environment(vehicle=Multirotor(quad_params), controller=SE3Control(quad_params),
+                      trajectory=HoverTraj(), sim_rate=1000)
     t0 = time.perf_counter()
-    env.run(t_final=20, use_mocap=False, terminate=False, plot=False, animate_bool=False,
-            verbose=False)
+    env.run(t_final=20, **kw)
     t = time.perf_counter() - t0
     record("peer: rotorpy Environment.run, 20 s at 1 ms", f"{t:.1f}", "s",
            f"{t / quadcog_seconds:.0f}x quadcog's simulate()", "",
@@ -569,13 +616,14 @@ def bench_rotorpy(quadcog_seconds):
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--flights", type=int, default=1000, help="batch size (default 1000)")
-    ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench" / "results.md",
-                    help="where to write the table (default: out/bench/results.md)")
+    ap.add_argument("--out", type=Path, default=None,
+                    help="where to write the table (default: out/bench/results-ISA.md, ISA "
+                         "the batch kernel's build: $QUADCOG_KERNEL_ISA pins it)")
     ap.add_argument("--peer-seconds", type=float, default=0.05,
                     help="simulated seconds of RotorPy's batched run (default 0.05: its "
                          "trajectory arrays grow with every step)")
-    ap.add_argument("--peer-steps", type=int, default=200,
-                    help="steps of crazyflow's timed run (default 200)")
+    ap.add_argument("--peer-steps", type=int, default=20000,
+                    help="steps of crazyflow's timed run (default 20000: quadcog's 20 s)")
     ap.add_argument("--scale", type=int, nargs="*", default=[10, 100, 1000, 10000],
                     help="batch sizes of the scale table (default 10 100 1000 10000)")
     args = ap.parse_args()
@@ -588,7 +636,10 @@ def main():
     record("machine: vector features", m["features"], "", "", "", "/proc/cpuinfo flags")
     record("machine: compiler", m["compiler"], "", "", "", "")
     record("machine: batch kernel build", m["isa"], "", "", "",
-           f"{m['lanes']} flights per block; flags {m['flags']}")
+           f"{m['lanes']} flights per block; flags {m['flags']}; "
+           + ("the CPU's widest" if m["isa"] == m["native"] else
+              f"pinned by ${m['isa_env']}, narrower than the CPU's {m['native']}: the figures "
+              f"are of a {m['isa']} build on this CPU, not of a {m['isa']} CPU"))
     record("machine: load before", load_before, "1/5/15 min", "", "", "/proc/loadavg")
     bench_single_call()
     bench_controllers()
@@ -608,13 +659,16 @@ def main():
     lines += ["| " + " | ".join(map(str, r)) + " |" for r in rows]
     table = "\n".join(lines)
     print("\n" + table)
-    out = args.out
+    out = args.out or ROOT / "out" / "bench" / f"results-{m['isa']}.md"
     out.parent.mkdir(parents=True, exist_ok=True)
+    build = (f"kernels built for {m['isa']}, the CPU's widest" if m["isa"] == m["native"] else
+             f"kernels built for {m['isa']} on a CPU that runs {m['native']}: not a CPU "
+             f"whose widest is {m['isa']}")
     out.write_text("# `make bench` results\n\nMedian of repeats, measured in one run on "
-                   f"{m['cpu']} ({m['cores']} cores, {m['machine']}, kernel built for "
-                   f"{m['isa']}), {time.strftime('%Y-%m-%d')}.\n\n" + table + "\n")
-    print(f"\nwritten to {out}; `python bench/publish.py bench` copies it into docs/performance.md and "
-          "bench/results.md")
+                   f"{m['cpu']} ({m['cores']} cores, {m['machine']}, {build}), "
+                   f"{time.strftime('%Y-%m-%d')}.\n\n" + table + "\n")
+    print(f"\nwritten to {out}; `python bench/publish.py bench` copies each "
+          "out/bench/results-ISA.md into docs/performance.md and bench/")
 
 
 if __name__ == "__main__":

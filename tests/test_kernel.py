@@ -11,7 +11,7 @@ import pytest
 import quadcog
 from quadcog.codegen.vector_kernel import emit_c, vector_flags
 import quadcog.sim.batch as batch_module
-from quadcog.sim.batch import batch_kernel
+from quadcog.sim.batch import batch_kernel, slow_row_entries
 from quadcog.sim.closed_loop import monitored_step, packed
 from quadcog.sim.divergence import Limits
 from quadcog.sim.plant import Actuation
@@ -93,18 +93,29 @@ def test_casadi_fallback_agrees(monkeypatch):
 
 @pytest.mark.skipif(platform.machine() != "x86_64" or shutil.which("cc") is None,
                     reason="checks gcc's x86-64 vectorizer")
-def test_gcc_vectorizes_the_step_with_libmvec(tmp_path):
+@pytest.mark.parametrize("isa", ["avx2", "avx512"])
+def test_gcc_vectorizes_the_step_with_libmvec(tmp_path, isa):
+    """Every loop of the kernel (once per call, on a change of the CoG, each step) is vector
+    code for either ISA, whatever this CPU runs (compiled only), with libmvec's sin of that
+    ISA; and the step loop keeps few divisions (hoisted, or through reciprocals: 170
+    without)."""
     ctl = quadcog.FeedbackLinearization()           # sin, cos, tan, atan2 like the others
     actuation = Actuation.of(ctl.vehicle)
+    text = emit_c(packed(monitored_step(ctl, actuation, Limits())), slow=slow_row_entries())
     src = tmp_path / "k.c"
-    src.write_text(emit_c(packed(monitored_step(ctl, actuation, Limits()))))
-    flags = [f for f in vector_flags() if f not in ("-shared", "-fPIC")]
-    r = subprocess.run(["cc", *flags, "-fopt-info-vec-optimized", "-c", str(src), "-o",
+    src.write_text(text)
+    flags = [f for f in vector_flags(isa) if f not in ("-shared", "-fPIC")]
+    r = subprocess.run(["cc", *flags, "-fopt-info-vec-all", "-c", str(src), "-o",
                         str(tmp_path / "k.o")], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-2000:]
-    assert "loop vectorized" in r.stderr, r.stderr[-2000:]
+    vectorized = r.stderr.count("optimized: loop vectorized")
+    assert text.count("#pragma omp simd") == 3 and vectorized >= 3, r.stderr[-2000:]
+    assert "not vectorized: control flow" not in r.stderr, r.stderr[-2000:]
     nm = subprocess.run(["nm", str(tmp_path / "k.o")], capture_output=True, text=True).stdout
-    assert "_ZGV" in nm and "sin" in nm, nm          # libmvec's vector sin, not a scalar loop
+    abi = {"avx2": "_ZGVd", "avx512": "_ZGVe"}[isa]
+    assert any(s.startswith(abi) and s.endswith("_sin") for s in nm.split()), nm
+    step_loop = text[text.rindex("#pragma omp simd"):]
+    assert step_loop.count(" / ") <= 20
 
 
 @pytest.mark.parametrize("name", sorted(quadcog.controllers.BY_NAME))
@@ -129,3 +140,39 @@ def test_sweep_engine_equals_single_flights(kernel):
         assert b.diverged[i] == m.diverged
         for name in METRICS:
             assert getattr(b, name)[i] == pytest.approx(getattr(m, name), rel=1e-9, abs=1e-12)
+
+
+def test_hoisting_changes_no_bit(monkeypatch):
+    """What the kernel computes once per call or on a change of the slow row entries (the CoG
+    profile, the payloads) gives the bits of computing it every step (without reciprocals,
+    hoisting reorders no rounding): a CoG that ramps (it changes every step for 0.1 s, then
+    stays) over 400 steps, flown with and without hoisting. A hoisted value left stale after
+    a change, a change not detected, or a step value hoisted would differ."""
+    import functools
+
+    import quadcog.codegen.vector_kernel as qk
+    from quadcog.sim.prepare import batch_start, start_at_reference, whole_body
+    from quadcog.sim.schedule import Schedule
+    from quadcog.sim.timeline import PayloadProfile
+    from quadcog.sim.vector_batch import cog_shapes, sweep_step
+    from quadcog.trajectories.registry import as_trajectory
+    monkeypatch.setattr(qk, "emit_c", functools.partial(qk.emit_c, reciprocals=False))
+    ctl = quadcog.AdaptiveFeedbackLinearization()
+    actuation = Actuation.of(ctl.vehicle)
+    step = packed(sweep_step(ctl, actuation, Limits(), 1))
+    hoisted = qk.VectorKernel(step, isa="portable", slow=slow_row_entries(1))
+    plain = qk.VectorKernel(step, isa="portable")
+    assert hoisted.library != plain.library
+    schedule = Schedule.build(as_trajectory("circle"), 0.4, 1e-3,
+                              payloads=PayloadProfile([], ()))
+    shapes = cog_shapes(schedule.t, [(0.15, 0.1)])
+    rng = np.random.default_rng(5)
+    B = 11
+    P = np.array([ctl.vehicle.airframe.parameters()] * B)
+    Q = np.hstack([P, np.column_stack([rng.uniform(-0.05, 0.05, (B, 2)), np.zeros(B)])])
+    Z = batch_start(ctl, actuation, whole_body(P, schedule.payload[0]),
+                    start_at_reference(schedule.ref[0]))
+    rows = schedule.rows(0, schedule.n_steps, shapes)
+    a, b = hoisted(Z, Q, rows), plain(Z, Q, rows)
+    assert np.all(np.isfinite(a)) and a.tobytes() == b.tobytes()
+    assert not np.array_equal(a, plain(Z, Q, schedule.rows(0, schedule.n_steps, 0 * shapes)))

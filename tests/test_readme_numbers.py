@@ -14,10 +14,14 @@ def _publish():
     return mod
 
 
-def test_bench_table_is_the_published_bench_run():
+def test_bench_tables_are_the_published_bench_runs():
+    """One table per ISA (an AVX-512 and an AVX2 build), each the copy of its run's file."""
     pub = _publish()
-    readme = pub.PAGES["bench"].read_text()
-    assert pub.block(readme, "bench") == pub.table_of((ROOT / "bench" / "results.md").read_text())
+    for isa in pub.BENCH_ISAS:
+        readme = pub.PAGES[f"bench-{isa}"].read_text()
+        copy = (ROOT / "bench" / f"results-{isa}.md").read_text()
+        assert pub.block(readme, f"bench-{isa}") == pub.table_of(copy)
+        assert f"kernels built for {isa}" in pub.machine_of(copy)
 
 
 def test_publish_replaces_only_its_block(tmp_path):
@@ -33,7 +37,7 @@ def test_publish_replaces_only_its_block(tmp_path):
 
 def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
     """`make bench` (bench/run.py's main, its measurements stubbed, its root moved to a
-    temporary folder) writes the table into out/bench/results.md and nothing into bench/."""
+    temporary folder) writes the table into out/bench/results-ISA.md and nothing into bench/."""
     monkeypatch.setattr(sys, "path", list(sys.path))          # run.py inserts the root
     spec = importlib.util.spec_from_file_location("bench_run", ROOT / "bench" / "run.py")
     run = importlib.util.module_from_spec(spec)
@@ -48,22 +52,24 @@ def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
     monkeypatch.setattr(run, "rows", [("a measurement", "1.5", "s", "", "", "")])
     monkeypatch.setattr(run, "ROOT", tmp_path)
     monkeypatch.setattr(sys, "argv", ["run.py"])
-    tracked = (ROOT / "bench" / "results.md").read_bytes()
+    tracked = {p: p.read_bytes() for p in (ROOT / "bench").glob("results-*.md")}
     run.main()
-    written = (tmp_path / "out" / "bench" / "results.md").read_text()
+    from bench.machine import machine
+    written = (tmp_path / "out" / "bench" / f"results-{machine()['isa']}.md").read_text()
     assert "| a measurement | 1.5 | s |" in written
     assert not (tmp_path / "bench").exists()
-    assert (ROOT / "bench" / "results.md").read_bytes() == tracked
+    assert {p: p.read_bytes() for p in (ROOT / "bench").glob("results-*.md")} == tracked
 
 
 def test_bench_figures_name_their_machine():
     """The published bench table says which machine and day it came from: the line the run
     wrote above its table, copied with it."""
     pub = _publish()
-    page = pub.PAGES["bench"].read_text()
-    machine = pub.block(page, "bench-machine")
-    assert machine == pub.machine_of((ROOT / "bench" / "results.md").read_text())
-    assert "cores" in machine and "20" in machine
+    for isa in pub.BENCH_ISAS:
+        page = pub.PAGES[f"bench-{isa}"].read_text()
+        machine = pub.block(page, f"bench-{isa}-machine")
+        assert machine == pub.machine_of((ROOT / "bench" / f"results-{isa}.md").read_text())
+        assert "cores" in machine and "20" in machine
 
 
 # -- numbers in the prose: <!-- value NAME KEY FORMAT -->...<!-- /value --> (bench/publish.py) --
@@ -147,4 +153,5 @@ def test_every_published_markdown_table_is_its_tracked_copy():
         if f"<!-- BEGIN {name}-machine -->" in page:
             assert pub.block(page, f"{name}-machine") == machine, name
         checked.append(name)
-    assert {"bench", "precision-float32", "precision-isa", "precision-fma"} <= set(checked)
+    assert {"bench-avx512", "bench-avx2", "objcode", "precision-float32", "precision-isa",
+            "precision-fma"} <= set(checked)

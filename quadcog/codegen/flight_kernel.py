@@ -29,15 +29,16 @@ import hashlib
 import casadi as ca
 import numpy as np
 
+from quadcog.codegen import hoisting
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
+from quadcog.codegen.hoisting import CONSTANT as _CONSTANT
+from quadcog.codegen.hoisting import SLOW as _SLOW
+from quadcog.codegen.hoisting import STEP as _STEP
 from quadcog.codegen.vector_kernel import ISA_FLAGS, TARGETS, kernel_isa
 from quadcog.errors import CompileError, KernelError
 
 __all__ = ["flight_flags", "emit_flight_c", "FlightKernel"]
-
-_CONSTANT, _SLOW, _STEP = 0, 1, 2      # when an instruction runs: once, on a change, each step
-
 
 def flight_flags(isa: str | None = None) -> tuple[str, ...]:
     """Compiler flags of the single-flight kernel.
@@ -54,43 +55,6 @@ def flight_flags(isa: str | None = None) -> tuple[str, ...]:
     """
     isa = kernel_isa() if isa is None else isa
     return ("-O3", *ISA_FLAGS[isa], "-ffp-contract=off", "-fno-math-errno", "-shared", "-fPIC")
-
-
-def _levels(step: ca.Function, constant: frozenset[int], slow: frozenset[int]) -> list[int]:
-    """The level (_CONSTANT, _SLOW, _STEP) of every instruction's result."""
-    level_of_input = [(_CONSTANT if i in constant else _SLOW if i in slow else _STEP)
-                      for i in range(step.n_in())]
-    slot: dict[int, int] = {}
-    levels = []
-    for k in range(step.n_instructions()):
-        op = step.instruction_id(k)
-        ins, outs = step.instruction_input(k), step.instruction_output(k)
-        if op == ca.OP_INPUT:
-            level = level_of_input[ins[0]]
-        elif op == ca.OP_CONST:
-            level = _CONSTANT
-        elif op == ca.OP_OUTPUT:
-            level = _STEP
-        else:
-            level = max((slot[i] for i in ins if i >= 0), default=_CONSTANT)
-        if op != ca.OP_OUTPUT:
-            slot[outs[0]] = level
-        levels.append(level)
-    return levels
-
-
-def _divisor_uses(step: ca.Function) -> dict[int, int]:
-    """How many divisions divide by each instruction's result: instruction -> count."""
-    made_by: dict[int, int] = {}       # work slot -> the instruction whose result it holds
-    uses: dict[int, int] = {}
-    for k in range(step.n_instructions()):
-        op, ins, outs = step.instruction_id(k), step.instruction_input(k), step.instruction_output(k)
-        if op == ca.OP_DIV:
-            d = made_by[ins[1]]
-            uses[d] = uses.get(d, 0) + 1
-        if op != ca.OP_OUTPUT:
-            made_by[outs[0]] = k
-    return uses
 
 
 def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
@@ -144,13 +108,14 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
                           f"{n_in - 1}")
     target = TARGETS["float64"]
     one, zero = target.literal(1.0), target.literal(0.0)
-    levels = _levels(step, constant_set, slow_set)
+    levels = hoisting.levels(step, lambda i, nz: (_CONSTANT if i in constant_set else _SLOW
+                                                  if i in slow_set else _STEP))
     rows = [step.nnz_in(i) for i in range(n_in)]
     blocks: dict[int, list[str]] = {_CONSTANT: [], _SLOW: [], _STEP: []}
     calls: dict[str, int] = {}
     name_of: dict[int, str] = {}          # work slot -> the variable that holds it now
     code_var = None
-    uses = _divisor_uses(step) if reciprocals else {}
+    uses = hoisting.divisor_uses(step) if reciprocals else {}
     made_by: dict[int, int] = {}          # work slot -> the instruction of its value
     inverted: set[int] = set()            # instructions whose reciprocal r<k> is declared
 
@@ -179,7 +144,7 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
             rhs = read(ins[0], ins[1])
         elif op == ca.OP_CONST:
             rhs = target.literal(step.instruction_constant(k))
-        elif op == ca.OP_DIV and _through_reciprocal(made_by[ins[1]], level, levels, uses):
+        elif op == ca.OP_DIV and hoisting.through_reciprocal(made_by[ins[1]], level, levels, uses):
             d = made_by[ins[1]]
             if d not in inverted:       # once, where the divisor is computed
                 inverted.add(d)
@@ -229,11 +194,6 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
   return stop;
 }}
 """
-
-
-def _through_reciprocal(d: int, level: int, levels: list[int], uses: dict[int, int]) -> bool:
-    """Whether a division (at ``level``) by instruction d's result goes through 1 / d."""
-    return d in uses and (uses[d] > 1 or levels[d] < level)
 
 
 class FlightKernel:

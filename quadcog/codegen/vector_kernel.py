@@ -32,7 +32,7 @@ asked for is the thread count used. A flight's bits do not depend on the block i
 lane runs the same vector code; a partial block is padded), so results are the same for any
 batch size, thread count or chunking.
 """
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Sequence
 import ctypes
 import functools
 import hashlib
@@ -45,11 +45,12 @@ import warnings
 import casadi as ca
 import numpy as np
 
+from quadcog.codegen import hoisting
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.errors import CompileError, InputError, KernelError, QuadcogWarning
 
-__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "TARGETS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
+__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "SCHEDULE_FLAGS", "TARGETS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
            "ISA_ENV", "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c",
            "kernel_for", "kernel_isa", "lanes_for", "vector_flags"]
 
@@ -68,6 +69,11 @@ ISA_FLAGS = {"avx512": ("-mavx512f", "-mavx512dq", "-mavx512vl", "-mavx512bw", "
 # every bit); unset, the CPU's widest is used
 ISA_ENV = "QUADCOG_KERNEL_ISA"
 VECTOR_BITS = {"avx512": 512, "avx2": 256, "sse2": 128, "portable": 128}
+# gcc's register-pressure-aware scheduling before allocation: the step holds more live
+# values than the vector registers, and CasADi's instruction order keeps many of them alive
+# long; reordered, fewer are spilled to the stack (llvm-mca's Zen 3 model: 528 -> 462 cycles
+# per flight-step of the AVX2 loop; docs/performance.md). The bits do not change.
+SCHEDULE_FLAGS = ("-fschedule-insns", "-fsched-pressure", "-fira-loop-pressure")
 VECTORS_PER_BLOCK = 4   # independent vectors per operation: enough to hide a few cycles' latency
 _BYTES = {"float64": 8, "float32": 4}
 C_TYPE = {"float64": "double", "float32": "float"}
@@ -224,12 +230,27 @@ def vector_flags(isa: str | None = None, precision: str = "float64") -> tuple[st
     f = "f" if _check_precision(precision) == "float32" else ""
     return ("-O3", *ISA_FLAGS[isa], "-ffp-contract=off", "-fno-math-errno",
             "-fno-trapping-math", "-fopenmp-simd", f"-fno-builtin-sin{f}",
-            f"-fno-builtin-cos{f}", "-shared", "-fPIC")
+            f"-fno-builtin-cos{f}", *SCHEDULE_FLAGS, "-shared", "-fPIC")
 
 
 def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
-           precision: str = "float64") -> str:
+           precision: str = "float64", slow: Sequence[int] = (), reciprocals: bool = True
+           ) -> str:
     """C source of the kernel of the SX Function ``step(Z, Q, row) -> Z_next``.
+
+    What a flight computes less often than every step is hoisted out of the step
+    (``quadcog.codegen.hoisting``, as in the single-flight kernel), per flight and so per
+    lane: what depends only on Q (and literals) runs once per block and call, what depends
+    only on Q and the ``slow`` entries of the row runs again only at the steps where those
+    entries differ, bit for bit, from the last run of them (the row is shared by the
+    flights, so all lanes of a block rerun together). Their results reach the step through
+    a per-block array of lanes. A divisor shared by several divisions or computed less often
+    is inverted once (``reciprocals``).
+
+    The sine and cosine of one angle stay two libmvec calls: gcc 12 does not if-convert a
+    loop that calls libmvec's vector ``sincos`` (it writes through pointers), so such a loop
+    is not vectorized, and an inline sincos (fdlibm's kernels) measured no faster than the
+    two calls (docs/performance.md).
 
     Parameters
     ----------
@@ -242,6 +263,11 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
         Flights per block.
     precision : str
         "float64" (double) or "float32" (float, sinf, float literals).
+    slow : sequence of int
+        The nonzeros of the row that change seldom (the CoG profile, the payloads).
+    reciprocals : bool
+        Divide through reciprocals (``quadcog.codegen.hoisting.through_reciprocal``: one
+        rounding more, at most an ulp, per such division).
 
     Returns
     -------
@@ -255,22 +281,107 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     nZ, nQ, nR = (step.nnz_in(i) for i in range(3))
     if step.nnz_out(0) != nZ or step.n_in() != 3 or step.n_out() != 1:
         raise KernelError(f"{step.name()}: expected step(Z, Q, row) -> Z_next of equal size")
+    slow_set = frozenset(int(i) for i in slow)
+    if not slow_set <= set(range(nR)):
+        raise KernelError(f"{step.name()}: slow row entries {sorted(slow_set)} outside 0 .. "
+                          f"{nR - 1}")
     target = TARGETS[precision]
-    inputs = (lambda nz: f"z[{nz * lanes}+j]", lambda nz: f"q[{nz * lanes}+j]",
-              lambda nz: f"row[{nz}]")
-    c = sxc.walk(step, target, read=lambda i, nz: inputs[i](nz),
-                 write=lambda i, nz: f"zn[{nz * lanes}+j]")
     real, sfx = C_TYPE[precision], target.suffix
+    one, zero = target.literal(1.0), target.literal(0.0)
+    levels = hoisting.levels(step, lambda i, nz: (
+        hoisting.CONSTANT if i == 1 else hoisting.SLOW if i == 2 and nz in slow_set
+        else hoisting.STEP))
+    uses = hoisting.divisor_uses(step) if reciprocals else {}
+    blocks: dict[int, list[str]] = {hoisting.CONSTANT: [], hoisting.SLOW: [], hoisting.STEP: []}
+    level_of: dict[str, int] = {}         # variable -> the loop that computes it
+    hoisted: dict[str, int] = {}          # variable -> its row in h (read by a later loop)
+    free: dict[int, str] = {}             # instruction -> C text valid in any loop
+    reads: set[str] = set()               # the texts of free that read memory (Q, the row)
+    name_of: dict[int, str] = {}          # work slot -> the C text of its value now
+    made_by: dict[int, int] = {}          # work slot -> the instruction of its value
+    calls: dict[str, int] = {}
+
+    loaded: dict[tuple[str, int], str] = {}    # (memory read, loop) -> its local variable
+
+    def load(text: str, level: int) -> str:
+        """A memory read as a local of the loop, read once: a select of a read would not be
+        if-converted (gcc does not speculate a load), which stops the vectorizer."""
+        if (text, level) not in loaded:
+            loaded[text, level] = f"l{len(loaded)}"
+            blocks[level].append(f"{real} {loaded[text, level]} = {text};")
+        return loaded[text, level]
+
+    def use(text: str, level: int) -> str:
+        """A value in the loop of ``level``: its variable, or its row of h."""
+        if text in reads:
+            return load(text, level)
+        if text not in level_of or level_of[text] == level:
+            return text
+        if text not in hoisted:
+            hoisted[text] = len(hoisted)
+            blocks[level_of[text]].append(f"h[{hoisted[text] * lanes}+j] = {text};")
+        return load(f"h[{hoisted[text] * lanes}+j]", level)
+
+    def define(var: str, rhs: str, level: int) -> None:
+        blocks[level].append(f"{real} {var} = {rhs};")
+        level_of[var] = level
+
+    for k in range(step.n_instructions()):
+        op, level = step.instruction_id(k), levels[k]
+        ins, outs = step.instruction_input(k), step.instruction_output(k)
+        if op == ca.OP_OUTPUT:
+            blocks[hoisting.STEP].append(
+                f"zn[{outs[1] * lanes}+j] = {use(name_of[ins[0]], hoisting.STEP)};")
+            continue
+        var = f"v{k}"
+        if op == ca.OP_CONST:
+            free[k] = var = target.literal(step.instruction_constant(k))
+        elif op == ca.OP_INPUT and ins[0] == 1:
+            free[k] = var = f"q[{ins[1] * lanes}+j]"
+            reads.add(var)
+        elif op == ca.OP_INPUT and ins[0] == 2:
+            free[k] = var = f"row[{ins[1]}]"
+            reads.add(var)
+        elif op == ca.OP_INPUT:
+            define(var, f"z[{ins[1] * lanes}+j]", level)
+        elif op == ca.OP_DIV and hoisting.through_reciprocal(made_by[ins[1]], level, levels,
+                                                              uses):
+            d = made_by[ins[1]]
+            r = f"r{d}"
+            if r not in level_of:          # once, where the divisor is computed
+                define(r, f"{one} / {use(name_of[ins[1]], levels[d])}", levels[d])
+            define(var, f"{use(name_of[ins[0]], level)} * {use(r, level)}", level)
+        else:
+            form = sxc.template(op, target)
+            if form is None:
+                raise KernelError(f"{step.name()}: CasADi operation {sxc.op_name(op)} "
+                                  f"(instruction {k}) has no C form in quadcog.codegen.sx_to_c")
+            call = sxc.CALL.match(form)
+            if call:
+                calls[call.group(1)] = call.group(2).count(",") + 1
+            define(var, form.format(*(use(name_of[n], level) for n in ins), one=one,
+                                    zero=zero, f=sfx), level)
+        name_of[outs[0]] = var
+        made_by[outs[0]] = k
     # const + simd: gcc may call libmvec's vector versions (flags: -fno-builtin-sin/cos, or
-    # gcc merges sin and cos into a sincos that has no vector form); sqrt, fabs, floor, ceil
-    # and copysign are inlined as vector instructions
+    # gcc merges sin and cos into a sincos that has no vector form); sqrt, fabs, floor,
+    # ceil and copysign are inlined as vector instructions
     decls = "".join(f"{real} {f}{sfx}({', '.join([real] * n)})"
                     + (" __attribute__((const, __simd__(\"notinbranch\")))"
                        if f in _VECTOR_MATH else "") + ";\n"
-                    for f, n in sorted(c.calls.items()))
-    work = ", ".join(f"w{i}" for i in range(step.sz_w()))
-    lines = "\n      ".join(c.statements)
+                    for f, n in sorted(calls.items()))
+    runs = _runs(sorted(slow_set))
+    changed = " || ".join(f"memcmp(row + {lo}, rows + last * NR + {lo}, {n} * sizeof(real))"
+                          for lo, n in runs)
+    body = {lv: "\n        ".join(b) for lv, b in blocks.items()}
+    simd = "#pragma omp simd\n"
+    constant_loop = (f"    {simd}    for (long j = 0; j < LANES; ++j) {{\n        "
+                     f"{body[hoisting.CONSTANT]}\n    }}\n" if blocks[hoisting.CONSTANT] else "")
+    slow_loop = (f"      if (last < 0 || {changed or '0'}) {{\n        last = k;\n"
+                 f"        {simd}        for (long j = 0; j < LANES; ++j) {{\n        "
+                 f"{body[hoisting.SLOW]}\n        }}\n      }}\n" if blocks[hoisting.SLOW] else "")
     return f"""/* quadcog vector kernel for {step.name()} ({precision}): generated, do not edit. */
+#include <string.h>
 typedef {real} real;
 {decls}#define LANES {lanes}
 #define NZ {nZ}
@@ -281,18 +392,30 @@ void {name}(long n_steps, const real *rows, real *Z, const real *Q, long n_block
     real *z = Z + b * NZ * LANES;
     const real *q = Q + b * NQ * LANES;
     real zn[NZ * LANES] __attribute__((aligned(64)));
-    for (long k = 0; k < n_steps; ++k) {{
+    real h[{max(1, len(hoisted)) * lanes}] __attribute__((aligned(64)));
+    long last = -1;
+    (void) last; (void) h; (void) q;
+{constant_loop}    for (long k = 0; k < n_steps; ++k) {{
       const real *row = rows + k * NR;
-      #pragma omp simd
-      for (long j = 0; j < LANES; ++j) {{
-      real {work};
-      {lines}
+{slow_loop}      {simd}      for (long j = 0; j < LANES; ++j) {{
+        {body[hoisting.STEP]}
       }}
       for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];
     }}
   }}
 }}
 """
+
+
+def _runs(entries: list[int]) -> list[tuple[int, int]]:
+    """Sorted integers as runs of consecutive ones: [(first, length), ...]."""
+    runs: list[tuple[int, int]] = []
+    for e in entries:
+        if runs and runs[-1][0] + runs[-1][1] == e:
+            runs[-1] = (runs[-1][0], runs[-1][1] + 1)
+        else:
+            runs.append((e, 1))
+    return runs
 
 
 class VectorKernel:
@@ -311,6 +434,8 @@ class VectorKernel:
         One of ``ISAS`` (default ``kernel_isa()``); one the CPU cannot run is refused.
     precision : str
         "float64" or "float32".
+    slow : sequence of int
+        The nonzeros of the row that change seldom (``emit_c``).
 
     Attributes
     ----------
@@ -320,7 +445,7 @@ class VectorKernel:
     """
 
     def __init__(self, step: ca.Function, lanes: int | None = None, isa: str | None = None,
-                 precision: str = "float64") -> None:
+                 precision: str = "float64", slow: Sequence[int] = ()) -> None:
         cc = find_compiler()
         if cc is None:
             raise KernelError("no C compiler")
@@ -331,6 +456,7 @@ class VectorKernel:
             raise KernelError(f"isa={isa!r}: this CPU runs at most {native!r} (CPU flags of "
                               "/proc/cpuinfo); its instructions would stop the process")
         self.nZ, self.nQ, self.nR = (step.nnz_in(i) for i in range(3))
+        self.slow = tuple(slow)
         try:
             self._build(step, cc, isa, lanes)
         except CompileError as e:
@@ -349,7 +475,7 @@ class VectorKernel:
         self.isa = isa
         self.lanes = lanes_for(isa, self.precision) if lanes is None else int(lanes)
         self.flags = vector_flags(isa, self.precision) + ("-Wl,--no-as-needed", "-lmvec")
-        source = emit_c(step, "qc_kernel", self.lanes, self.precision).encode()
+        source = emit_c(step, "qc_kernel", self.lanes, self.precision, self.slow).encode()
         # the ISA in the name too: the flags are in the cache key already
         stem = f"vector_kernel_{isa}_" + hashlib.sha256(source).hexdigest()[:12]
         self.library = compile_library(source, stem, cc, flags=self.flags)
@@ -410,7 +536,8 @@ _warned: list = []
 
 
 def kernel_for(key: Hashable, build_step: Callable[[], ca.Function], required: bool = False,
-               precision: str = "float64", isa: str | None = None) -> "VectorKernel | None":
+               precision: str = "float64", isa: str | None = None,
+               slow: Sequence[int] = ()) -> "VectorKernel | None":
     """The VectorKernel of the step that ``build_step()`` makes, once per key and process.
 
     Parameters
@@ -425,6 +552,8 @@ def kernel_for(key: Hashable, build_step: Callable[[], ca.Function], required: b
         "float64" or "float32".
     isa : str, optional
         One of ``ISAS`` (default ``kernel_isa()``).
+    slow : sequence of int
+        The nonzeros of the row that change seldom (``emit_c``).
 
     Returns
     -------
@@ -434,10 +563,10 @@ def kernel_for(key: Hashable, build_step: Callable[[], ca.Function], required: b
     """
     precision = _check_precision(precision)
     isa = kernel_isa() if isa is None else _check_isa(isa)
-    key = (key, precision, isa)
+    key = (key, precision, isa, tuple(slow))
     if key not in _kernels:
         try:
-            _kernels[key] = VectorKernel(build_step(), isa=isa, precision=precision)
+            _kernels[key] = VectorKernel(build_step(), isa=isa, precision=precision, slow=slow)
         except (KernelError, CompileError) as e:
             if required:
                 raise KernelError(f"the vector kernel cannot be built here: {e}") from None

@@ -16,18 +16,18 @@ from quadcog.codegen.vector_kernel import VectorKernel, kernel_for
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_STATE, R_G
-from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, monitored_chunk_function, monitored_step, packed
+from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, SLOW_INPUTS, monitored_chunk_function, monitored_step, packed
 from quadcog.sim.divergence import DivergenceCause, Limits, divergence_rule, magnitude
 from quadcog.sim.plant import Actuation, TruthOptions
 from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference, whole_body
 from quadcog.sim.result import metric_arrays, position_errors
-from quadcog.sim.schedule import Schedule, cog_at
+from quadcog.sim.schedule import STEP_INPUTS, Schedule, cog_at
 from quadcog.sim.timeline import CogProfile, PayloadProfile
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["BatchResult", "batch_kernel", "simulate_batch", "run_kernel", "run_map",
-           "batch_metrics"]
+           "batch_metrics", "slow_row_entries"]
 
 
 @dataclass
@@ -122,6 +122,30 @@ class BatchResult:
         return pd.DataFrame(self.columns())
 
 
+def slow_row_entries(n_extra: int = 0) -> tuple[int, ...]:
+    """The entries of a packed row (``quadcog.sim.closed_loop.packed``) that change seldom.
+
+    Parameters
+    ----------
+    n_extra : int
+        Slow entries appended after the ``STEP_INPUTS`` (the sweep engine's CoG shapes).
+
+    Returns
+    -------
+    tuple of int
+        The row entries of ``SLOW_INPUTS`` (the CoG profile and the payloads) and the
+        ``n_extra`` after the ``STEP_INPUTS``: the vector kernel reruns what depends only on
+        them and the flight's parameters where they change (``quadcog.codegen.hoisting``).
+    """
+    entries: list[int] = []
+    start = 0
+    for name, rows in STEP_INPUTS:
+        if name in SLOW_INPUTS:
+            entries += range(start, start + rows)
+        start += rows
+    return tuple(entries) + tuple(range(start, start + n_extra))
+
+
 def batch_kernel(controller: Controller, actuation: Actuation, limits: Limits
                  ) -> VectorKernel | None:
     """The vector kernel of the monitored step (``quadcog.codegen.vector_kernel.kernel_for``).
@@ -143,7 +167,8 @@ def batch_kernel(controller: Controller, actuation: Actuation, limits: Limits
         None where it cannot be built.
     """
     return kernel_for(("batch", controller.cache_key(), actuation, limits),
-                      lambda: packed(monitored_step(controller, actuation, limits)))
+                      lambda: packed(monitored_step(controller, actuation, limits)),
+                      slow=slow_row_entries())
 
 
 # the Vehicle fields that are not among the 14 parameters: what the rotors are, and labels

@@ -20,7 +20,7 @@ from quadcog import config
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
-from quadcog.sim.batch import BatchResult, batch_metrics, run_kernel, run_map
+from quadcog.sim.batch import BatchResult, batch_metrics, run_kernel, run_map, slow_row_entries
 from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
 from quadcog.sim.divergence import Limits
 from quadcog.sim.plant import Actuation, TruthOptions
@@ -180,7 +180,7 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
         run = kernel_for(("sweep_step", controller.cache_key(), actuation, limits, J),
                          lambda: packed(sweep_step(controller, actuation, limits, J)),
                          required=kernel == "vector" or precision == "float32",
-                         precision=precision)
+                         precision=precision, slow=slow_row_entries(J))
     if run is not None:
         Z = run_kernel(run, Z, Q, schedule, shapes, threads=threads)
     else:
