@@ -25,6 +25,8 @@ LAYERS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("scenarios", "scenarios", ("quadcog.scenarios",)),
     ("sweeps", "sweeps", ("quadcog.sweeps",)),
     ("embedded", "embedded: C for a flight controller", ("quadcog.embedded",)),
+    ("stacks", "stacks: flight stacks and peer suites in the loop",
+     ("quadcog.stacks", "quadcog.crazyflie", "quadcog.px4", "quadcog.aqb")),
     ("studies", "studies: the paper, beyond, analysis", ("quadcog.studies",)),
     ("cli", "The command line", ("quadcog.cli", "quadcog.__main__", "quadcog")),
 )
