@@ -101,7 +101,7 @@ aqb: $(STAMP)
 AQB_TRIALS ?= 100
 AQB_ARGS ?=
 bench-aqb: aqb compile
-	$(PY) bench/aqb.py --trials $(AQB_TRIALS) $(AQB_ARGS)
+	$(PY) bench/aqb_suite.py --trials $(AQB_TRIALS) $(AQB_ARGS)
 	$(PY) bench/aqb_physics.py --trials $(AQB_TRIALS) $(AQB_ARGS)
 
 # Would the tests catch wrong physics? Each deliberate mistake (bench/mutations.py --list) is

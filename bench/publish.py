@@ -22,6 +22,9 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py precision-float32 [FILE]   # out/bench/precision-float32.md,
     python bench/publish.py precision-isa     [FILE]   # ... -isa.md and -fma.md
     python bench/publish.py precision-fma     [FILE]   # (python bench/precision.py)
+    python bench/publish.py aqb         [FILE]   # default out/aqb/aqb.json (make bench-aqb)
+    python bench/publish.py aqb-physics [FILE]   # out/aqb/physics.json (make bench-aqb)
+    python bench/publish.py aqb-flaws   [FILE]   # out/aqb/flaws.json (make bench-aqb)
 """
 import json
 from pathlib import Path
@@ -39,21 +42,25 @@ SOURCES = {"bench": OUT / "bench" / "results.md",
            "embedded": OUT / "embedded" / "costs.json",
            "targets": OUT / "targets" / "targets.md",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
-              for p in ("float32", "isa", "fma")}}
+              for p in ("float32", "isa", "fma")},
+           "aqb": OUT / "aqb" / "aqb.json", "aqb-physics": OUT / "aqb" / "physics.json",
+           "aqb-flaws": OUT / "aqb" / "flaws.json"}
 # the page that holds each table block
 PAGES = {"bench": ROOT / "docs" / "performance.md",
          "paper": ROOT / "docs" / "tour" / "paper.md",
          "beyond": ROOT / "docs" / "tour" / "beyond.md",
          "embedded": ROOT / "docs" / "tour" / "flight-controller.md",
          "targets": ROOT / "docs" / "targets.md",
-         **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")}}
+         **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")},
+         **{name: ROOT / "docs" / "aqb.md" for name in ("aqb", "aqb-physics", "aqb-flaws")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
 COPIES = {"bench": ROOT / "bench" / "results.md",
           "analysis": MEASURED / "analysis.json",
           "verify": MEASURED / "verification.json",
           "embedded": MEASURED / "embedded.json",
-          **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")}}
+          **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")},
+          **{name: MEASURED / f"{name}.json" for name in ("aqb", "aqb-physics", "aqb-flaws")}}
 VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
                    r"(?P<text>[^<]*)<!-- /value -->")
 

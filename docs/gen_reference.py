@@ -19,6 +19,7 @@ build). ``tests/test_docsite.py`` checks that every schema key has a meaning her
 import argparse
 import dataclasses
 import importlib
+import importlib.util
 import inspect
 from pathlib import Path
 import pkgutil
@@ -408,6 +409,8 @@ def _help(p: argparse.ArgumentParser) -> str:
 
 
 def _modules(package: str) -> list[str]:
+    if importlib.util.find_spec(package) is None:   # a layer's package not on this branch yet
+        return []
     mod = importlib.import_module(package)
     if not hasattr(mod, "__path__"):
         return [package]

@@ -46,6 +46,11 @@ class QuadcogAQBController:
         Controller already designed.
     substep : float
         Longest Euler step of the law's own state (s), default 1 ms.
+    on_nonfinite : {"raise", "cut"}
+        What a law that is no longer finite (it went unstable) does: raise InputError
+        (default), or cut the motors (rotor speeds 0) until the next flight, as a flight
+        controller's failsafe would, so that a benchmark records a failed flight;
+        ``failures`` counts such calls.
     **settings
         Keyword settings of the law (with a name).
 
@@ -56,13 +61,15 @@ class QuadcogAQBController:
     """
 
     def __init__(self, quad_params: Mapping[str, Any], law: str | Controller = "composite",
-                 substep: float = 1e-3, **settings: Any) -> None:
+                 substep: float = 1e-3, on_nonfinite: str = "raise", **settings: Any) -> None:
         self.vehicle = vehicle_from_quad_params(quad_params)
         if isinstance(law, Controller):
             self.controller = law
         else:
             self.controller = make_controller(law, vehicle=self.vehicle, **settings)
         self.substep = validate.positive(substep, "substep", "s")
+        self.on_nonfinite = validate.choice(on_nonfinite, "on_nonfinite", ("raise", "cut"))
+        self.failures = 0
         self._call = self.controller.compiled()
         self._call.inputs[0][:] = 0.0
         self.reset()
@@ -137,11 +144,19 @@ class QuadcogAQBController:
         x, ref = state_vector(state), reference_row(flat_output)
         if self._t is not None and t < self._t:
             self.reset()                        # a new flight with the same controller
-        self._advance(t)
-        U, _ = self._law(t, x, ref)
+        with np.errstate(all="ignore"):         # an unstable law is caught just below
+            self._advance(t)
+            U, _ = self._law(t, x, ref)
         if not np.isfinite(U).all():
-            validate.fail(f"controller {self.controller.name!r} at t = {t} s", "a finite input",
-                          U.tolist())
+            if self.on_nonfinite == "raise":
+                validate.fail(f"controller {self.controller.name!r} at t = {t} s",
+                              "a finite input", U.tolist())
+            self.failures += 1
+            self._t, self._held = t, (x, ref)
+            return {"cmd_motor_speeds": np.zeros(4), "cmd_motor_thrusts": np.zeros(4),
+                    "cmd_thrust": 0.0, "cmd_moment": np.zeros(3),
+                    "cmd_q": np.array([0.0, 0.0, 0.0, 1.0]), "cmd_w": np.zeros(3),
+                    "cmd_v": ref[3:6].copy()}
         self._t, self._held = t, (x, ref)
         f = np.clip(self.vehicle.rotor_thrusts(U), self.vehicle.min_rotor_thrust,
                     self.vehicle.max_rotor_thrust)
@@ -161,7 +176,7 @@ def _quaternion(R: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     return q / np.linalg.norm(q)
 
 
-def aqb_controller_factory(peer_factory: Any = None) -> Any:
+def aqb_controller_factory(peer_factory: Any = None, on_nonfinite: str = "raise") -> Any:
     """A ``controller_factory(controller_type, quad_params)`` for AdaptiveQuadBench's runner:
     ``"qc-<name>"`` makes quadcog's law ``<name>`` (``AQB_NAMES``), anything else goes to
     ``peer_factory`` (AdaptiveQuadBench's own ``switch_controller``).
@@ -170,6 +185,8 @@ def aqb_controller_factory(peer_factory: Any = None) -> Any:
     ----------
     peer_factory : callable, optional
         The factory of the peers' controllers.
+    on_nonfinite : {"raise", "cut"}
+        Passed to each QuadcogAQBController (a benchmark cuts the motors of an unstable law).
 
     Returns
     -------
@@ -179,7 +196,8 @@ def aqb_controller_factory(peer_factory: Any = None) -> Any:
     def factory(controller_type: str, quad_params: Mapping[str, Any]) -> Any:
         if controller_type.startswith(AQB_PREFIX):
             validate.choice(controller_type, "controller", tuple(AQB_NAMES))
-            return QuadcogAQBController(quad_params, AQB_NAMES[controller_type])
+            return QuadcogAQBController(quad_params, AQB_NAMES[controller_type],
+                                        on_nonfinite=on_nonfinite)
         if peer_factory is None:
             validate.choice(controller_type, "controller", tuple(AQB_NAMES))
         return peer_factory(controller_type, quad_params)

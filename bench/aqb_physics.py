@@ -1,0 +1,115 @@
+"""The same AdaptiveQuadBench payload trials in both simulators, and its payload model's flaws
+measured (docs/aqb.md).
+
+The trials are ``quadcog.aqb.protocol.payload_trials`` (seed 42: trial i is AdaptiveQuadBench's
+trial i). Each controller flies them in RotorPy with the payload model as shipped and with a
+rigid body's (``quadcog.aqb.physics.corrected_multirotor``), everything else the same (100 Hz,
+RotorPy's aerodynamics and motor noise); quadcog's laws also fly them in quadcog's simulator,
+whose truth carries the payload as a rigid body, at 1 kHz with the true state and with the
+real-sensing options (noise, one-period delay; rotor saturation and motor lag on in both).
+Writes ``out/aqb/physics.json`` and ``out/aqb/flaws.json``; ``python bench/publish.py
+aqb-physics`` and ``aqb-flaws`` put their tables into docs/aqb.md.
+
+    python bench/aqb_physics.py [--trials 100] [--intensity K] [--controllers ...]
+"""
+import argparse
+import json
+import os
+from pathlib import Path
+import sys
+import time
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from aqb_suite import PEERS, default_controllers, machine_line
+import numpy as np
+
+from quadcog.aqb.protocol import SUCCESS_RMSE, fly, payload_trials
+from quadcog.sim.sensing import Sensing
+
+COLUMNS = ("RotorPy, payload as shipped", "RotorPy, rigid-body payload",
+           "quadcog 1 kHz, true state", "quadcog 1 kHz, real sensing")
+
+
+def summary(costs):
+    """(success %, mean RMSE of the successes) in AdaptiveQuadBench's way."""
+    c = np.asarray(costs, float)
+    ok = c < SUCCESS_RMSE
+    return 100.0 * ok.mean(), (float(c[ok].mean()) if ok.any() else float("nan"))
+
+
+def cell(costs):
+    if costs is None:
+        return "—"
+    s, e = summary(costs)
+    return f"{s:.0f} % / {e:.3f} m" if e == e else f"{s:.0f} % / —"
+
+
+def main():
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--trials", type=int, default=100)
+    ap.add_argument("--intensity", type=float, default=None,
+                    help="a when2fail step (payload of K vehicle masses); default the payload "
+                         "experiment's U(0, 0.5)")
+    ap.add_argument("--controllers", nargs="+")
+    ap.add_argument("--out", default=str(ROOT / "out" / "aqb"))
+    a = ap.parse_args()
+    from quadcog.aqb.physics import flaw_measures, fly_rotorpy
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    trials = payload_trials(a.trials, intensity=a.intensity)
+    what = ("payload experiment, mass U(0, 0.5) x 0.826 kg" if a.intensity is None
+            else f"when2fail intensity {a.intensity:g}: payload {a.intensity:g} x 0.826 kg")
+
+    flaws = flaw_measures(trials)
+    flaw_rows = [
+        "| flaw of the shipped payload model | measured over the trials' toggles |", "|---|---|",
+        f"| inertia about the CoM after attach (parallel-axis term subtracted), largest relative "
+        f"error | {100 * flaws['inertia_error_attach']:.1f} % |",
+        f"| extra payload torque (body offset x world gravity, fixed at attach), largest | "
+        f"{flaws['extra_torque_max']:.3f} N m |",
+        f"| extra torque / the CoG offset's own moment through the rotor arms, largest | "
+        f"{flaws['extra_torque_ratio']:.2f} |",
+        f"| CoM after detach, largest distance from the bare vehicle's | "
+        f"{1000 * flaws['com_error_detach']:.1f} mm |",
+        f"| inertia after detach, largest relative error from the bare vehicle's | "
+        f"{100 * flaws['inertia_error_detach']:.1f} % |"]
+    (out / "flaws.json").write_text(json.dumps(
+        {"table": "\n".join(flaw_rows), "machine": f"{len(trials)} trials ({what}), seed 42.",
+         "measures": flaws}, indent=1))
+    print("\n".join(flaw_rows), flush=True)
+
+    records = []
+    for c in a.controllers or default_controllers():
+        t0 = time.time()
+        r = {"controller": c, "trials": len(trials)}
+        r["shipped"] = [fly_rotorpy(t, c, corrected=False) for t in trials]
+        r["rigid"] = [fly_rotorpy(t, c, corrected=True) for t in trials]
+        if c not in PEERS:
+            law = c.removeprefix("qc-")
+            r["quadcog"] = [fly(t, law, dt=1e-3)[0] for t in trials]
+            r["quadcog_sensing"] = [fly(t, law, dt=1e-3, sensing=Sensing(seed=t.index + 1))[0]
+                                    for t in trials]
+        r["seconds"] = time.time() - t0
+        records.append(r)
+        print(c, {k: cell(v) for k, v in r.items() if isinstance(v, list)}, flush=True)
+
+    rows = ["| controller | trials | " + " | ".join(COLUMNS) + " | mean abs. change of RMSE, "
+            "shipped -> rigid (m) |", "|---|---|" + "---|" * (len(COLUMNS) + 1)]
+    for r in records:
+        d = np.abs(np.asarray(r["shipped"]) - np.asarray(r["rigid"]))
+        rows.append(f"| {r['controller']} | {r['trials']} | {cell(r['shipped'])} | "
+                    f"{cell(r['rigid'])} | {cell(r.get('quadcog'))} | "
+                    f"{cell(r.get('quadcog_sensing'))} | {float(np.mean(d)):.4f} |")
+    table = "\n".join(rows)
+    (out / "physics.json").write_text(json.dumps(
+        {"table": table, "machine": machine_line(records) + f" {what}; cells: success / mean "
+         "RMSE of the successes.", "records": records}, indent=1))
+    print(table)
+
+
+if __name__ == "__main__":
+    main()
