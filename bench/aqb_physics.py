@@ -56,7 +56,12 @@ def main():
                          "experiment's U(0, 0.5)")
     ap.add_argument("--controllers", nargs="+")
     ap.add_argument("--out", default=str(ROOT / "out" / "aqb"))
+    ap.add_argument("--merge", nargs="+", metavar="FOLDER",
+                    help="only write one table of the physics.json files of these folders")
     a = ap.parse_args()
+    if a.merge:
+        merge(a.merge, a.out)
+        return
     from quadcog.aqb.physics import flaw_measures, fly_rotorpy
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -97,6 +102,12 @@ def main():
         records.append(r)
         print(c, {k: cell(v) for k, v in r.items() if isinstance(v, list)}, flush=True)
 
+    write_table(records, out, machine_line(records) + f" {what}; cells: success / mean "
+                "RMSE of the successes.")
+
+
+def write_table(records, out, machine):
+    """The same-trials table of the records into ``out / "physics.json"``."""
     rows = ["| controller | trials | " + " | ".join(COLUMNS) + " | mean abs. change of RMSE, "
             "shipped -> rigid (m) |", "|---|---|" + "---|" * (len(COLUMNS) + 1)]
     for r in records:
@@ -105,11 +116,19 @@ def main():
                     f"{cell(r['rigid'])} | {cell(r.get('quadcog'))} | "
                     f"{cell(r.get('quadcog_sensing'))} | {float(np.mean(d)):.4f} |")
     table = "\n".join(rows)
-    (out / "physics.json").write_text(json.dumps(
-        {"table": table, "machine": machine_line(records) + f" {what}; cells: success / mean "
-         "RMSE of the successes.", "records": records}, indent=1))
+    (Path(out) / "physics.json").write_text(json.dumps(
+        {"table": table, "machine": machine, "records": records}, indent=1))
     print(table)
 
+
+def merge(folders, out):
+    """One table of the records of several runs (runs split over processes); the flaws of
+    the first run (the same trials measure the same flaws)."""
+    runs = [json.loads((Path(f) / "physics.json").read_text()) for f in folders]
+    Path(out).mkdir(parents=True, exist_ok=True)
+    write_table([r for run in runs for r in run["records"]], out, runs[0]["machine"])
+    flaws = Path(folders[0]) / "flaws.json"
+    (Path(out) / "flaws.json").write_text(flaws.read_text())
 
 if __name__ == "__main__":
     main()

@@ -362,3 +362,24 @@ def test_aqb_env_is_named_in_the_setup_error(monkeypatch, tmp_path):
         prepare()
     assert "make aqb" in SETUP_LINE and os.environ["QUADCOG_AQB"].endswith("nowhere")
     assert Path(vendor_tarball()).name == TARBALL
+
+
+# -- the published tables --------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["aqb", "aqb-physics", "aqb-flaws"])
+def test_the_published_tables_are_the_runs(name):
+    """docs/aqb.md holds the tables (and machine lines) of the files bench/publish.py copied
+    from the runs into docs/measured/, never typed ones."""
+    import importlib.util
+    import json
+    root = Path(__file__).resolve().parent.parent
+    spec = importlib.util.spec_from_file_location("publish", root / "bench" / "publish.py")
+    pub = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(pub)
+    copy = pub.COPIES[name]
+    if not copy.is_file():
+        pytest.skip(f"{name} not published yet (make bench-aqb, python bench/publish.py {name})")
+    data = json.loads(copy.read_text())
+    page = pub.PAGES[name].read_text()
+    assert pub.block(page, name) == pub.table_of(data["table"])
+    assert pub.block(page, f"{name}-machine") == data["machine"]

@@ -20,7 +20,6 @@ same trials flown with both show what the payload model alone changes (``fly_rot
 Needs AdaptiveQuadBench (``make aqb``).
 """
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt

@@ -1,4 +1,4 @@
-"""AdaptiveQuadBench's payload protocol as quadcog scenarios, on quadcog's payload model.
+"""AdaptiveQuadBench's payload protocol as quadcog flights, on quadcog's payload model.
 
 The distribution, read from AdaptiveQuadBench's ``aqb/config/randomization_config.py`` and
 RotorPy's ``trajectories/random_motion_prim_traj.py`` (commit ee7df29 / 6d2045d):
@@ -15,9 +15,12 @@ RotorPy's ``trajectories/random_motion_prim_traj.py`` (commit ee7df29 / 6d2045d)
 ``payload_trials`` draws them in AdaptiveQuadBench's order from a legacy numpy RandomState
 seeded as its ``--seed`` (all trajectories, then all payloads, then all toggle lists; the
 when2fail mode draws payloads and toggles again at each intensity), so trial i is the trial i
-AdaptiveQuadBench flies. ``PayloadTrial.scenario`` flies it in quadcog's simulator, whose truth
-model carries the payload as a rigid body (its ten inertial parameters added to the
-airframe's, ``quadcog.vehicles.payload``), at any rate and with the real-sensing options.
+AdaptiveQuadBench flies (trial i depends on the number of trials, as there: all goals are drawn
+before the first payload). ``fly`` flies a trial in quadcog's simulator, whose truth model
+carries the payload as a rigid body (its ten inertial parameters added to the airframe's,
+``quadcog.vehicles.payload``), at any rate and with the real-sensing options: its
+``MotionPrimitive`` trajectory and its ``payload_events`` are ordinary ``quadcog.simulate``
+arguments.
 """
 from dataclasses import dataclass
 from typing import Any
