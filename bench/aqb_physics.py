@@ -90,7 +90,8 @@ def main():
     records = []
     for c in a.controllers or default_controllers():
         t0 = time.time()
-        r = {"controller": c, "trials": len(trials)}
+        r = {"controller": c, "trials": len(trials),
+             "condition": None if a.intensity is None else f"{a.intensity:g}x mass"}
         r["shipped"] = [fly_rotorpy(t, c, corrected=False) for t in trials]
         r["rigid"] = [fly_rotorpy(t, c, corrected=True) for t in trials]
         if c not in PEERS:
@@ -112,7 +113,8 @@ def write_table(records, out, machine):
             "shipped -> rigid (m) |", "|---|---|" + "---|" * (len(COLUMNS) + 1)]
     for r in records:
         d = np.abs(np.asarray(r["shipped"]) - np.asarray(r["rigid"]))
-        rows.append(f"| {r['controller']} | {r['trials']} | {cell(r['shipped'])} | "
+        label = r["controller"] + (f" ({r['condition']})" if r.get("condition") else "")
+        rows.append(f"| {label} | {r['trials']} | {cell(r['shipped'])} | "
                     f"{cell(r['rigid'])} | {cell(r.get('quadcog'))} | "
                     f"{cell(r.get('quadcog_sensing'))} | {float(np.mean(d)):.4f} |")
     table = "\n".join(rows)
