@@ -56,6 +56,7 @@ def main():
                          "experiment's U(0, 0.5)")
     ap.add_argument("--controllers", nargs="+")
     ap.add_argument("--out", default=str(ROOT / "out" / "aqb"))
+    ap.add_argument("--flaws-only", action="store_true", help="only measure the flaws")
     ap.add_argument("--merge", nargs="+", metavar="FOLDER",
                     help="only write one table of the physics.json files of these folders")
     a = ap.parse_args()
@@ -83,9 +84,12 @@ def main():
         f"| inertia after detach, largest relative error from the bare vehicle's | "
         f"{100 * flaws['inertia_error_detach']:.1f} % |"]
     (out / "flaws.json").write_text(json.dumps(
-        {"table": "\n".join(flaw_rows), "machine": f"{len(trials)} trials ({what}), seed 42.",
+        {"table": "\n".join(flaw_rows),
+         "machine": machine_line([]) + f" {len(trials)} trials ({what}), seed 42.",
          "measures": flaws}, indent=1))
     print("\n".join(flaw_rows), flush=True)
+    if a.flaws_only:
+        return
 
     records = []
     for c in a.controllers or default_controllers():
@@ -130,7 +134,8 @@ def merge(folders, out):
     Path(out).mkdir(parents=True, exist_ok=True)
     write_table([r for run in runs for r in run["records"]], out, runs[0]["machine"])
     flaws = Path(folders[0]) / "flaws.json"
-    (Path(out) / "flaws.json").write_text(flaws.read_text())
+    if not (Path(out) / "flaws.json").is_file() or Path(out).resolve() != Path(folders[0]).resolve():
+        (Path(out) / "flaws.json").write_text(flaws.read_text())
 
 if __name__ == "__main__":
     main()
