@@ -1,7 +1,7 @@
 """AdaptiveQuadBench set up in quadcog's cache: found, copied, patched for the CPU, located.
 
 The tree comes from ``$QUADCOG_AQB`` (a user's own checkout, a folder, or a tarball) or else
-from the vendor tarball ``../shared/vendor/adaptivequadbench.tar.xz`` beside the checkout
+from the vendor tarball ``shared/vendor/adaptivequadbench.tar.xz`` in the folder beside the checkout
 (``shared/vendor/README.md``). It is unpacked or copied into
 ``quadcog.paths.cache_dir() / "aqb" / <sha256>`` (the tarball's sha256, or a hash of the
 user's files), and only that copy is patched, never a user's tree. The three CPU fixes
@@ -123,7 +123,7 @@ class AqbTree:
 
 
 def vendor_tarball() -> Path:
-    """Where the vendor tarball is: ``../shared/vendor`` beside the checkout.
+    """Where the vendor tarball is: ``shared/vendor`` in the folder beside the checkout.
 
     Returns
     -------
