@@ -195,7 +195,10 @@ def payload_trials(n: int, seed: int = 42, intensity: float | None = None,
     intensity : float, optional
         None: the payload experiment (mass ratio U(0, 0.5)). A number k >= 0: the
         ``--when2fail`` step at intensity k (mass ratio exactly min(k, 2); the draws of the
-        steps 0, 1, ... before it are made first, as there), in whole steps of 1.
+        steps 0, 1, ... before it are made first, as ``RandomizationConfig`` makes them), in
+        whole steps of 1. AdaptiveQuadBench's own when2fail runner draws steps >= 1 from
+        numpy's global state as the previous step's flights left it (its serial runner
+        reseeds it per flight), so its trials there differ from these.
     quad_params : dict, optional
         The vehicle whose mass and arm scale the payload (default ``AQB_QUAD_PARAMS``).
 
