@@ -4,6 +4,8 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
+# AdaptiveQuadBench (make aqb, make bench-aqb): its targets are phony too
+.PHONY: aqb bench-aqb
 .PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded crazyflie crazyflie-app docs targets clean
 
 OUT ?= out
@@ -91,6 +93,25 @@ TORCH_PIP_ARGS ?=
 bench-peers: $(STAMP)
 	$(PY) -m pip install $(TORCH_PIP_ARGS) torch==2.13.0
 	$(PY) -m pip install -e '.[bench]'
+
+# AdaptiveQuadBench and its RotorPy fork (docs/aqb.md): the `aqb` extra's PyPI packages, the
+# vendor tarball (or $$QUADCOG_AQB, a checkout of your own) copied into quadcog's cache with the
+# CPU fixes applied to that copy, then both trees pip install -e'd (the fork replaces PyPI's
+# rotorpy, which `make bench-peers` installs under the same name).
+aqb: $(STAMP)
+	$(PY) -m pip install --quiet -e '.[aqb]'
+	$(PY) -m quadcog.aqb setup > $(VENV)/.aqb-folders
+	$(PY) -m pip install --quiet --no-deps $$(sed 's/^/-e /' $(VENV)/.aqb-folders)
+
+# AdaptiveQuadBench's payload experiment (AQB_TRIALS trials, when2fail to intensity 2, delay
+# margin) for its peers and quadcog's laws, one process per controller; then the same trials
+# in both simulators. Writes out/aqb/*.json; `python bench/publish.py aqb` and
+# `python bench/publish.py aqb-physics` put the tables into docs/aqb.md. Hours on 2 cores.
+AQB_TRIALS ?= 100
+AQB_ARGS ?=
+bench-aqb: aqb compile
+	$(PY) bench/aqb_suite.py --trials $(AQB_TRIALS) $(AQB_ARGS)
+	$(PY) bench/aqb_physics.py --trials $(AQB_TRIALS) $(AQB_ARGS)
 
 # Would the tests catch wrong physics? Each deliberate mistake (bench/mutations.py --list) is
 # applied to a copy of the repository, which runs the physics tests; writes

@@ -31,6 +31,9 @@ checks every block and value against, so a page that disagrees with its command 
     python bench/publish.py px4-speed    [FILE]   # out/px4/speed.md, identify.md, side.md
     python bench/publish.py px4-identify [FILE]   # (make px4)
     python bench/publish.py px4-side     [FILE]
+    python bench/publish.py aqb         [FILE]   # default out/aqb/aqb.json (make bench-aqb)
+    python bench/publish.py aqb-physics [FILE]   # out/aqb/physics.json (make bench-aqb)
+    python bench/publish.py aqb-flaws   [FILE]   # out/aqb/flaws.json (make bench-aqb)
 """
 import json
 from pathlib import Path
@@ -55,7 +58,9 @@ SOURCES = {**{f"bench-{isa}": OUT / "bench" / f"results-{isa}.md" for isa in BEN
            "objcode": OUT / "bench" / "objcode.md",
            **{f"precision-{p}": OUT / "bench" / f"precision-{p}.md"
               for p in ("float32", "isa", "fma")},
-           **{f"px4-{p}": OUT / "px4" / f"{p}.md" for p in ("speed", "identify", "side")}}
+           **{f"px4-{p}": OUT / "px4" / f"{p}.md" for p in ("speed", "identify", "side")},
+           "aqb": OUT / "aqb" / "aqb.json", "aqb-physics": OUT / "aqb" / "physics.json",
+           "aqb-flaws": OUT / "aqb" / "flaws.json"}
 # the page that holds each table block
 PAGES = {**{f"bench-{isa}": ROOT / "docs" / "performance.md" for isa in BENCH_ISAS},
          "paper": ROOT / "docs" / "tour" / "paper.md",
@@ -67,7 +72,8 @@ PAGES = {**{f"bench-{isa}": ROOT / "docs" / "performance.md" for isa in BENCH_IS
          "crazyflie-real": ROOT / "docs" / "crazyflie.md",
          "geometric": ROOT / "docs" / "tour" / "geometric.md",
          **{f"precision-{p}": ROOT / "docs" / "performance.md" for p in ("float32", "isa", "fma")},
-         **{f"px4-{p}": ROOT / "docs" / "px4.md" for p in ("speed", "identify", "side")}}
+         **{f"px4-{p}": ROOT / "docs" / "px4.md" for p in ("speed", "identify", "side")},
+         **{name: ROOT / "docs" / "aqb.md" for name in ("aqb", "aqb-physics", "aqb-flaws")}}
 # the tracked copy of each published file (paper and beyond: tests/test_paper.py reruns them)
 MEASURED = ROOT / "docs" / "measured"
 COPIES = {**{f"bench-{isa}": ROOT / "bench" / f"results-{isa}.md" for isa in BENCH_ISAS},
@@ -79,7 +85,8 @@ COPIES = {**{f"bench-{isa}": ROOT / "bench" / f"results-{isa}.md" for isa in BEN
           "crazyflie-real": MEASURED / "crazyflie-real.md",
           "geometric": MEASURED / "geometric.json",
           **{f"precision-{p}": MEASURED / f"precision-{p}.md" for p in ("float32", "isa", "fma")},
-          **{f"px4-{p}": MEASURED / f"px4-{p}.md" for p in ("speed", "identify", "side")}}
+          **{f"px4-{p}": MEASURED / f"px4-{p}.md" for p in ("speed", "identify", "side")},
+          **{name: MEASURED / f"{name}.json" for name in ("aqb", "aqb-physics", "aqb-flaws")}}
 VALUE = re.compile(r"<!-- value (?P<name>[\w-]+) (?P<key>[^>]+?) (?P<format>\S+) -->"
                    r"(?P<text>[^<]*)<!-- /value -->")
 

@@ -87,6 +87,14 @@ class MissingDependencyError(QuadcogError, ImportError):
     """An optional package is not installed; the message gives the install command."""
 
 
+class PeerStateError(InputError):
+    """A peer simulator's state dictionary lacks what a quadcog law needs, or holds a value of
+    the wrong shape; the message names the key (quadcog.aqb)."""
+
+
+__all__ += ["PeerStateError"]
+
+
 class LogError(InputError):
     """A flight log cannot be read or written (quadcog.logs); the message names the file."""
 
