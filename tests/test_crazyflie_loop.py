@@ -200,7 +200,7 @@ def test_quadcog_run_with_the_stack(tree, tmp_path, capsys):
 
     from quadcog.cli import main
     main(["run", "parcel-crazyflie", "--stack", "crazyflie", "--controller", "pid",
-          "--set", "duration=3", "--out", str(tmp_path), "--quiet", "--no-plot"])
+          "--set", "duration=3", "--set", "payload=[]", "--out", str(tmp_path), "--quiet", "--no-plot"])
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["controller"] == "crazyflie pid" and not metrics["diverged"]
     assert "tail RMS" in capsys.readouterr().out

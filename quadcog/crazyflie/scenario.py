@@ -51,7 +51,7 @@ def run_scenario(scenario: Scenario) -> SimulationResult:
                           sensing=scenario.sensing, **options)
     except StackError:
         raise
-    except InputError as e:
-        raise ScenarioError(f"{scenario.source}: key 'stack': {e}") from None
+    except InputError as e:     # the message names the argument or key it is about
+        raise ScenarioError(f"{scenario.source}: {e}") from None
     result.info["scenario"] = scenario.name
     return result
