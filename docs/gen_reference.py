@@ -72,7 +72,9 @@ LIMITS_MEANING = {"max_position_error": "position error that counts as diverged 
                   "max_tilt_deg": "|phi| or |theta| that counts as diverged (deg)"}
 VEHICLE_EXTRA = {"preset": "the vehicle to start from: \"hummingbird\" (default), "
                            "\"crazyflie\" or \"x500\"; the other keys change its fields",
-                 "identified": "JSON file of `quadcog identify --json`: its r_G becomes the CoG"}
+                 "identified": "JSON file of `quadcog identify --json`: its r_G becomes the CoG",
+                 "file": "a URDF or SDF file (relative to the scenario file) whose vehicle "
+                         "replaces the preset ([Your own vehicle](../howto/vehicle.md))"}
 SWEEP_MEANING = {
     "name": "the sweep's name", "description": "free text (`quadcog sweeps` lists it)",
     "scenario": "the base scenario: a shipped name, or a path relative to this file",

@@ -180,6 +180,9 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--identified", type=Path, default=None, metavar="FILE",
                    help="JSON of `quadcog identify --json`: its r_G becomes the vehicle's CoG "
                         "and the controller's starting estimate")
+    p.add_argument("--vehicle", type=Path, default=None, metavar="FILE",
+                   help="fly the vehicle of a URDF or SDF file (Vehicle.from_urdf, "
+                        "Vehicle.from_sdf) as the truth; the controller's model starts from it")
     p.set_defaults(func=cmd_run)
 
 
@@ -200,6 +203,9 @@ def cmd_run(args: argparse.Namespace) -> None:
         path = json.dumps(str(args.identified.resolve()))
         args.overrides = list(args.overrides) + [f"vehicle.identified={path}",
                                                  f"controller_model.identified={path}"]
+    if args.vehicle is not None:        # as --set vehicle.file=...
+        args.overrides = list(args.overrides) + [
+            f"vehicle.file={json.dumps(str(args.vehicle.resolve()))}"]
     run_file(args.scenario, out, progress=not args.quiet, overrides=args.overrides,
              plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate)
 

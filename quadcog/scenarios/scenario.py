@@ -384,10 +384,13 @@ def _vehicle(data, key, base, source):
     _validate(table, VEHICLE, source, f"{key}.", " vehicle field")
     preset = table.pop("preset", None)
     identified = table.pop("identified", None)
+    file = table.pop("file", None)
     if preset is not None:
         base = PRESETS[validate.choice(preset, f"{source}: key '{key}.preset'", tuple(PRESETS),
                                        ScenarioError)]
     try:
+        if file is not None:                # a URDF or SDF file, relative to the scenario file
+            base = Vehicle.from_file(Path(source).parent / file)
         vehicle = (base or HUMMINGBIRD).replace(**table)
         if identified is not None:
             from quadcog.identification.identified import identified_cog

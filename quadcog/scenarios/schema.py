@@ -36,6 +36,7 @@ VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
            for name in FIELD_NAMES}
 VEHICLE["preset"] = str
 VEHICLE["identified"] = str         # the JSON of `quadcog identify --json`: its r_G
+VEHICLE["file"] = str               # a URDF or SDF file (quadcog.vehicles.description)
 TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool}
 SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,
            "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}

@@ -19,6 +19,7 @@ adds ``y_i f_i`` to the roll moment U2 and ``-x_i f_i`` to the pitch moment U3. 
 counter-clockwise), -1 for counter-clockwise.
 """
 from dataclasses import asdict, dataclass, fields, replace
+import os
 from typing import Any
 
 import numpy as np
@@ -30,11 +31,12 @@ from quadcog.model.inertial_parameters import check_physically_consistent, from_
 from quadcog.model.parameters import check_parameters
 from quadcog.numerics import exact_inverse
 from quadcog.validate import array, plain, real, vector
+from quadcog.vehicles.description import file_fields, sdf_fields, urdf_fields
 from quadcog.vehicles.payload import Payload, as_payload
 from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
-           "plus_layout", "x_layout", "default_parameters"]
+           "plus_layout", "x_layout", "default_parameters", "preset_drag"]
 
 N_ROTORS = 4
 
@@ -224,6 +226,99 @@ class Vehicle:
                          where("parameters"))
         _check_payloads(self, where)
         _check_rigid_body(self, where)
+
+    # -- from the files users have -------------------------------------------------------
+    @classmethod
+    def from_urdf(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
+                  **options: Any) -> "Vehicle":
+        """A vehicle from a URDF file (gym-pybullet-drones' ``cf2x.urdf`` and its kind).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The URDF file.
+        drag : dict of str to float, optional
+            The six drag coefficients by field name; default ``preset_drag`` (the file has
+            none).
+        **options
+            ``rotor_directions``, ``g``, ``name``: see
+            ``quadcog.vehicles.description.urdf_fields``, which says what is read and how the
+            file's inertia about the CoG becomes this class's inertia about O.
+
+        Returns
+        -------
+        Vehicle
+            The vehicle.
+
+        Raises
+        ------
+        VehicleFileError
+            A missing file, or a needed value missing or not a number (named with the file).
+        PhysicalConsistencyError
+            A link whose mass and inertia no rigid body has.
+        """
+        return cls._from_fields(urdf_fields(path, **options), drag)
+
+    @classmethod
+    def from_sdf(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
+                 **options: Any) -> "Vehicle":
+        """A vehicle from an SDF model (Gazebo; PX4's gz ``x500/model.sdf``).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The model's SDF file; ``model://`` includes are found beside its folder or in
+            ``model_paths``.
+        drag : dict of str to float, optional
+            The six drag coefficients by field name; default ``preset_drag``.
+        **options
+            ``model_paths``, ``g``, ``name``, ``rotor_links``: see
+            ``quadcog.vehicles.description.sdf_fields``.
+
+        Returns
+        -------
+        Vehicle
+            The vehicle.
+
+        Raises
+        ------
+        VehicleFileError
+            A missing file or included model, or a needed value missing or not a number.
+        PhysicalConsistencyError
+            A link whose mass and inertia no rigid body has.
+        """
+        return cls._from_fields(sdf_fields(path, **options), drag)
+
+    @classmethod
+    def from_file(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
+                  **options: Any) -> "Vehicle":
+        """A vehicle from a ``.urdf`` or ``.sdf`` file, by its suffix.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file.
+        drag : dict of str to float, optional
+            The six drag coefficients by field name; default ``preset_drag``.
+        **options
+            Passed on to ``from_urdf`` or ``from_sdf``.
+
+        Returns
+        -------
+        Vehicle
+            The vehicle.
+
+        Raises
+        ------
+        VehicleFileError
+            Another suffix, or what ``from_urdf`` or ``from_sdf`` raises.
+        """
+        return cls._from_fields(file_fields(path, **options), drag)
+
+    @classmethod
+    def _from_fields(cls, fields_: dict[str, Any], drag: dict[str, float] | None) -> "Vehicle":
+        drag = drag if drag is not None else preset_drag(fields_["m"], fields_["Ixx"])
+        return cls(**{**fields_, **drag})
 
     # -- what the generated functions and the plant need --------------------------------
     def parameters(self) -> npt.NDArray[np.float64]:
@@ -591,6 +686,30 @@ X500 = Vehicle(
     moment_constant=0.016,
     max_rotor_thrust=_X500_THRUST_CONSTANT * _X500_MAX_ROTOR_SPEED ** 2,   # 8.55 N
     motor_time_constant=0.0125)
+
+
+
+def preset_drag(m: float, Ixx: float) -> dict[str, float]:
+    """The linear drag of the presets that no source gives (the X500, the Crazyflie, a vehicle
+    from a file): the Hummingbird's drag per mass and per inertia.
+
+    Parameters
+    ----------
+    m : float
+        Mass (kg).
+    Ixx : float
+        Roll inertia about O (kg m^2).
+
+    Returns
+    -------
+    dict of str to float
+        ``c_x = c_y = c_z = (c_x / m)_Hummingbird m`` (N s/m) and ``c_phi = c_theta = c_psi =
+        (c_phi / Ixx)_Hummingbird Ixx`` (N m s/rad), by field name.
+    """
+    linear, rate = _DRAG_PER_MASS * m, _RATE_DRAG_PER_INERTIA * Ixx
+    return {"c_x": linear, "c_y": linear, "c_z": linear, "c_phi": rate, "c_theta": rate,
+            "c_psi": rate}
+
 
 PRESETS = {"hummingbird": HUMMINGBIRD, "crazyflie": CRAZYFLIE, "x500": X500}
 
