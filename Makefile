@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded docs targets clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded docs docs-figures targets clean
 
 OUT ?= out
 
@@ -102,6 +102,11 @@ embedded: compile
 # (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.
 docs: $(STAMP)
 	$(VENV)/bin/mkdocs build --strict --site-dir $(OUT)/docs
+
+# The site's figures (docs/figures/*.png, committed) from quadcog's own commands: about two
+# minutes; docs/figures.py lists each figure, its command and its caption.
+docs-figures: compile
+	$(PY) docs/figures.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache quadcog.egg-info

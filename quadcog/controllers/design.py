@@ -176,7 +176,7 @@ def adaptation_gain(vehicle: Vehicle) -> float:
     gamma is the reference gain times (I kp / (m g))^2 over the reference's, so the
     dimensionless gain gamma (m g / (I kp))^2 is the same on every vehicle. The rate is not
     scaled up with the loops: the paper's gradient law holds only for adaptation much slower
-    than every loop (README, "Choosing gamma"); fast learning is the composite law's
+    than every loop (docs/tour/simulate.md, "Choosing gamma"); fast learning is the composite law's
     least-squares term.
 
     Parameters

@@ -3,7 +3,8 @@
 A scenario names a controller, a trajectory, CoG changes, disturbances, the truth vehicle
 (``[vehicle]``) and what the controller believes (``[controller_model]``), controller
 parameters and truth-model switches; `quadcog run FILE --out DIR` writes
-metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are documented in README.md.
+metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are documented in
+docs/reference/scenario-keys.md (generated).
 """
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -293,7 +294,7 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
     Parameters
     ----------
     data : dict
-        The parsed scenario file (keys as in README.md "Scenario files").
+        The parsed scenario file (keys as in docs/reference/scenario-keys.md).
     source : str
         What error messages name (the file).
 
