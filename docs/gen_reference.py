@@ -437,6 +437,7 @@ def _api_block(module: str) -> str:
     return f"::: {module}\n"
 
 
+
 def _layer_page(module: str) -> str:
     for slug, (_, packages) in LAYERS.items():
         if any(module == p or module.startswith(p + ".") for p in packages):

@@ -246,9 +246,17 @@ class Design:
 
     Parameters
     ----------
-    poles_attitude, poles_z, poles_psi, poles_position : tuple of float
+    poles_attitude : tuple of float
         Feedback linearization's poles (rad/s): the reference's times ``similarity``.
-    poles_x, poles_y : tuple of float
+    poles_z : tuple of float
+        Feedback linearization's poles (rad/s): the reference's times ``similarity``.
+    poles_psi : tuple of float
+        Feedback linearization's poles (rad/s): the reference's times ``similarity``.
+    poles_position : tuple of float
+        Feedback linearization's poles (rad/s): the reference's times ``similarity``.
+    poles_x : tuple of float
+        Cascade PD's x-theta and y-phi chains (rad/s), likewise.
+    poles_y : tuple of float
         Cascade PD's x-theta and y-phi chains (rad/s), likewise.
     max_tilt : float
         ``tilt_limit_of`` (rad).

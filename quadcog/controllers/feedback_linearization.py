@@ -136,7 +136,11 @@ class FeedbackLinearization(Controller):
 
         Parameters
         ----------
-        e, e_dot, y_ddot_d : casadi.SX
+        e : casadi.SX
+            As returned by ``output_errors`` (4,) each.
+        e_dot : casadi.SX
+            As returned by ``output_errors`` (4,) each.
+        y_ddot_d : casadi.SX
             As returned by ``output_errors`` (4,) each.
 
         Returns

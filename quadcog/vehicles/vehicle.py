@@ -88,14 +88,26 @@ class Vehicle:
         Mass (kg), > 0.
     g : float
         Gravitational acceleration (m/s^2), > 0.
-    Ixx, Iyy, Izz : float
-        Inertia about O (kg m^2), > 0; with ``r_G = 0`` the inertia about the CoG. The model
-        holds it constant as the CoG moves (the truth model's ``parallel_axis`` option adds the
-        change).
-    c_x, c_y, c_z : float
-        Linear drag of the body velocities (N s/m), >= 0.
-    c_phi, c_theta, c_psi : float
-        Linear drag of the body rates (N m s/rad), >= 0.
+    Ixx : float
+        Roll inertia about O at the stated CoG (kg m^2), > 0; with ``r_G = 0`` the inertia
+        about the CoG. The model holds ``Ixx``, ``Iyy``, ``Izz`` constant as the CoG moves (the
+        truth model's ``parallel_axis`` option adds the change).
+    Iyy : float
+        Pitch inertia about O at the stated CoG (kg m^2), > 0.
+    Izz : float
+        Yaw inertia about O at the stated CoG (kg m^2), > 0.
+    c_x : float
+        Linear drag of the forward body velocity u (N s/m), >= 0.
+    c_y : float
+        Linear drag of the sideways body velocity v (N s/m), >= 0.
+    c_z : float
+        Linear drag of the vertical body velocity w (N s/m), >= 0.
+    c_phi : float
+        Linear drag of the roll rate p (N m s/rad), >= 0.
+    c_theta : float
+        Linear drag of the pitch rate q (N m s/rad), >= 0.
+    c_psi : float
+        Linear drag of the yaw rate r (N m s/rad), >= 0.
     rotor_positions : (4, 2) array_like
         Four (x, y) pairs (m) in the body frame, in the rotor plane through O
         (``plus_layout(arm)``, ``x_layout(arm)`` or any); stored as a tuple of tuples.
@@ -115,9 +127,14 @@ class Vehicle:
     motor_time_constant : float, default 0
         First-order time constant from commanded to actual rotor thrust (s), >= 0; 0 means
         instant. Used by the truth model's ``motor_lag`` option.
-    x_G, y_G, z_G : float, default 0
-        CoG offset r_G from O in the body frame (m). The inertia about the CoG,
-        ``I_O - m (|r_G|^2 I - r_G r_G^T)``, must stay positive definite.
+    x_G : float, default 0
+        CoG offset from O along body x (m, forward). The inertia about the CoG,
+        ``I_O - m (|r_G|^2 I - r_G r_G^T)`` with ``r_G = [x_G, y_G, z_G]``, must stay
+        positive definite.
+    y_G : float, default 0
+        CoG offset from O along body y (m, left).
+    z_G : float, default 0
+        CoG offset from O along body z (m, up).
     name : str, default "vehicle"
         A label.
     rotor_model : RotorModel or str or None, default None
