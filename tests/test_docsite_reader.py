@@ -234,3 +234,29 @@ def test_built_site_works_offline():
         assert "cdn.jsdelivr" not in text and "unpkg.com" not in text, html
     face = (site / "reference" / "api" / "quadcog.html").read_text()
     assert "quadcog.sim.flight.simulate" in face
+
+
+def test_references_to_pages_are_links():
+    """"docs/model.md sec. 3.3" in prose is a link on the site ([the model, sec. 3.3](...)),
+    not plain text; a command line that names a file (`--update docs/identify.md`) may."""
+    plain = []
+    for page in _pages():
+        text = re.sub(r"\]\([^)]*\)", "]()", _prose(page.read_text()))
+        text = re.sub(r"<!--.*?-->", "", text, flags=re.S)
+        for m in re.finditer(r"(?<![-\w/])docs/[\w/-]+\.md(?!`:)(`)?(,)?\s*(sec\.)?", text):
+            if "--update " in text[max(0, m.start() - 12):m.start()] or \
+                    text[m.end():m.end() + 2].startswith(("N`", " N")):
+                continue                    # a command line; the notation `docs/model.md sec. N`
+            plain.append(f"{page.relative_to(DOCS)}: {m.group(0)!r}")
+    assert not plain, "\n".join(plain)
+
+
+@pytest.mark.slow
+def test_api_pages_render_docstrings_not_raw_markup():
+    """The controller interface (quadcog.controllers.template) read as one paragraph with its
+    Returns as a code block of raw backticks; no API page shows ``double backticks``."""
+    site = _built("index.md").parent
+    for html in (site / "reference" / "api").glob("*.html"):
+        assert "``" not in html.read_text(), html.name
+    text = (site / "reference" / "api" / "controllers.html").read_text()
+    assert "<li><code>ref</code>" in text
