@@ -260,3 +260,17 @@ def test_api_pages_render_docstrings_not_raw_markup():
         assert "``" not in html.read_text(), html.name
     text = (site / "reference" / "api" / "controllers.html").read_text()
     assert "<li><code>ref</code>" in text
+
+
+def test_scenario_key_meanings_are_their_own():
+    """On the scenario-keys page a controller's keys each have a meaning of their own: none
+    empty (adaptive's inherited poles had none), none starting with a leaked type string
+    ("float or (3,) sequence of float, optional ..."), no two keys of a table with one text."""
+    page = _module("gen_reference", DOCS / "gen_reference.py").scenario_keys_page()
+    for table in page.split("\n### ")[1:]:
+        meanings = [line.rstrip(" |").split(" | ")[-1] for line in table.splitlines()
+                    if line.startswith("| `")]
+        assert all(meanings), table.splitlines()[0]
+        assert not [m for m in meanings if re.match(r"(float|int|str|bool|sequence|tuple)\b"
+                                                     r"[^.]*(, optional|\))", m)], table[:60]
+        assert len(set(meanings)) == len(meanings), table.splitlines()[0]
