@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 
 # AdaptiveQuadBench (make aqb, make bench-aqb): its targets are phony too
 .PHONY: aqb bench-aqb
-.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded crazyflie crazyflie-app docs targets clean
+.PHONY: all setup derive derive-if-stale check-generated compile tour paper analyze report test bench bench-peers mutations embedded crazyflie crazyflie-app docs docs-figures targets clean
 
 OUT ?= out
 
@@ -153,6 +153,11 @@ px4: px4-build
 # (scenario and sweep keys, the CLI, the API) are generated at build time by docs/gen_reference.py.
 docs: $(STAMP)
 	$(VENV)/bin/mkdocs build --strict --site-dir $(OUT)/docs
+
+# The site's figures (docs/figures/*.png, committed) from quadcog's own commands: about two
+# minutes; docs/figures.py lists each figure, its command and its caption.
+docs-figures: compile
+	$(PY) docs/figures.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache quadcog.egg-info

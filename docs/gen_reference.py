@@ -13,6 +13,13 @@ below are made from the code, so nothing they list is written twice.
 - ``reference/cli.md``: every command of ``quadcog`` and its options, from the parser.
 - ``reference/api/<layer>.md``: ``::: module`` blocks for mkdocstrings, one page per layer.
 
+It also fills the pages' markers: ``<!-- figure NAME -->`` becomes the committed figure
+``docs/figures/NAME.png`` with its caption (``docs/figures.py``, the command that makes them),
+and ``<!-- equation NAME -->`` the derived expression as display mathematics
+(``derive/site.py``, printed by the LaTeX report's printer; computed once per state of
+``derive/`` and kept in quadcog's cache). MathJax (the ``django-static-mathjax`` package of the
+docs extra, SVG output: no web fonts) is copied into the site, which works offline.
+
 ``python docs/gen_reference.py DIR`` writes the same pages into DIR (to read them without a
 build). ``tests/test_docsite.py`` checks that every schema key has a meaning here.
 """
@@ -36,7 +43,8 @@ from quadcog.layers import LAYERS as PACKAGE_LAYERS  # noqa: E402 (after the pat
 __all__ = ["TOP_MEANING", "COG_MEANING", "DISTURBANCE_MEANING", "LIMITS_MEANING",
            "SWEEP_MEANING", "DIMENSION_MEANING", "LAYERS", "pages", "parameter_docs",
            "scenario_keys_page", "sweep_keys_page", "cli_page", "shipped_page", "api_pages",
-           "on_files"]
+           "on_files", "on_page_markdown", "equations", "figure_block", "MATHJAX",
+           "face_page"]
 
 # The meanings of the keys that have no class of their own (the others come from docstrings).
 TOP_MEANING = {
@@ -78,7 +86,9 @@ LIMITS_MEANING = {"max_position_error": "position error that counts as diverged 
                   "max_tilt_deg": "|phi| or |theta| that counts as diverged (deg)"}
 VEHICLE_EXTRA = {"preset": "the vehicle to start from: \"hummingbird\" (default), "
                            "\"crazyflie\" or \"x500\"; the other keys change its fields",
-                 "identified": "JSON file of `quadcog identify --json`: its r_G becomes the CoG"}
+                 "identified": "JSON file of `quadcog identify --json`: its r_G becomes the CoG",
+                 "file": "a URDF or SDF file (relative to the scenario file) whose vehicle "
+                         "replaces the preset ([Your own vehicle](../howto/vehicle.md))"}
 SWEEP_MEANING = {
     "name": "the sweep's name", "description": "free text (`quadcog sweeps` lists it)",
     "scenario": "the base scenario: a shipped name, or a path relative to this file",
@@ -122,6 +132,8 @@ def parameter_docs(obj: Any) -> dict[str, str]:
     texts = [inspect.getdoc(obj) or ""]
     if inspect.isclass(obj) and "__init__" in obj.__dict__:
         texts.append(inspect.getdoc(obj.__init__) or "")
+    if inspect.isclass(obj):        # a setting inherited from a base class: its meaning there
+        texts += [inspect.getdoc(base) or "" for base in obj.__mro__[1:] if base is not object]
     out: dict[str, str] = {}
     for text in texts:
         lines = text.splitlines()
@@ -153,8 +165,9 @@ def _store(out: dict[str, str], names: list[str], entry: list[str] | None) -> No
         return
     head, rest = entry[0], " ".join(entry[1:])
     # numpydoc: 'name : type' then the description (the type is the schema's value column);
-    # the older form: 'name : description' continued on indented lines
-    is_type = len(head) <= 40 and not head.endswith((".", ",", ";", ":"))
+    # the older form: 'name : description' continued on indented lines (a head that ends
+    # like a sentence part), or 'name : description.' alone
+    is_type = bool(rest) and not head.endswith((".", ",", ";", ":"))
     text = (rest or head) if is_type else f"{head} {rest}".strip()
     for name in names:
         out.setdefault(name, text)
@@ -424,6 +437,52 @@ def _modules(package: str) -> list[str]:
                               if not m.name.rsplit(".", 1)[-1].startswith("_"))
 
 
+def _api_block(module: str) -> str:
+    """``::: module``; a package shows its docstring only: the objects it re-exports are
+    documented once, where they are defined (``reference/api/quadcog.md`` maps the names)."""
+    if hasattr(importlib.import_module(module), "__path__"):
+        return f"::: {module}\n    options:\n      members: false\n"
+    return f"::: {module}\n"
+
+
+
+def _layer_page(module: str) -> str:
+    for slug, (_, packages) in LAYERS.items():
+        if any(module == p or module.startswith(p + ".") for p in packages):
+            return slug
+    return "cli"
+
+
+def face_page() -> str:
+    """The page of ``quadcog`` itself: every name ``from quadcog import ...`` gives, linked to
+    where it is defined and documented.
+
+    Returns
+    -------
+    str
+        Markdown.
+    """
+    import quadcog
+    rows = []
+    for name in quadcog.__all__:
+        obj = getattr(quadcog, name)
+        module = getattr(obj, "__module__", None) if (inspect.isclass(obj) or callable(obj)) \
+            else None
+        if module and module.startswith("quadcog") and getattr(obj, "__name__", "") == name:
+            # a NamedTuple is not rendered on its own by mkdocstrings: its module's heading
+            anchor = module if inspect.isclass(obj) and issubclass(obj, tuple) else \
+                f"{module}.{name}"
+            target = f"{module}.{name}"
+            rows.append((f"`{name}`", f"[`{target}`]({_layer_page(module)}.md#{anchor})"))
+        else:
+            rows.append((f"`{name}`", f"a value ({type(obj).__name__})"))
+    return "\n".join([
+        "# quadcog\n",
+        "The package's face: `from quadcog import NAME` for every name below, each linked to "
+        "the module that defines it (where it is documented, once).\n",
+        _table(rows, ("name", "defined in"))])
+
+
 def api_pages() -> dict[str, str]:
     """The API pages: ``::: module`` for every module of each layer.
 
@@ -437,9 +496,14 @@ def api_pages() -> dict[str, str]:
              "only from the layers above it in this list.\n"]
     for slug, (title, packages) in LAYERS.items():
         mods = [m for p in packages for m in _modules(p)]
-        pages[f"reference/api/{slug}.md"] = f"# {title}\n\n" + "\n".join(
-            f"::: {m}\n" for m in mods)
+        head, _, what = title.partition(": ")   # the nav's label is the part before ':'
+        pages[f"reference/api/{slug}.md"] = (f"# {head}\n\n" + (f"{what[:1].upper()}{what[1:]}."
+                                                                 "\n\n" if what else "")
+                                             + "\n".join(_api_block(m) for m in mods))
         index.append(f"- [{title}]({slug}.md): " + ", ".join(f"`{m}`" for m in mods))
+    index.insert(2, "- [quadcog](quadcog.md): every name of `from quadcog import ...` and "
+                    "where it is defined")
+    pages["reference/api/quadcog.md"] = face_page()
     pages["reference/api/index.md"] = "\n".join(index) + "\n"
     return pages
 
@@ -456,6 +520,110 @@ def pages() -> dict[str, str]:
             "reference/sweep-keys.md": sweep_keys_page(),
             "reference/shipped.md": shipped_page(),
             "reference/cli.md": cli_page(), **api_pages()}
+
+
+MATHJAX = "assets/mathjax/tex-svg-full.js"        # where the site serves MathJax from
+_MARKER = re.compile(r"<!-- (figure|equation) ([\w.-]+) -->")
+
+
+def _mathjax_file() -> Path:
+    import mathjax  # django-static-mathjax (docs extra)
+    return Path(mathjax.__file__).parent / "static" / "mathjax" / "es5" / "tex-svg-full.js"
+
+
+def equations() -> dict[str, str]:
+    """The derived displays of ``derive/site.py``, from the cache when ``derive/`` is unchanged.
+
+    Returns
+    -------
+    dict of str to str
+        {name: LaTeX}.
+    """
+    import hashlib
+    import json
+    if str(ROOT) not in sys.path:               # mkdocs may have reset the path since import
+        sys.path.insert(0, str(ROOT))
+
+    from derive.manifest import derive_sources
+    from quadcog.paths import cache_dir
+    sources = {**derive_sources(), "derive/site.py": hashlib.sha256(
+        (ROOT / "derive" / "site.py").read_bytes()).hexdigest()}
+    key = hashlib.sha256(json.dumps(sources, sort_keys=True).encode()).hexdigest()[:16]
+    path = cache_dir() / "docs-equations" / f"{key}.json"
+    if path.is_file():
+        return dict(json.loads(path.read_text()))
+    from derive.model import derive_model
+    from derive.site import equations as derived
+    out = derived(derive_model())
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(out, indent=1))
+    tmp.replace(path)
+    return out
+
+
+def _figures() -> Any:
+    spec = importlib.util.spec_from_file_location("docs_figures", ROOT / "docs" / "figures.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("docs_figures", mod)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def figure_block(name: str, page: str) -> str:
+    """The Markdown of figure ``name`` of ``docs/figures.py`` on ``page``: image and caption.
+
+    Parameters
+    ----------
+    name : str
+        A ``Figure.name``.
+    page : str
+        The page's path under docs/ (for the relative link).
+
+    Returns
+    -------
+    str
+        A ``<figure>`` with the image and its caption.
+    """
+    import posixpath
+    fig = {f.name: f for f in _figures().FIGURES}[name]
+    src = posixpath.relpath(f"figures/{name}.png", posixpath.dirname(page) or ".")
+    return (f'<figure markdown="span">\n  ![{fig.shows}: {fig.caption}]({src})\n'
+            f"  <figcaption markdown>{fig.caption} (`{fig.shows}`)</figcaption>\n</figure>\n")
+
+
+def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
+    """MkDocs hook: the figure and equation markers of a page filled in.
+
+    Parameters
+    ----------
+    markdown : str
+        The page's Markdown.
+    page : mkdocs.structure.pages.Page
+        The page.
+    config : mkdocs.config.defaults.MkDocsConfig
+        The site's configuration.
+    files : mkdocs.structure.files.Files
+        The site's files.
+
+    Returns
+    -------
+    str
+        The Markdown with every marker replaced.
+    """
+    if "<!-- figure " not in markdown and "<!-- equation " not in markdown:
+        return markdown
+    found = equations() if "<!-- equation " in markdown else {}
+
+    def fill(m: re.Match[str]) -> str:
+        kind, name = m.groups()
+        if kind == "figure":
+            return figure_block(name, page.file.src_uri)
+        if name not in found:
+            raise KeyError(f"{page.file.src_uri}: no equation {name!r} in derive/site.py")
+        return f"\n$$\n{found[name]}\n$$\n"
+    return _MARKER.sub(fill, markdown)
 
 
 def on_files(files: Any, config: Any) -> Any:
@@ -476,6 +644,7 @@ def on_files(files: Any, config: Any) -> Any:
     from mkdocs.structure.files import File
     for path, text in pages().items():
         files.append(File.generated(config, path, content=text))
+    files.append(File.generated(config, MATHJAX, abs_src_path=str(_mathjax_file())))
     return files
 
 

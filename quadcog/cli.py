@@ -187,6 +187,9 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--controller", dest="stack_controller", default=None, metavar="NAME",
                    help="with --stack: the stack's controller (crazyflie: pid, mellinger, indi, "
                         "brescianini, lee or an out-of-tree controller's folder; default pid)")
+    p.add_argument("--vehicle", type=Path, default=None, metavar="FILE",
+                   help="fly the vehicle of a URDF or SDF file (Vehicle.from_urdf, "
+                        "Vehicle.from_sdf) as the truth; the controller's model starts from it")
     p.set_defaults(func=cmd_run)
 
 
@@ -207,6 +210,9 @@ def cmd_run(args: argparse.Namespace) -> None:
         path = json.dumps(str(args.identified.resolve()))
         args.overrides = list(args.overrides) + [f"vehicle.identified={path}",
                                                  f"controller_model.identified={path}"]
+    if args.vehicle is not None:        # as --set vehicle.file=...
+        args.overrides = list(args.overrides) + [
+            f"vehicle.file={json.dumps(str(args.vehicle.resolve()))}"]
     if args.stack is not None:
         args.overrides = list(args.overrides) + [f"stack.name={json.dumps(args.stack)}"]
     if args.stack_controller is not None:

@@ -9,6 +9,7 @@ __all__ = ["QuadcogError", "GeneratedFilesError", "InputError", "ParameterError"
            "LogCRCError", "LogSignalError", "IdentificationError", "StackError",
            "FirmwareError", "FirmwareBuildError"]
 __all__ += ["Px4Error", "Px4TimeoutError"]
+__all__ += ["VehicleFileError"]
 
 
 class QuadcogError(Exception):
@@ -151,6 +152,11 @@ class LogSignalError(LogError):
 class IdentificationError(InputError):
     """A CoG/mass identification cannot run on the logs given (quadcog.identification): a
     missing signal, too few hover samples, no rotor model; the message names the log."""
+
+
+class VehicleFileError(InputError):
+    """A vehicle description file (URDF, SDF) lacks a value the vehicle needs, or holds one
+    that is not a number: the message names the file and the value (its element path)."""
 
 
 class SweepLockedError(SweepError):

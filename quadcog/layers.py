@@ -10,7 +10,7 @@ __all__ = ["LAYERS"]
 
 # (name, title, module prefixes); a module belongs to the layer of its longest prefix
 LAYERS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    ("floor", "The floor: errors, defaults, checks",
+    ("floor", "Foundations: errors, defaults, checks",
      ("quadcog.errors", "quadcog.config", "quadcog.validate", "quadcog.paths", "quadcog.files",
       "quadcog.kinds", "quadcog.interrupts", "quadcog.layers", "quadcog.numerics")),
     ("codegen", "codegen: compiled code", ("quadcog.codegen",)),

@@ -47,7 +47,9 @@ def row_distances(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]
 
     Parameters
     ----------
-    a, b : (N, >= 3) numpy.ndarray
+    a : (N, >= 3) numpy.ndarray
+        Rows whose first three columns are compared.
+    b : (N, >= 3) numpy.ndarray
         Rows whose first three columns are compared.
 
     Returns

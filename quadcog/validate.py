@@ -131,9 +131,13 @@ def real(value: object, where: str, lo: float | None = None, hi: float | None = 
         What the caller passed.
     where : str
         The argument name or scenario key, used as the start of the message.
-    lo, hi : float, optional
+    lo : float, optional
         Bounds (None: unbounded on that side).
-    lo_open, hi_open : bool, optional
+    hi : float, optional
+        Bounds (None: unbounded on that side).
+    lo_open : bool, optional
+        Make ``lo`` / ``hi`` strict bounds (default: inclusive).
+    hi_open : bool, optional
         Make ``lo`` / ``hi`` strict bounds (default: inclusive).
     unit : str, optional
         Unit named in the message, e.g. ``"s"``.
@@ -232,7 +236,9 @@ def integer(value: object, where: str, lo: int | None = None, hi: int | None = N
         What the caller passed.
     where : str
         The argument name or scenario key, used as the start of the message.
-    lo, hi : int, optional
+    lo : int, optional
+        Inclusive bounds (None: unbounded on that side).
+    hi : int, optional
         Inclusive bounds (None: unbounded on that side).
     error : type, optional
         Exception class raised (default quadcog.InputError).

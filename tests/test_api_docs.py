@@ -11,6 +11,7 @@ import enum
 import importlib
 import inspect
 import pkgutil
+import re
 
 import numpydoc.validate
 import pytest
@@ -93,3 +94,45 @@ def test_numpydoc(qualname, obj):
         codes = tuple(c for c in ERRORS if c not in ("PR01", "PR02"))   # Enum's own signature
     errors = [f"{code}: {msg}" for code, msg in result["errors"] if code in codes]
     assert not errors, f"{qualname}:\n  " + "\n  ".join(errors)
+
+
+def _own_lines(obj):
+    """The names that have a Parameters line of their own (``name : type``), and those that
+    share one (``a, b : type``)."""
+    texts = [inspect.getdoc(obj) or ""]
+    if inspect.isclass(obj) and "__init__" in vars(obj):
+        texts.append(inspect.getdoc(obj.__init__) or "")
+    own, shared = set(), set()
+    for text in texts:
+        part = re.split(r"^Parameters\n-+\n", text, flags=re.M)
+        if len(part) < 2:
+            continue
+        body = re.split(r"^\w[\w ]*\n-+\n", part[1], flags=re.M)[0]
+        for m in re.finditer(r"^(\*{0,2}[A-Za-z_]\w*(?:, *\*{0,2}[A-Za-z_]\w*)*) ?:", body,
+                             flags=re.M):
+            names = [n.strip(" *") for n in m.group(1).split(",")]
+            (own if len(names) == 1 else shared).update(names)
+    return own, shared
+
+
+@pytest.mark.parametrize("qualname, obj", [(q, o) for q, o in API if not q.endswith("__init__")],
+                         ids=[q for q, _ in API if not q.endswith("__init__")])
+def test_every_parameter_has_a_line_of_its_own(qualname, obj):
+    """Every public name, not a list of them: ``Ixx, Iyy, Izz : float`` documents Iyy only in
+    passing, and the docs' tables and search then show one text for three keys."""
+    own, shared = _own_lines(obj)
+    assert not shared - own, f"{qualname}: {sorted(shared - own)} share a Parameters line"
+
+
+def test_shared_descriptions_are_filled_in_and_written_once():
+    """Model's methods take x and p: their descriptions live once, in
+    quadcog.model.shared_docs, and every docstring has them filled in (no placeholder left)."""
+    from pathlib import Path
+
+    from quadcog.model import functions
+    from quadcog.model.shared_docs import SHARED
+    left = [q for q, o in API if "%(" in (o.__doc__ or "") and ".shared_docs." not in q]
+    assert not left, left
+    assert SHARED["x"].splitlines()[1].strip() in inspect.getdoc(functions.Model.dynamics)
+    source = Path(functions.__file__).read_text()
+    assert source.count("%(x)s") >= 8 and "State [x, y, z (m)" not in source

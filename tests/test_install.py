@@ -114,6 +114,12 @@ def test_wheel_and_sdist_ship_the_generated_files(wheels):
             for rel in manifest["files"]:      # the very bytes of generated/
                 assert z.read(f"quadcog/_generated/{rel}") == (ROOT / "generated" / rel) \
                     .read_bytes(), rel
+            # the licence pyproject names (MIT) and the citation file, in .dist-info/licenses/
+            for name in ("LICENSE", "CITATION.cff"):
+                shipped = [n for n in names if n.endswith(f".dist-info/licenses/{name}")]
+                assert shipped, f"{wheel.name} lacks {name}: pyproject.toml license-files"
+                assert z.read(shipped[0]) == (ROOT / name).read_bytes(), name
+        assert "MIT License" in (ROOT / "LICENSE").read_text()
         listings.append(names - {n for n in names if ".dist-info/" in n})
     assert listings[0] == listings[1], "the wheel built from the sdist differs from the tree's"
     assert not any(n.startswith(("derive/", "tests/", "generated/")) for n in listings[0])

@@ -41,9 +41,9 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
     gamma : float or (3,) sequence of float, optional
         Adaptation gain, a number or 3 numbers (diagonal of Gamma). Default: from the vehicle
         (``quadcog.controllers.design.adaptation_gain``: the same dimensionless learning rate
-        on every vehicle). The Hummingbird's 0.01 recovers a [6, 6, 0] cm step at hover
-        (3.7 cm tail RMS, estimates within 1 %); 0.03 leaves a 14 cm tail and 0.05 diverges
-        (see README, "Choosing gamma").
+        on every vehicle). On the Hummingbird after a [6, 6, 0] cm step at hover, 0.01
+        recovers with estimates within 1 %, larger gains oscillate with larger tails and
+        0.003 is too slow to recover (measured: docs/tour/simulate.md, "Choosing gamma").
     Q : (8, 8) array_like, optional
         The positive definite matrix of the Lyapunov equation (default identity).
     projection_radius : float or None or "default"

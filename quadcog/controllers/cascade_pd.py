@@ -41,12 +41,18 @@ class CascadePD(Controller):
         the hover moment.
     model : quadcog.model.functions.Model, optional
         The generated functions (default ``quadcog.load()``).
-    poles_z, poles_psi : sequence of float, optional
-        2 real poles each (rad/s) of the height and yaw loops. Default: from the vehicle
-        (``quadcog.controllers.design``; the Hummingbird's (-3, -4), (-4, -5)).
-    poles_x, poles_y : sequence of float, optional
-        4 real poles each (rad/s) of the x-theta and y-phi chains: two slow for position, two
-        fast for attitude. Default: from the vehicle (the Hummingbird's (-2, -2.5, -10, -12)).
+    poles_z : sequence of float, optional
+        2 real poles (rad/s) of the height loop. Default: from the vehicle
+        (``quadcog.controllers.design``; the Hummingbird's (-3, -4)).
+    poles_psi : sequence of float, optional
+        2 real poles (rad/s) of the yaw loop. Default: from the vehicle (the Hummingbird's
+        (-4, -5)).
+    poles_x : sequence of float, optional
+        4 real poles (rad/s) of the x-theta chain: two slow for position, two fast for
+        attitude. Default: from the vehicle (the Hummingbird's (-2, -2.5, -10, -12)).
+    poles_y : sequence of float, optional
+        4 real poles (rad/s) of the y-phi chain, as ``poles_x``. Default: from the vehicle
+        (the Hummingbird's (-2, -2.5, -10, -12)).
     max_tilt : float, optional
         Clip on the commanded roll and pitch (rad), in (0, pi/2]. Default: from the vehicle's
         thrust-to-weight ratio (0.6 for the Hummingbird).

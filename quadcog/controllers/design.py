@@ -176,7 +176,7 @@ def adaptation_gain(vehicle: Vehicle) -> float:
     gamma is the reference gain times (I kp / (m g))^2 over the reference's, so the
     dimensionless gain gamma (m g / (I kp))^2 is the same on every vehicle. The rate is not
     scaled up with the loops: the paper's gradient law holds only for adaptation much slower
-    than every loop (README, "Choosing gamma"); fast learning is the composite law's
+    than every loop (docs/tour/simulate.md, "Choosing gamma"); fast learning is the composite law's
     least-squares term.
 
     Parameters
@@ -246,9 +246,17 @@ class Design:
 
     Parameters
     ----------
-    poles_attitude, poles_z, poles_psi, poles_position : tuple of float
+    poles_attitude : tuple of float
         Feedback linearization's poles (rad/s): the reference's times ``similarity``.
-    poles_x, poles_y : tuple of float
+    poles_z : tuple of float
+        Feedback linearization's poles (rad/s): the reference's times ``similarity``.
+    poles_psi : tuple of float
+        Feedback linearization's poles (rad/s): the reference's times ``similarity``.
+    poles_position : tuple of float
+        Feedback linearization's poles (rad/s): the reference's times ``similarity``.
+    poles_x : tuple of float
+        Cascade PD's x-theta and y-phi chains (rad/s), likewise.
+    poles_y : tuple of float
         Cascade PD's x-theta and y-phi chains (rad/s), likewise.
     max_tilt : float
         ``tilt_limit_of`` (rad).

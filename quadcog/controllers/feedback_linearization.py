@@ -33,11 +33,16 @@ class FeedbackLinearization(Controller):
         The controller's model of the vehicle (default: the Hummingbird with r_G = 0).
     model : quadcog.model.functions.Model, optional
         The generated functions (default ``quadcog.load()``).
-    poles_z, poles_attitude, poles_psi : sequence of float, optional
-        2 poles each (rad/s, real or a conjugate pair) for the linearized output errors
-        e_ddot + kd e_dot + kp e = 0 of z, of phi and theta, and of psi. Default: from the
-        vehicle (``quadcog.controllers.design``; the Hummingbird's (-3, -4), (-10, -12),
-        (-4, -5)).
+    poles_z : sequence of float, optional
+        2 poles (rad/s, real or a conjugate pair) of the height's linearized output error
+        e_ddot + kd e_dot + kp e = 0. Default: from the vehicle
+        (``quadcog.controllers.design``; the Hummingbird's (-3, -4)).
+    poles_attitude : sequence of float, optional
+        2 poles (rad/s) of the roll's and the pitch's output errors, as ``poles_z``. Default:
+        from the vehicle (the Hummingbird's (-10, -12)).
+    poles_psi : sequence of float, optional
+        2 poles (rad/s) of the yaw's output error, as ``poles_z``. Default: from the vehicle
+        (the Hummingbird's (-4, -5)).
     poles_position : sequence of float, optional
         2 poles (rad/s) of the outer x, y loop (slower than the attitude). Default: from the
         vehicle (the Hummingbird's (-1.5, -2)).
@@ -131,7 +136,11 @@ class FeedbackLinearization(Controller):
 
         Parameters
         ----------
-        e, e_dot, y_ddot_d : casadi.SX
+        e : casadi.SX
+            As returned by ``output_errors`` (4,) each.
+        e_dot : casadi.SX
+            As returned by ``output_errors`` (4,) each.
+        y_ddot_d : casadi.SX
             As returned by ``output_errors`` (4,) each.
 
         Returns

@@ -3,19 +3,21 @@
 This module is the one place the protocol is stated; ``quadcog.sim.user_controller`` (which
 checks every call) and ``quadcog.sim.flight`` (which calls it) follow it. With
 ``quadcog.simulate(ctrl, ..., path="python")`` any object ``ctrl`` that satisfies
-``ControllerProtocol`` flies:
+``ControllerProtocol`` flies. What it must have is ``ctrl(t, x, ref, c)``, with the arguments
 
-``ctrl(t, x, ref, c)``
-    t : float, time (s).
-    x : (12,) ndarray, the state ``[x, y, z (m, ground axes), phi, theta, psi (rad, ZYX
-    Euler angles), u, v, w (m/s, body axes), p, q, r (rad/s, body axes)]``.
-    ref : (14,) ndarray, the reference row ``[p (3, m), v (3, m/s), a (3, m/s^2), j (3, m/s^3),
-    yaw (rad), yaw_rate (rad/s)]`` (``quadcog.trajectories.template``).
-    c : (n_state,) ndarray, the controller's own state (empty when it has none).
+- ``t``: float, the time (s);
+- ``x``: (12,) ndarray, the state ``[x, y, z (m, ground axes), phi, theta, psi (rad, ZYX
+  Euler angles), u, v, w (m/s, body axes), p, q, r (rad/s, body axes)]``;
+- ``ref``: (14,) ndarray, the reference row ``[p (3, m), v (3, m/s), a (3, m/s^2), j (3,
+  m/s^3), yaw (rad), yaw_rate (rad/s)]`` (``quadcog.trajectories.template``);
+- ``c``: (n_state,) ndarray, the controller's own state (empty when it has none);
 
-    Returns ``U`` (4,) ``[U1 (N): total thrust along body z, U2, U3, U4 (N m): the moments
-    about body x, y, z at O]``, or ``(U, c_dot)`` with ``c_dot`` (n_state,) the rate of its
-    state (per second). quadcog integrates ``c`` with the step dt: ``c + dt c_dot``.
+and it returns either
+
+- ``U``: (4,) ``[U1 (N): total thrust along body z, U2, U3, U4 (N m): the moments about
+  body x, y, z at O]``, or
+- ``(U, c_dot)``, with ``c_dot`` (n_state,) the rate of its state (per second); quadcog
+  integrates ``c`` with the step dt: ``c + dt c_dot``.
 
 Optional attributes (``FullControllerProtocol`` has them all); each has a default:
 

@@ -75,7 +75,9 @@ class Identification:
         ``"static"`` or ``"regression"``, with the reason when ``"auto"`` chose.
     verdict : str
         The identifiability report in words.
-    flights, baseline : tuple of FlightEstimate
+    flights : tuple of FlightEstimate
+        Per-log estimates (for figures and surveys).
+    baseline : tuple of FlightEstimate
         Per-log estimates (for figures and surveys).
     condition : float or None
         Largest condition number of the scaled regressor over the logs (regression).

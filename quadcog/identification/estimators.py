@@ -105,13 +105,23 @@ class FlightEstimate:
         Per-block masses (kg).
     blocks_v : numpy.ndarray, shape (B, 2)
         Per-block mean speeds forward and left (m/s), for ``speed_corrected``.
-    r_G, r_G_ci95 : numpy.ndarray, shape (3,)
+    r_G : numpy.ndarray, shape (3,)
         Estimate and 95 % half-widths (m); NaN half-width where the method does not estimate.
-    mass, mass_ci95 : float
+    r_G_ci95 : numpy.ndarray, shape (3,)
+        Estimate and 95 % half-widths (m); NaN half-width where the method does not estimate.
+    mass : float
+        kg.
+    mass_ci95 : float
         kg.
     samples : int
         Samples used.
-    t, moment, weight : numpy.ndarray
+    t : numpy.ndarray
+        For the figure: sample times (s), the rotor moments [sum y_i f_i, -sum x_i f_i] (N m)
+        and m g (N) over the window.
+    moment : numpy.ndarray
+        For the figure: sample times (s), the rotor moments [sum y_i f_i, -sum x_i f_i] (N m)
+        and m g (N) over the window.
+    weight : numpy.ndarray
         For the figure: sample times (s), the rotor moments [sum y_i f_i, -sum x_i f_i] (N m)
         and m g (N) over the window.
     condition : float or None

@@ -79,7 +79,9 @@ def fit_gain(x: npt.ArrayLike, y: npt.ArrayLike) -> tuple[float, float]:
 
     Parameters
     ----------
-    x, y : (N,) array_like
+    x : (N,) array_like
+        The two signals.
+    y : (N,) array_like
         The two signals.
 
     Returns

@@ -191,7 +191,9 @@ class FlightLog:
 
         Parameters
         ----------
-        t0, t1 : float
+        t0 : float
+            Start and end (s), on this log's ``t``; ``t0 < t1``.
+        t1 : float
             Start and end (s), on this log's ``t``; ``t0 < t1``.
 
         Returns

@@ -106,7 +106,11 @@ def quaternion_to_euler(q: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
     Returns
     -------
-    roll, pitch, yaw : numpy.ndarray, (...)
+    roll : numpy.ndarray, (...)
+        rad; yaw in (-pi, pi], pitch in [-pi/2, pi/2].
+    pitch : numpy.ndarray, (...)
+        rad; yaw in (-pi, pi], pitch in [-pi/2, pi/2].
+    yaw : numpy.ndarray, (...)
         rad; yaw in (-pi, pi], pitch in [-pi/2, pi/2].
     """
     w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
@@ -121,7 +125,11 @@ def euler_to_quaternion(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np
 
     Parameters
     ----------
-    roll, pitch, yaw : array_like
+    roll : array_like
+        ZYX Euler angles (rad), broadcast together.
+    pitch : array_like
+        ZYX Euler angles (rad), broadcast together.
+    yaw : array_like
         ZYX Euler angles (rad), broadcast together.
 
     Returns

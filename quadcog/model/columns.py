@@ -3,7 +3,7 @@
 A column name is ``<quantity>_<unit>``: the unit after the last word of the quantity, with
 ``_`` for a space, ``s2`` for s^2 (``ref_ax_m_s2`` is an acceleration in m/s^2). Angles are in
 radians here (the plots show degrees and say so). Defined once; the writers, the readers
-(``quadcog animate``) and the README use these names.
+(``quadcog animate``) and the docs use these names.
 """
 from quadcog.model.conventions import INPUT_NAMES, STATE_NAMES
 

@@ -17,6 +17,7 @@ from quadcog.model.attitude import QUATERNION, check_rotation, check_unit_quater
 from quadcog.model.generated_files import C_SOURCE, load_casadi_function, read_contract, verify
 from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import check_parameters
+from quadcog.model.shared_docs import shared_parameters
 from quadcog.paths import generated_dir
 from quadcog.validate import nonnegative, plain, positive, vector
 
@@ -242,20 +243,16 @@ class Model:
             check_physically_consistent(pi, "pi")
             self._last_pi = key
 
+    @shared_parameters
     def dynamics(self, x: ArrayLike, U: ArrayLike, p: ArrayLike,
                  out: np.ndarray | None = None) -> np.ndarray:
         """The state derivative of the model.
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
-        U : (4,) array_like
-            Inputs: thrust along body z (N) and the three body moments about O (N m).
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(x)s
+        %(U)s
+        %(p)s
         out : (12,) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -273,14 +270,13 @@ class Model:
         """
         return self._call("dynamics", (x, U, p), out)
 
+    @shared_parameters
     def mass_matrix(self, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """M, the mass and inertia matrix about O.
 
         Parameters
         ----------
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(p)s
         out : (6, 6) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -298,14 +294,13 @@ class Model:
         """
         return self._call("mass_matrix", (p,), out)
 
+    @shared_parameters
     def inverse_mass_matrix(self, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """M^{-1}, by block elimination (no 6x6 solve).
 
         Parameters
         ----------
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(p)s
         out : (6, 6) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -323,17 +318,14 @@ class Model:
         """
         return self._call("inverse_mass_matrix", (p,), out)
 
+    @shared_parameters
     def coriolis(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """The Coriolis and centripetal matrix C(nu).
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(x)s
+        %(p)s
         out : (6, 6) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -351,14 +343,13 @@ class Model:
         """
         return self._call("coriolis", (x, p), out)
 
+    @shared_parameters
     def damping(self, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """The damping matrix D.
 
         Parameters
         ----------
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(p)s
         out : (6, 6) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -376,17 +367,14 @@ class Model:
         """
         return self._call("damping", (p,), out)
 
+    @shared_parameters
     def gravity(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """The gravity wrench g_G = -[f_G; r_G x f_G].
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(x)s
+        %(p)s
         out : (6,) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -404,20 +392,17 @@ class Model:
         """
         return self._call("gravity", (x, p), out)
 
+    @shared_parameters
     def regressor(self, x: ArrayLike, vartheta: ArrayLike, p: ArrayLike,
                   out: np.ndarray | None = None) -> np.ndarray:
         """The CoG regressor Phi = d/dr_G [M vartheta + C nu + g_G].
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
+        %(x)s
         vartheta : (6,) array_like
             A generalized acceleration (m/s^2, rad/s^2).
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(p)s
         out : (6, 3) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -435,17 +420,14 @@ class Model:
         """
         return self._call("regressor", (x, vartheta, p), out)
 
+    @shared_parameters
     def decoupling(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """The decoupling matrix alpha = L_g L_f h for y = [z, phi, theta, psi].
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(x)s
+        %(p)s
         out : (4, 4) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -463,17 +445,14 @@ class Model:
         """
         return self._call("decoupling", (x, p), out)
 
+    @shared_parameters
     def drift(self, x: ArrayLike, p: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """The drift b = L_f^2 h of y = [z, phi, theta, psi].
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(x)s
+        %(p)s
         out : (4,) numpy.ndarray, optional
             Where to write the result (returned).
 
@@ -492,20 +471,16 @@ class Model:
         return self._call("drift", (x, p), out)
 
 
+    @shared_parameters
     def truth_dynamics(self, x: ArrayLike, U: ArrayLike, p: ArrayLike, I_products: ArrayLike,
                        wrench: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
         """The state derivative of the truth model: full inertia about O and an external wrench.
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
-        U : (4,) array_like
-            Inputs: thrust along body z (N) and the three body moments about O (N m).
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(x)s
+        %(U)s
+        %(p)s
         I_products : (3,) array_like
             Off-diagonal entries [Ixy, Ixz, Iyz] of the inertia about O (kg m^2); the
             diagonal is p's.
@@ -682,20 +657,16 @@ class Model:
         """
         return self._call("quaternion_rotation", (quaternion,), out)
 
+    @shared_parameters
     def linearization(self, x: ArrayLike, U: ArrayLike, p: ArrayLike,
                       out: tuple[np.ndarray, np.ndarray] | None = None) -> Linearization:
         """The dynamics linearized about (x, U).
 
         Parameters
         ----------
-        x : (12,) array_like
-            State [x, y, z (m), phi, theta, psi (rad), u, v, w (m/s), p, q, r (rad/s)]:
-            position in ground axes, ZYX Euler angles, body-axis velocities and rates.
-        U : (4,) array_like
-            Inputs: thrust along body z (N) and the three body moments about O (N m).
-        p : (14,) array_like
-            Parameters [m, g, Ixx, Iyy, Izz, c_x, ..., c_psi, x_G, y_G, z_G] (SI units),
-            admissible (else ParameterError).
+        %(x)s
+        %(U)s
+        %(p)s
         out : tuple of numpy.ndarray, optional
             Arrays of shapes (12, 12) and (12, 4) to write A and B into.
 

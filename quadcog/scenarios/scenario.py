@@ -3,7 +3,8 @@
 A scenario names a controller, a trajectory, CoG changes, disturbances, the truth vehicle
 (``[vehicle]``) and what the controller believes (``[controller_model]``), controller
 parameters and truth-model switches; `quadcog run FILE --out DIR` writes
-metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are documented in README.md.
+metrics.json, vehicle.json, trajectory.csv and flight.png. The keys are documented in
+docs/reference/scenario-keys.md (generated).
 """
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -299,7 +300,7 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
     Parameters
     ----------
     data : dict
-        The parsed scenario file (keys as in README.md "Scenario files").
+        The parsed scenario file (keys as in docs/reference/scenario-keys.md).
     source : str
         What error messages name (the file).
 
@@ -395,10 +396,13 @@ def _vehicle(data, key, base, source):
     _validate(table, VEHICLE, source, f"{key}.", " vehicle field")
     preset = table.pop("preset", None)
     identified = table.pop("identified", None)
+    file = table.pop("file", None)
     if preset is not None:
         base = PRESETS[validate.choice(preset, f"{source}: key '{key}.preset'", tuple(PRESETS),
                                        ScenarioError)]
     try:
+        if file is not None:                # a URDF or SDF file, relative to the scenario file
+            base = Vehicle.from_file(Path(source).parent / file)
         vehicle = (base or HUMMINGBIRD).replace(**table)
         if identified is not None:
             from quadcog.identification.identified import identified_cog

@@ -36,6 +36,7 @@ VEHICLE = {name: {"rotor_positions": "pairs4", "rotor_directions": "vec",
            for name in FIELD_NAMES}
 VEHICLE["preset"] = str
 VEHICLE["identified"] = str         # the JSON of `quadcog identify --json`: its r_G
+VEHICLE["file"] = str               # a URDF or SDF file (quadcog.vehicles.description)
 # a flight stack instead of quadcog's law (quadcog.crazyflie): its name and its own settings
 STACK = {"name": str, "controller": str, "propellers": str, "battery_voltage": NUMBER}
 STACKS = ("crazyflie",)

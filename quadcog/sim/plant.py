@@ -37,9 +37,10 @@ class TruthOptions:
     Parameters
     ----------
     parallel_axis : bool
-        The inertia about O follows the moving mass,
-        ``I_O = I_G + m (|r_G|^2 I - r_G r_G^T)``, ``I_G`` being the vehicle's diagonal inertia
-        (its inertia about the CoG when r_G = 0).
+        The inertia about O follows the moving mass: the vehicle's Ixx, Iyy, Izz are its
+        inertia about O at its stated CoG ``r_0`` (as the controllers' model reads them), and
+        a CoG at ``r`` adds ``m (S(r) - S(r_0))``, ``S(r) = |r|^2 I - r r^T`` (for a vehicle
+        stated at ``r_0 = 0``, as the presets are: the parallel-axis theorem from the CoG).
     rotor_saturation : bool
         Each rotor's thrust is clipped to the vehicle's
         ``[min_rotor_thrust, max_rotor_thrust]`` (without it: to ``[0, inf)``).

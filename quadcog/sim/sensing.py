@@ -59,8 +59,12 @@ class Sensing:
         Apply each computed input one control period later.
     seed : int
         Seed of the noise and of the gyroscope bias.
-    position, velocity, attitude : float
-        Standard deviations (m, m/s in body axes, rad), >= 0.
+    position : float
+        Standard deviation of the measured position (m), >= 0.
+    velocity : float
+        Standard deviation of the measured body velocities (m/s, body axes), >= 0.
+    attitude : float
+        Standard deviation of the measured Euler angles (rad), >= 0.
     gyro_density : float
         Rate-noise spectral density (rad/s/sqrt(Hz)); the per-sample standard deviation is
         gyro_density * sqrt(1 / (2 dt)).

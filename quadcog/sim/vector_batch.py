@@ -115,7 +115,10 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
         Size of each of the J CoG changes per flight (m), see the module docstring.
     trajectory : Trajectory, str or callable
         As for ``quadcog.simulate``.
-    duration, dt : float
+    duration : float
+        Seconds, as for ``quadcog.simulate`` (dt default
+        ``quadcog.config.defaults["simulate.dt"]``).
+    dt : float
         Seconds, as for ``quadcog.simulate`` (dt default
         ``quadcog.config.defaults["simulate.dt"]``).
     cog_times : sequence of (t, ramp)

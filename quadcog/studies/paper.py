@@ -161,9 +161,9 @@ def _fragment(rows):
 
 
 def readme_table(rows: list[dict[str, Any]]) -> str:
-    """The README's table of the claims (Markdown).
+    """The table of the claims (Markdown), ``readme_table.md``.
 
-    ``python bench/publish.py paper`` copies it into README.md.
+    ``python bench/publish.py paper`` copies it into docs/tour/paper.md.
 
     Parameters
     ----------

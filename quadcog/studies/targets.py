@@ -109,7 +109,13 @@ class Row:
 
     Parameters
     ----------
-    vehicle, law, case, metric : str
+    vehicle : str
+        The preset, the controller's short name, the case and the metric.
+    law : str
+        The preset, the controller's short name, the case and the metric.
+    case : str
+        The preset, the controller's short name, the case and the metric.
+    metric : str
         The preset, the controller's short name, the case and the metric.
     value : float
         The measured number (NaN when the flight diverged before it could be measured).

@@ -41,4 +41,4 @@ def tour(print_: Callable[[str], object] = print) -> None:
     show("regressor(x, vartheta = 0, p): Phi", model.regressor(x, np.zeros(6), p))
     A, B = model.linearization(x, U, p)
     show("eigenvalues of the hover linearization A", np.sort_complex(np.linalg.eigvals(A)))
-    print_("\nNext: `make test` runs the verification; see README.md for the rest.")
+    print_("\nNext: `make test` runs the verification; the docs site (make docs) has the rest.")

@@ -6,7 +6,7 @@ way the scenario file spells it: ``controller``, ``duration``, ``vehicle.m``,
 ``controller_params.gamma``, ``cog[0].r`` (a 3-vector), ``cog[0].r[1]`` (one component),
 ``cog[0].ramp``, ``trajectory.radius``... Every flight is validated by the scenario parser, so
 a sweep accepts exactly what a scenario file accepts. The keys of a sweep file are listed in
-README.md ("Sweeps").
+docs/reference/sweep-keys.md.
 """
 from collections.abc import Callable
 import copy
@@ -462,7 +462,7 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     Parameters
     ----------
     data : dict
-        The parsed sweep file (keys as in README.md "Sweeps").
+        The parsed sweep file (keys as in docs/reference/sweep-keys.md).
     source : str
         What error messages name.
     folder : str or os.PathLike, optional

@@ -18,6 +18,10 @@ from quadcog.errors import InputError, QuadcogError
 from quadcog.kinds import Number, Vec3
 from quadcog.model.parameters import LARGEST
 
+# position, velocity, acceleration, jerk: each (N, 3), ground axes (m, m/s, m/s^2, m/s^3)
+_PVAJ = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64],
+              npt.NDArray[np.float64]]
+
 __all__ = ["Trajectory", "Hover", "Circle", "Figure8", "Helix", "FromCallable", "REF_SIZE",
            "REF_NAMES", "REFERENCE_LIMIT", "POS", "VEL", "ACC", "JERK", "YAW", "YAW_RATE"]
 
@@ -176,7 +180,7 @@ class Hover(Trajectory):
         self.position = _vec3("hover position", self.position)
         self.yaw = _angle("hover yaw", self.yaw)
 
-    def _pvaj(self, t):
+    def _pvaj(self, t: npt.NDArray[np.float64]) -> _PVAJ:
         p = np.broadcast_to(np.asarray(self.position, float), (t.size, 3))
         zero = np.broadcast_to(0.0, (t.size, 3))
         return p, zero, zero, zero
@@ -215,7 +219,7 @@ class Circle(Trajectory):
         self.yaw = _angle("circle yaw", self.yaw)
         _rate("circle period", self.period)
 
-    def _pvaj(self, t):
+    def _pvaj(self, t: npt.NDArray[np.float64]) -> _PVAJ:
         w = 2 * np.pi / self.period
         c, s, z = np.cos(w * t), np.sin(w * t), np.zeros_like(t)
         r = self.radius
@@ -259,7 +263,7 @@ class Figure8(Trajectory):
         self.yaw = _angle("figure8 yaw", self.yaw)
         _rate("figure8 period", self.period)
 
-    def _pvaj(self, t):
+    def _pvaj(self, t: npt.NDArray[np.float64]) -> _PVAJ:
         w, a_, z = 2 * np.pi / self.period, self.size, np.zeros_like(t)
         p = self.center + np.stack([a_ * np.sin(w * t), a_ / 2 * np.sin(2 * w * t), z], 1)
         v = np.stack([a_ * w * np.cos(w * t), a_ * w * np.cos(2 * w * t), z], 1)
@@ -296,7 +300,7 @@ class Helix(Circle):
         super().__post_init__()
         self.climb_rate = validate.real(self.climb_rate, "helix climb_rate", unit="m/s")
 
-    def _pvaj(self, t):
+    def _pvaj(self, t: npt.NDArray[np.float64]) -> _PVAJ:
         p, v, a, j = super()._pvaj(t)
         p[:, 2] += self.climb_rate * t
         v[:, 2] += self.climb_rate

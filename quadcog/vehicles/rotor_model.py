@@ -336,7 +336,9 @@ def px4_thrust_curve(max_thrust: float, thr_mdl_fac: float, name: str = "px4",
         Thrust of one rotor at full output (N), > 0.
     thr_mdl_fac : float
         The vehicle's ``THR_MDL_FAC`` k in [0, 1] (0: thrust linear in u; 1: quadratic).
-    name, source : str
+    name : str
+        Identifier and citation of the numbers (the vehicle's own parameters).
+    source : str
         Identifier and citation of the numbers (the vehicle's own parameters).
 
     Returns

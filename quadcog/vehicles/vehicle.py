@@ -19,6 +19,7 @@ adds ``y_i f_i`` to the roll moment U2 and ``-x_i f_i`` to the pitch moment U3. 
 counter-clockwise), -1 for counter-clockwise.
 """
 from dataclasses import asdict, dataclass, fields, replace
+import os
 from typing import Any
 
 import numpy as np
@@ -30,11 +31,12 @@ from quadcog.model.inertial_parameters import check_physically_consistent, from_
 from quadcog.model.parameters import check_parameters
 from quadcog.numerics import exact_inverse
 from quadcog.validate import array, plain, real, vector
+from quadcog.vehicles.description import file_fields, sdf_fields, urdf_fields
 from quadcog.vehicles.payload import PAYLOAD_REACH, Payload, as_payload
 from quadcog.vehicles.rotor_model import CRAZYFLIE_21_PLUS_CUBIC, CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "CRAZYFLIE_21", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
-           "plus_layout", "x_layout", "default_parameters"]
+           "plus_layout", "x_layout", "default_parameters", "preset_drag"]
 
 N_ROTORS = 4
 
@@ -86,14 +88,26 @@ class Vehicle:
         Mass (kg), > 0.
     g : float
         Gravitational acceleration (m/s^2), > 0.
-    Ixx, Iyy, Izz : float
-        Inertia about O (kg m^2), > 0; with ``r_G = 0`` the inertia about the CoG. The model
-        holds it constant as the CoG moves (the truth model's ``parallel_axis`` option adds the
-        change).
-    c_x, c_y, c_z : float
-        Linear drag of the body velocities (N s/m), >= 0.
-    c_phi, c_theta, c_psi : float
-        Linear drag of the body rates (N m s/rad), >= 0.
+    Ixx : float
+        Roll inertia about O at the stated CoG (kg m^2), > 0; with ``r_G = 0`` the inertia
+        about the CoG. The model holds ``Ixx``, ``Iyy``, ``Izz`` constant as the CoG moves (the
+        truth model's ``parallel_axis`` option adds the change).
+    Iyy : float
+        Pitch inertia about O at the stated CoG (kg m^2), > 0.
+    Izz : float
+        Yaw inertia about O at the stated CoG (kg m^2), > 0.
+    c_x : float
+        Linear drag of the forward body velocity u (N s/m), >= 0.
+    c_y : float
+        Linear drag of the sideways body velocity v (N s/m), >= 0.
+    c_z : float
+        Linear drag of the vertical body velocity w (N s/m), >= 0.
+    c_phi : float
+        Linear drag of the roll rate p (N m s/rad), >= 0.
+    c_theta : float
+        Linear drag of the pitch rate q (N m s/rad), >= 0.
+    c_psi : float
+        Linear drag of the yaw rate r (N m s/rad), >= 0.
     rotor_positions : (4, 2) array_like
         Four (x, y) pairs (m) in the body frame, in the rotor plane through O
         (``plus_layout(arm)``, ``x_layout(arm)`` or any); stored as a tuple of tuples.
@@ -113,9 +127,14 @@ class Vehicle:
     motor_time_constant : float, default 0
         First-order time constant from commanded to actual rotor thrust (s), >= 0; 0 means
         instant. Used by the truth model's ``motor_lag`` option.
-    x_G, y_G, z_G : float, default 0
-        CoG offset r_G from O in the body frame (m). The inertia about the CoG,
-        ``I_O - m (|r_G|^2 I - r_G r_G^T)``, must stay positive definite.
+    x_G : float, default 0
+        CoG offset from O along body x (m, forward). The inertia about the CoG,
+        ``I_O - m (|r_G|^2 I - r_G r_G^T)`` with ``r_G = [x_G, y_G, z_G]``, must stay
+        positive definite.
+    y_G : float, default 0
+        CoG offset from O along body y (m, left).
+    z_G : float, default 0
+        CoG offset from O along body z (m, up).
     name : str, default "vehicle"
         A label.
     rotor_model : RotorModel or str or None, default None
@@ -224,6 +243,99 @@ class Vehicle:
                          where("parameters"))
         _check_payloads(self, where)
         _check_rigid_body(self, where)
+
+    # -- from the files users have -------------------------------------------------------
+    @classmethod
+    def from_urdf(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
+                  **options: Any) -> "Vehicle":
+        """A vehicle from a URDF file (gym-pybullet-drones' ``cf2x.urdf`` and its kind).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The URDF file.
+        drag : dict of str to float, optional
+            The six drag coefficients by field name; default ``preset_drag`` (the file has
+            none).
+        **options
+            ``rotor_directions``, ``g``, ``name``: see
+            ``quadcog.vehicles.description.urdf_fields``, which says what is read and how the
+            file's inertia about the CoG becomes this class's inertia about O.
+
+        Returns
+        -------
+        Vehicle
+            The vehicle.
+
+        Raises
+        ------
+        VehicleFileError
+            A missing file, or a needed value missing or not a number (named with the file).
+        PhysicalConsistencyError
+            A link whose mass and inertia no rigid body has.
+        """
+        return cls._from_fields(urdf_fields(path, **options), drag)
+
+    @classmethod
+    def from_sdf(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
+                 **options: Any) -> "Vehicle":
+        """A vehicle from an SDF model (Gazebo; PX4's gz ``x500/model.sdf``).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The model's SDF file; ``model://`` includes are found beside its folder or in
+            ``model_paths``.
+        drag : dict of str to float, optional
+            The six drag coefficients by field name; default ``preset_drag``.
+        **options
+            ``model_paths``, ``g``, ``name``, ``rotor_links``: see
+            ``quadcog.vehicles.description.sdf_fields``.
+
+        Returns
+        -------
+        Vehicle
+            The vehicle.
+
+        Raises
+        ------
+        VehicleFileError
+            A missing file or included model, or a needed value missing or not a number.
+        PhysicalConsistencyError
+            A link whose mass and inertia no rigid body has.
+        """
+        return cls._from_fields(sdf_fields(path, **options), drag)
+
+    @classmethod
+    def from_file(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
+                  **options: Any) -> "Vehicle":
+        """A vehicle from a ``.urdf`` or ``.sdf`` file, by its suffix.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file.
+        drag : dict of str to float, optional
+            The six drag coefficients by field name; default ``preset_drag``.
+        **options
+            Passed on to ``from_urdf`` or ``from_sdf``.
+
+        Returns
+        -------
+        Vehicle
+            The vehicle.
+
+        Raises
+        ------
+        VehicleFileError
+            Another suffix, or what ``from_urdf`` or ``from_sdf`` raises.
+        """
+        return cls._from_fields(file_fields(path, **options), drag)
+
+    @classmethod
+    def _from_fields(cls, fields_: dict[str, Any], drag: dict[str, float] | None) -> "Vehicle":
+        drag = drag if drag is not None else preset_drag(fields_["m"], fields_["Ixx"])
+        return cls(**{**fields_, **drag})
 
     # -- what the generated functions and the plant need --------------------------------
     def parameters(self) -> npt.NDArray[np.float64]:
@@ -606,6 +718,28 @@ X500 = Vehicle(
     moment_constant=0.016,
     max_rotor_thrust=_X500_THRUST_CONSTANT * _X500_MAX_ROTOR_SPEED ** 2,   # 8.55 N
     motor_time_constant=0.0125)
+
+def preset_drag(m: float, Ixx: float) -> dict[str, float]:
+    """The linear drag of the presets that no source gives (the X500, the Crazyflie, a vehicle
+    from a file): the Hummingbird's drag per mass and per inertia.
+
+    Parameters
+    ----------
+    m : float
+        Mass (kg).
+    Ixx : float
+        Roll inertia about O (kg m^2).
+
+    Returns
+    -------
+    dict of str to float
+        ``c_x = c_y = c_z = (c_x / m)_Hummingbird m`` (N s/m) and ``c_phi = c_theta = c_psi =
+        (c_phi / Ixx)_Hummingbird Ixx`` (N m s/rad), by field name.
+    """
+    linear, rate = _DRAG_PER_MASS * m, _RATE_DRAG_PER_INERTIA * Ixx
+    return {"c_x": linear, "c_y": linear, "c_z": linear, "c_phi": rate, "c_theta": rate,
+            "c_psi": rate}
+
 
 # Bitcraze Crazyflie 2.1 with its default 2.1+ propellers, from the firmware's own constants
 # (crazyflie-firmware 2a18fc29, src/platform/interface/platform_defaults_cf2.h with the

@@ -1,0 +1,507 @@
+"""Vehicles from the description files users have: URDF (gym-pybullet-drones) and SDF (Gazebo,
+PX4's gz models).
+
+The files are read with the standard library's ``xml.etree.ElementTree``: both formats are
+plain XML whose few elements this module needs (links' ``<inertial>``, joints, a plugin's or a
+``<properties>`` tag's numbers), and no URDF/SDF library on PyPI is kept for both without a
+simulator attached (``urdfpy`` has not been released since 2020 and pins an old networkx;
+``sdformat`` is Gazebo's C++ library with bindings only from Gazebo's own packages).
+
+What is read
+------------
+- The rigid body: every link's ``<inertial>`` (mass, CoG pose, inertia about the CoG in the
+  inertial frame's axes), turned to body axes and summed about the common CoG
+  (parallel-axis theorem): the mass, the CoG and the inertia about the CoG of the whole
+  model. Each link and the whole must be physically consistent: a link whose numbers no
+  rigid body has gets ``PhysicalConsistencyError`` (``quadcog.model.inertial_parameters``).
+- The origin O: on the rotors' axis (their centroid in x, y), at the height of the CoG. The
+  moments of thrusts along body z do not depend on the height of the plane they act in, so O
+  may sit at any height on that axis; at the CoG's, ``z_G = 0`` and a vehicle whose CoG lies on
+  the rotors' axis gets the file's inertia about the CoG as its ``Ixx, Iyy, Izz``.
+- The inertia in quadcog's convention (``Vehicle``, docs/model.md sec. 1.2): the diagonal of
+  the inertia about O at the stated CoG, ``I_O = I_G + m (|r_G|^2 I - r_G r_G^T)`` with the
+  file's whole-body ``I_G``; the products of inertia are left out, as the model has none.
+- The rotors, in the file's order: positions (x, y) from O, spin directions, thrust and
+  moment constants, the largest thrust and the motor time constant, from the SDF's
+  ``MulticopterMotorModel`` plugins or the URDF's ``<properties>`` tag.
+- Linear drag: neither format has the model's linear drag, so ``Vehicle.from_urdf`` and
+  ``Vehicle.from_sdf`` apply the presets' rule (``quadcog.vehicles.vehicle.preset_drag``) unless ``drag`` is
+  given.
+
+The functions here return the ``Vehicle`` fields (this module sits below ``vehicle.py``);
+``Vehicle.from_urdf``, ``Vehicle.from_sdf`` and ``Vehicle.from_file`` make the vehicle.
+
+A needed value that is missing or not a number raises ``VehicleFileError`` naming the value
+(its element path) and the file.
+"""
+from dataclasses import dataclass
+import math
+import os
+from pathlib import Path
+from typing import Any
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import numpy.typing as npt
+
+from quadcog.errors import VehicleFileError
+from quadcog.model.inertial_parameters import check_physically_consistent, inertial_parameters
+
+__all__ = ["urdf_fields", "sdf_fields", "file_fields", "GYM_PYBULLET_DIRECTIONS",
+           "RPM_PER_RAD_S", "GAZEBO_PATH_VARIABLES"]
+
+# gym-pybullet-drones, BaseAviary._physics: z_torque = -t0 + t1 - t2 + t3 with t_i = KM rpm_i^2,
+# and the torques negated for DroneModel.RACE (whose URDF is racer.urdf); the file has no
+# directions, that code has them
+GYM_PYBULLET_DIRECTIONS = {"": (-1, 1, -1, 1), "racer": (1, -1, 1, -1)}
+# gym-pybullet-drones' kf, km are per squared rotor speed in revolutions per minute
+RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
+# where Gazebo looks for model:// URIs (gz sim; Gazebo classic's name second)
+GAZEBO_PATH_VARIABLES = ("GZ_SIM_RESOURCE_PATH", "GAZEBO_MODEL_PATH")
+
+
+# -- XML reading -----------------------------------------------------------------------------
+
+def _parse(path: Path) -> ET.Element:
+    try:
+        return ET.parse(path).getroot()
+    except FileNotFoundError:
+        raise VehicleFileError(f"{path}: no such file") from None
+    except (ET.ParseError, OSError) as e:
+        raise VehicleFileError(f"{path}: not readable as XML ({e})") from None
+
+
+def _numbers(text: str | None, what: str, path: Path, n: int) -> npt.NDArray[np.float64]:
+    if text is None:
+        raise VehicleFileError(f"{path}: {what} is missing; expected {n} number(s)")
+    try:
+        values = np.array([float(t) for t in text.split()])
+    except ValueError:
+        values = np.array([])
+    if values.shape != (n,) or not np.isfinite(values).all():
+        raise VehicleFileError(f"{path}: {what} = {text.strip()!r}; expected {n} finite "
+                               "number(s)")
+    return values
+
+
+def _number(text: str | None, what: str, path: Path) -> float:
+    return float(_numbers(text, what, path, 1)[0])
+
+
+def _rotation(rpy: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """Rz(yaw) Ry(pitch) Rx(roll): the fixed-axis roll, pitch, yaw of URDF and SDF poses."""
+    r, p, y = np.asarray(rpy, dtype=float)
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+@dataclass(frozen=True)
+class _Pose:
+    R: npt.NDArray[np.float64]
+    t: npt.NDArray[np.float64]
+
+    def then(self, inner: "_Pose") -> "_Pose":
+        return _Pose(self.R @ inner.R, self.R @ inner.t + self.t)
+
+
+_IDENTITY = _Pose(np.eye(3), np.zeros(3))
+
+
+def _sdf_pose(element: ET.Element | None, what: str, path: Path) -> _Pose:
+    node = None if element is None else element.find("pose")
+    if node is None or not (node.text or "").strip():
+        return _IDENTITY
+    v = _numbers(node.text, f"{what}/pose", path, 6)
+    rpy = np.radians(v[3:]) if node.get("degrees", "false").lower() == "true" else v[3:]
+    return _Pose(_rotation(rpy), v[:3])
+
+
+def _urdf_origin(element: ET.Element | None, what: str, path: Path) -> _Pose:
+    node = None if element is None else element.find("origin")
+    if node is None:
+        return _IDENTITY
+    xyz = _numbers(node.get("xyz", "0 0 0"), f"{what}/origin@xyz", path, 3)
+    rpy = _numbers(node.get("rpy", "0 0 0"), f"{what}/origin@rpy", path, 3)
+    return _Pose(_rotation(rpy), xyz)
+
+
+_INERTIA_KEYS = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")   # products default to 0
+
+
+def _inertia_matrix(values: dict[str, float]) -> npt.NDArray[np.float64]:
+    g = values.get
+    return np.array([[g("ixx", 0.0), g("ixy", 0.0), g("ixz", 0.0)],
+                     [g("ixy", 0.0), g("iyy", 0.0), g("iyz", 0.0)],
+                     [g("ixz", 0.0), g("iyz", 0.0), g("izz", 0.0)]])
+
+
+@dataclass(frozen=True)
+class _Body:
+    """One link's inertial in model axes: mass (kg), CoG (m), inertia about its CoG (kg m^2)."""
+    m: float
+    r: npt.NDArray[np.float64]
+    I_G: npt.NDArray[np.float64]
+
+
+def _body(m: float, where: _Pose, I_G: npt.NDArray[np.float64], what: str, path: Path) -> _Body:
+    """A link's inertial, its inertia about its CoG turned to model axes; refused when no
+    rigid body has it (the pseudo-inertia, quadcog.model.inertial_parameters)."""
+    I_model = where.R @ I_G @ where.R.T
+    check_physically_consistent(inertial_parameters(m, np.zeros(3), I_model, what),
+                                f"{path}: {what}")
+    return _Body(m, where.t, I_model)
+
+
+def _whole(bodies: list[_Body], path: Path) -> tuple[float, npt.NDArray[np.float64],
+                                                      npt.NDArray[np.float64]]:
+    """Mass, CoG and inertia about the CoG of the links together (the parallel-axis theorem
+    about the common CoG, so one link comes back exactly as the file states it)."""
+    m = sum(b.m for b in bodies)
+    cog = sum((b.m * b.r for b in bodies), np.zeros(3)) / m
+    I_G = np.zeros((3, 3))
+    for b in bodies:
+        d = b.r - cog
+        I_G = I_G + b.I_G + b.m * (float(d @ d) * np.eye(3) - np.outer(d, d))
+    check_physically_consistent(inertial_parameters(m, np.zeros(3), I_G, "the links"),
+                                f"{path}: the links together")
+    return m, cog, I_G
+
+
+# -- the vehicle from its parts --------------------------------------------------------------
+
+def _assemble(path: Path, name: str, bodies: list[_Body],
+              rotors: npt.NDArray[np.float64], directions: tuple[int, ...],
+              thrust_constant: float, moment_constant: float, max_rotor_thrust: float,
+              motor_time_constant: float, g: float) -> dict[str, Any]:
+    """The Vehicle of the summed links (pi about the model frame's origin) and the rotors'
+    positions in the model frame: O on the rotors' axis at the CoG's height."""
+    if not bodies:
+        raise VehicleFileError(f"{path}: no link has a mass (<inertial>); expected the "
+                               "vehicle's body")
+    m, cog, I_G = _whole(bodies, path)
+    centre = rotors[:, :2].mean(axis=0)
+    r_G = np.array([cog[0] - centre[0], cog[1] - centre[1], 0.0])
+    I_O = I_G + m * (float(r_G @ r_G) * np.eye(3) - np.outer(r_G, r_G))
+    return dict(
+        name=name, m=float(m), g=g, Ixx=float(I_O[0, 0]), Iyy=float(I_O[1, 1]),
+        Izz=float(I_O[2, 2]), rotor_positions=tuple((float(x), float(y)) for x, y in rotors[:, :2] - centre),
+        rotor_directions=directions, thrust_constant=thrust_constant,
+        moment_constant=moment_constant, max_rotor_thrust=max_rotor_thrust,
+        motor_time_constant=motor_time_constant, x_G=float(r_G[0]), y_G=float(r_G[1]),
+        z_G=0.0)
+
+
+def _check_axis(axis: npt.NDArray[np.float64], what: str, path: Path) -> None:
+    unit = axis / max(float(np.linalg.norm(axis)), 1e-300)
+    if not abs(abs(unit[2]) - 1.0) < 1e-6:
+        raise VehicleFileError(f"{path}: {what} = {axis.tolist()} is not along body z; "
+                               "expected rotors that push along body z (quadcog's model)")
+
+
+# -- URDF ------------------------------------------------------------------------------------
+
+def urdf_fields(path: str | os.PathLike[str], *,
+                rotor_directions: tuple[int, ...] | None = None, g: float = 9.81,
+                name: str | None = None) -> dict[str, Any]:
+    """The fields of a vehicle (all but the drag) from a URDF file of gym-pybullet-drones' kind
+    (``cf2x.urdf``, ``cf2p.urdf``, ``racer.urdf``).
+
+    Read as gym-pybullet-drones' ``BaseAviary`` reads it: the mass and inertia of the links'
+    ``<inertial>`` tags; the rotors at the CoG frames of the links ``prop0_link`` ..
+    ``prop3_link`` (PyBullet applies each rotor's force there); from ``<properties>``: ``kf``
+    and ``km`` (thrust and drag moment per squared rotor speed in rpm, so
+    ``thrust_constant = kf (60 / 2 pi)^2`` N/(rad/s)^2 and ``moment_constant = km / kf`` m)
+    and ``thrust2weight`` (the largest thrust of a rotor is ``thrust2weight m g / 4``). The
+    file states no motor lag (``motor_time_constant = 0``) and no linear drag.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The URDF file.
+    rotor_directions : tuple of 4 int, optional
+        The signs d_i of ``Vehicle.rotor_directions``. The file has none; by default those of
+        ``BaseAviary._physics`` (``GYM_PYBULLET_DIRECTIONS``): (-1, 1, -1, 1), and (1, -1, 1,
+        -1) for a file named ``racer.urdf`` (BaseAviary negates the racer's torques).
+    g : float, default 9.81
+        Gravitational acceleration (m/s^2); also sets the largest thrust.
+    name : str, optional
+        The vehicle's name; default the ``<robot name>`` and the file name.
+
+    Returns
+    -------
+    dict of str to Any
+        ``Vehicle`` fields but the six drag coefficients (not validated: ``Vehicle`` does).
+
+    Raises
+    ------
+    VehicleFileError
+        A missing file, a needed value missing or not a number (named with the file).
+    PhysicalConsistencyError
+        A link whose mass and inertia no rigid body has.
+    """
+    path = Path(path)
+    root = _parse(path)
+    if root.tag != "robot":
+        raise VehicleFileError(f"{path}: the root element is <{root.tag}>; expected <robot> "
+                               "(URDF)")
+    links = {link.get("name", ""): link for link in root.findall("link")}
+    parent_of = {}
+    for joint in root.findall("joint"):
+        child, parent = joint.find("child"), joint.find("parent")
+        if child is not None and parent is not None:
+            parent_of[child.get("link", "")] = (parent.get("link", ""), joint)
+
+    def link_pose(link: str) -> _Pose:
+        pose, seen = _IDENTITY, set()
+        while link in parent_of and link not in seen:
+            seen.add(link)
+            parent, joint = parent_of[link]
+            pose = _urdf_origin(joint, f"joint {joint.get('name')!r}", path).then(pose)
+            link = parent
+        return pose
+
+    bodies = []
+    for link_name, link in links.items():
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        what = f"link {link_name!r} <inertial>"
+        mass = inertial.find("mass")
+        m = _number(None if mass is None else mass.get("value"), f"{what}/mass@value", path)
+        if m == 0.0:
+            continue
+        node = inertial.find("inertia")
+        if node is None:
+            raise VehicleFileError(f"{path}: {what}/inertia is missing; expected ixx, iyy, "
+                                   f"izz (kg m^2) of a link of mass {m:g} kg")
+        values = {k: _number(node.get(k, "0" if k[1] != k[2] else None),
+                             f"{what}/inertia@{k}", path) for k in _INERTIA_KEYS}
+        where = link_pose(link_name).then(_urdf_origin(inertial, what, path))
+        bodies.append(_body(m, where, _inertia_matrix(values), what, path))
+
+    rotors = []
+    for i in range(4):
+        link_name = f"prop{i}_link"
+        if link_name not in links:
+            raise VehicleFileError(f"{path}: link {link_name!r} is missing; expected the four "
+                                   "rotor links prop0_link .. prop3_link (gym-pybullet-drones)")
+        rotors.append(link_pose(link_name).then(
+            _urdf_origin(links[link_name].find("inertial"), f"link {link_name!r} <inertial>",
+                         path)).t)
+    props = root.find("properties")
+    if props is None:
+        raise VehicleFileError(f"{path}: <properties> is missing; expected kf, km and "
+                               "thrust2weight (gym-pybullet-drones)")
+    kf = _number(props.get("kf"), "<properties>@kf", path)
+    km = _number(props.get("km"), "<properties>@km", path)
+    t2w = _number(props.get("thrust2weight"), "<properties>@thrust2weight", path)
+    m_total = sum(b.m for b in bodies)
+    if rotor_directions is None:
+        rotor_directions = GYM_PYBULLET_DIRECTIONS.get(path.stem, GYM_PYBULLET_DIRECTIONS[""])
+    if not kf > 0:
+        raise VehicleFileError(f"{path}: <properties>@kf = {kf:g}; expected > 0 "
+                               "(N/rpm^2)")
+    return _assemble(path, name or f"{root.get('name', path.stem)} ({path.name})", bodies,
+                     np.array(rotors), tuple(rotor_directions), kf * RPM_PER_RAD_S ** 2,
+                     km / kf, t2w * m_total * g / 4.0, 0.0, g)
+
+
+# -- SDF -------------------------------------------------------------------------------------
+
+def _model_folder(uri: str, beside: Path, model_paths: tuple[Path, ...], path: Path) -> Path:
+    """The folder of ``model://NAME`` as Gazebo finds it: the given paths, then Gazebo's
+    variables, then the folder beside the including model's."""
+    name = uri.removeprefix("model://").strip("/").split("/")[0]
+    search = list(model_paths)
+    for variable in GAZEBO_PATH_VARIABLES:
+        search += [Path(p) for p in os.environ.get(variable, "").split(os.pathsep) if p]
+    search.append(beside)
+    for folder in search:
+        if (folder / name).is_dir():
+            return folder / name
+    raise VehicleFileError(f"{path}: <include><uri>{uri}</uri>: no folder {name!r} in "
+                           f"{[str(f) for f in search]}; expected the model beside this one, "
+                           f"or its parent folder in model_paths or {GAZEBO_PATH_VARIABLES[0]}")
+
+
+def _model_file(folder: Path) -> Path:
+    config = folder / "model.config"
+    if config.is_file():
+        sdf = _parse(config).find("sdf")
+        if sdf is not None and (sdf.text or "").strip():
+            return folder / (sdf.text or "").strip()
+    return folder / "model.sdf"
+
+
+def _sdf_model(path: Path, model_paths: tuple[Path, ...],
+               depth: int = 0) -> tuple[str, list[tuple[ET.Element, _Pose]],
+                                        list[ET.Element], list[ET.Element]]:
+    """(model name, [(link, link pose in the model frame)], joints, plugins) of an SDF
+    model, its ``<include>`` s resolved."""
+    root = _parse(path)
+    model = root.find("model") if root.tag == "sdf" else None
+    if model is None:
+        raise VehicleFileError(f"{path}: no <sdf><model>; expected an SDF model file")
+    links = [(link, _sdf_pose(link, f"link {link.get('name')!r}", path))
+             for link in model.findall("link")]
+    joints, plugins = model.findall("joint"), model.findall("plugin")
+    for include in model.findall("include"):
+        if depth > 8:
+            raise VehicleFileError(f"{path}: <include> nested deeper than 8; expected no loop")
+        uri = (include.findtext("uri") or "").strip()
+        if not uri:
+            raise VehicleFileError(f"{path}: <include><uri> is missing")
+        target = (_model_file(_model_folder(uri, path.parent.parent, model_paths, path))
+                  if uri.startswith("model://") else (path.parent / uri))
+        _, inner_links, inner_joints, inner_plugins = _sdf_model(target, model_paths, depth + 1)
+        inner_root = _parse(target).find("model")
+        placed = (_sdf_pose(include, "<include>", path) if include.find("pose") is not None
+                  else _sdf_pose(inner_root, "<model>", target))
+        links += [(link, placed.then(pose)) for link, pose in inner_links]
+        joints += inner_joints
+        plugins += inner_plugins
+    return model.get("name", path.stem), links, joints, plugins
+
+
+def sdf_fields(path: str | os.PathLike[str], *,
+               model_paths: tuple[str | os.PathLike[str], ...] = (), g: float = 9.81,
+               name: str | None = None, rotor_links: bool = True) -> dict[str, Any]:
+    """The fields of a vehicle (all but the drag) from an SDF model (Gazebo; PX4's ``x500/model.sdf``).
+
+    ``<include>`` s are resolved as Gazebo does: ``model://NAME`` is the folder NAME in
+    ``model_paths``, then in ``GZ_SIM_RESOURCE_PATH`` (or ``GAZEBO_MODEL_PATH``), then beside
+    the including model's folder; its ``model.config`` names the file (default
+    ``model.sdf``). The rotors are the ``MulticopterMotorModel`` plugins in ``motorNumber``
+    order: position from the pose of their ``linkName``, the spin axis of their ``jointName``
+    (along body z), ``turningDirection`` (ccw seen from above: d_i = -1), ``motorConstant``
+    (N/(rad/s)^2), ``momentConstant`` (m), ``maxRotVelocity`` (rad/s; the largest thrust is
+    ``motorConstant maxRotVelocity^2``) and ``timeConstantUp`` (s).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The model's SDF file.
+    model_paths : tuple of str or os.PathLike, default ()
+        Folders that hold models named by ``model://`` URIs, searched first.
+    g : float, default 9.81
+        Gravitational acceleration (m/s^2).
+    name : str, optional
+        The vehicle's name; default the model's name and the file's path.
+    rotor_links : bool, default True
+        Count the rotor links' masses in the body (Gazebo flies them); False takes the other
+        links only, as quadcog's X500 preset does (4 x 16 g, 3 % of the mass, left out).
+
+    Returns
+    -------
+    dict of str to Any
+        ``Vehicle`` fields but the six drag coefficients (not validated: ``Vehicle`` does).
+
+    Raises
+    ------
+    VehicleFileError
+        A missing file or included model, a needed value missing or not a number, a rotor
+        axis that is not along body z (named with the file).
+    PhysicalConsistencyError
+        A link whose mass and inertia no rigid body has.
+    """
+    path = Path(path)
+    model_name, links, joints, plugins = _sdf_model(
+        path, tuple(Path(p) for p in model_paths))
+    motors = [p for p in plugins if "MulticopterMotorModel" in (p.get("name", "")
+                                                               + p.get("filename", ""))]
+    if len(motors) != 4:
+        raise VehicleFileError(f"{path}: {len(motors)} MulticopterMotorModel plugin(s); "
+                               "expected 4 (one per rotor)")
+    poses = {link.get("name", ""): pose for link, pose in links}
+    joint_of = {j.get("name", ""): j for j in joints}
+
+    def text(plugin: ET.Element, tag: str) -> str | None:
+        return plugin.findtext(tag)
+
+    def motor_number(plugin: ET.Element) -> float:
+        return _number(text(plugin, "motorNumber"), "MulticopterMotorModel/motorNumber", path)
+
+    motors.sort(key=motor_number)
+    rotors: list[npt.NDArray[np.float64]] = []
+    directions: list[int] = []
+    rotor_names: set[str] = set()
+    constants: dict[str, list[float]] = {k: [] for k in (
+        "motorConstant", "momentConstant", "maxRotVelocity", "timeConstantUp")}
+    for plugin in motors:
+        k = int(motor_number(plugin))
+        what = f"MulticopterMotorModel of motor {k}"
+        link_name = (text(plugin, "linkName") or "").strip()
+        if link_name not in poses:
+            raise VehicleFileError(f"{path}: {what}: linkName {link_name!r} is not a link; "
+                                   f"expected one of {sorted(poses)}")
+        rotor_names.add(link_name)
+        rotors.append(poses[link_name].t)
+        joint = joint_of.get((text(plugin, "jointName") or "").strip())
+        if joint is not None and joint.find("axis/xyz") is not None:
+            axis = _numbers(joint.findtext("axis/xyz"), f"joint {joint.get('name')!r} "
+                            "axis/xyz", path, 3)
+            _check_axis(poses[link_name].R @ axis, f"joint {joint.get('name')!r} axis", path)
+        spin = (text(plugin, "turningDirection") or "").strip().lower()
+        if spin not in ("cw", "ccw"):
+            raise VehicleFileError(f"{path}: {what}: turningDirection = {spin!r}; expected "
+                                   "'cw' or 'ccw'")
+        directions.append(-1 if spin == "ccw" else 1)
+        for key, values in constants.items():
+            values.append(_number(text(plugin, key), f"{what}/{key}", path))
+    for key, values in constants.items():
+        if max(values) != min(values):
+            raise VehicleFileError(f"{path}: {key} differs between the rotors ({values}); "
+                                   "expected one value (quadcog's rotors are alike)")
+    bodies = []
+    for link, pose in links:
+        link_name = link.get("name", "")
+        inertial = link.find("inertial")
+        if inertial is None or (not rotor_links and link_name in rotor_names):
+            continue
+        what = f"link {link_name!r} <inertial>"
+        m = _number(inertial.findtext("mass"), f"{what}/mass", path)
+        if m == 0.0:
+            continue
+        node = inertial.find("inertia")
+        if node is None:
+            raise VehicleFileError(f"{path}: {what}/inertia is missing; expected ixx, iyy, "
+                                   f"izz (kg m^2) of a link of mass {m:g} kg")
+        inertia = {k: _number(node.findtext(k) or ("0" if k[1] != k[2] else None),
+                             f"{what}/inertia/{k}", path) for k in _INERTIA_KEYS}
+        where = pose.then(_sdf_pose(inertial, what, path))
+        bodies.append(_body(m, where, _inertia_matrix(inertia), what, path))
+    c = {k: v[0] for k, v in constants.items()}
+    return _assemble(path, name or f"{model_name} ({path})", bodies, np.array(rotors),
+                     tuple(directions), c["motorConstant"], c["momentConstant"],
+                     c["motorConstant"] * c["maxRotVelocity"] ** 2, c["timeConstantUp"], g)
+
+
+def file_fields(path: str | os.PathLike[str], **options: Any) -> dict[str, Any]:
+    """The fields of a vehicle from a URDF (``.urdf``) or SDF (``.sdf``) file, by its suffix.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    **options
+        Passed on to ``urdf_fields`` or ``sdf_fields``.
+
+    Returns
+    -------
+    dict of str to Any
+        ``Vehicle`` fields but the drag.
+
+    Raises
+    ------
+    VehicleFileError
+        A suffix other than ``.urdf`` or ``.sdf``, or what the reader raises.
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".urdf":
+        return urdf_fields(path, **options)
+    if path.suffix.lower() == ".sdf":
+        return sdf_fields(path, **options)
+    raise VehicleFileError(f"{path}: suffix {path.suffix!r}; expected a .urdf or .sdf vehicle "
+                           "file")
