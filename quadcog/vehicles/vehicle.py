@@ -719,6 +719,7 @@ X500 = Vehicle(
     max_rotor_thrust=_X500_THRUST_CONSTANT * _X500_MAX_ROTOR_SPEED ** 2,   # 8.55 N
     motor_time_constant=0.0125)
 
+
 def preset_drag(m: float, Ixx: float) -> dict[str, float]:
     """The linear drag of the presets that no source gives (the X500, the Crazyflie, a vehicle
     from a file): the Hummingbird's drag per mass and per inertia.
