@@ -58,7 +58,7 @@ def vendor_dir() -> Path:
 
 
 def unpack_tarball(tarball: str | os.PathLike[str], folder: str | os.PathLike[str] | None = None,
-                   name: str | None = None) -> Path:
+                   name: str | None = None, error: type[StackError] = StackError) -> Path:
     """Unpack a tarball into the cache, once per content.
 
     Parameters
@@ -70,6 +70,8 @@ def unpack_tarball(tarball: str | os.PathLike[str], folder: str | os.PathLike[st
     name : str, optional
         The unpacked folder's name (default ``<stem>-<sha256[:16]>``); it must change with
         the content.
+    error : type of StackError
+        The error raised (a subclass for a caller's own, e.g. ``FirmwareError``).
 
     Returns
     -------
@@ -80,11 +82,11 @@ def unpack_tarball(tarball: str | os.PathLike[str], folder: str | os.PathLike[st
     Raises
     ------
     quadcog.StackError
-        The tarball is missing or cannot be read.
+        The tarball is missing or cannot be read (``error``).
     """
     path = Path(tarball)
     if not path.is_file():
-        raise StackError(f"tarball {str(path)!r}: not found")
+        raise error(f"tarball {str(path)!r}: not found")
     stem = path.name.split(".tar")[0]
     out = Path(folder) if folder is not None else cache_dir() / "vendor"
     target = out / (name if name is not None else f"{stem}-{file_digest(path)[:16]}")
@@ -101,7 +103,7 @@ def unpack_tarball(tarball: str | os.PathLike[str], folder: str | os.PathLike[st
             if not target.is_dir():
                 raise
     except (OSError, tarfile.TarError) as e:
-        raise StackError(f"tarball {str(path)!r}: cannot be unpacked into {str(out)!r} "
+        raise error(f"tarball {str(path)!r}: cannot be unpacked into {str(out)!r} "
                          f"({e})") from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -109,7 +111,7 @@ def unpack_tarball(tarball: str | os.PathLike[str], folder: str | os.PathLike[st
 
 
 def check_tree(path: str | os.PathLike[str], where: str, markers: Sequence[str], what: str,
-               get: str) -> Path:
+               get: str, error: type[StackError] = StackError) -> Path:
     """``path`` when it is a tree of this kind.
 
     Parameters
@@ -124,6 +126,8 @@ def check_tree(path: str | os.PathLike[str], where: str, markers: Sequence[str],
         The tree's name for messages, e.g. ``"Crazyflie firmware tree"``.
     get : str
         How to get one, for messages (e.g. a ``git clone`` line).
+    error : type of StackError
+        The error raised.
 
     Returns
     -------
@@ -133,21 +137,22 @@ def check_tree(path: str | os.PathLike[str], where: str, markers: Sequence[str],
     Raises
     ------
     quadcog.StackError
-        Not a folder, or a marker is missing (the message names the first).
+        Not a folder, or a marker is missing (the message names them): ``error``.
     """
     root = Path(path).expanduser()
     if not root.is_dir():
-        raise StackError(f"{where} = {str(path)!r} is not a folder; expected a {what} ({get})")
+        raise error(f"{where} = {str(path)!r} is not a folder; expected a {what} ({get})")
     missing = [m for m in markers if not (root / m).is_file()]
     if missing:
-        raise StackError(f"{where} = {str(path)!r} is not a {what}: it has no "
+        raise error(f"{where} = {str(path)!r} is not a {what}: it has no "
                          f"{', '.join(missing)} (expected {', '.join(markers)}; {get})")
     return root.resolve()
 
 
 def locate_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str,
                 markers: Sequence[str], what: str, get: str, tarball_argument: bool = False,
-                argument_name: str = "argument") -> tuple[Path, bool]:
+                argument_name: str = "argument", error: type[StackError] = StackError
+                ) -> tuple[Path, bool]:
     """Where a third-party tree is: a folder (checked) or a tarball, not yet unpacked.
 
     Parameters
@@ -168,6 +173,8 @@ def locate_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str,
         Accept a tarball file as the argument.
     argument_name : str
         The argument's name in messages.
+    error : type of StackError
+        The error raised.
 
     Returns
     -------
@@ -186,12 +193,12 @@ def locate_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str,
     for value, where in ((argument, argument_name), (os.environ.get(env), f"${env}")):
         if value is None or value == "":
             continue
-        return check_tree(value, where, markers, what, get), False
+        return check_tree(value, where, markers, what, get, error), False
     candidate = vendor_dir() / tarball
     if candidate.is_file():
         return candidate.resolve(), True
-    raise StackError(f"no {what}: pass one as an argument, set ${env}, or put {tarball} in "
-                     f"{str(vendor_dir())!r} (${VENDOR_ENV}); {get}")
+    raise error(f"no {what}: pass one ({argument_name}), set ${env}, or put {tarball} in "
+                f"{str(vendor_dir())!r} (${VENDOR_ENV}); {get}")
 
 
 def find_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str, inner: str,
