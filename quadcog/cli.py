@@ -353,7 +353,7 @@ def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                    help="c (default: the C99 module) or crazyflie (an out-of-tree controller "
                         "app of the Crazyflie firmware, float32; docs: On a Crazyflie)")
     p.add_argument("--vehicle", help="with --target crazyflie: the vehicle preset the law is "
-                                     "designed for (default the Crazyflie's)")
+                                     "designed for (default crazyflie21, the Crazyflie 2.1)")
     p.add_argument("--build", action="store_true",
                    help="with --target crazyflie: also build cf2.elf with the app in quadcog's "
                         "cache and print its size (needs gcc-arm-none-eabi)")
