@@ -185,7 +185,8 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                         "docs: The Crazyflie firmware in the loop)")
     p.add_argument("--controller", dest="stack_controller", default=None, metavar="NAME",
                    help="with --stack: the stack's controller (crazyflie: pid, mellinger, indi, "
-                        "brescianini, lee or an out-of-tree controller's folder; default pid)")
+                        "brescianini, lee, an out-of-tree controller's folder or a quadcog "
+                        "law such as composite, flown as its app; default pid)")
     p.set_defaults(func=cmd_run)
 
 

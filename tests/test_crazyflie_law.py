@@ -120,3 +120,14 @@ def test_a_sign_error_at_the_boundary_fails_the_agreement(tree, reference, monke
     _mutated_app(monkeypatch, tmp_path, old, new)
     res = _loop("composite")
     assert res.diverged or not _agrees(_differences(res, reference["composite"]))
+
+
+def test_quadcog_run_flies_a_law_on_the_stack(tree, tmp_path):
+    import json
+
+    from quadcog.cli import main
+    main(["run", "parcel-crazyflie", "--stack", "crazyflie", "--controller", "payload_adaptive",
+          "--set", "duration=3", "--out", str(tmp_path), "--quiet", "--no-plot"])
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["controller"] == "crazyflie quadcog payload_adaptive"
+    assert not metrics["diverged"]
