@@ -20,7 +20,9 @@ After the start and the CoG event (t >= 2 s) the positions agree to 4.7e-5 m and
 input U to 1.4e-5 of its scale (thrust) and 1.2e-4 (torque, one scale for its three
 components), for both laws; the tolerances below are 4 to 7 times those (and 1.8 times the
 start's sag). A sign error at the boundary (the pitch read from state_t, the pitch torque
-written to control_t) makes the law fly another vehicle: it tilts over 85 deg within 1 s.
+written to control_t) makes the law fly another vehicle: it tilts over 85 deg within 1 s. A
+setpoint without the high-level commander's jerk (which the laws feed forward) parts the
+settled positions by 2.2 mm.
 """
 from pathlib import Path
 import shutil
@@ -131,3 +133,12 @@ def test_quadcog_run_flies_a_law_on_the_stack(tree, tmp_path):
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["controller"] == "crazyflie quadcog payload_adaptive"
     assert not metrics["diverged"]
+
+
+def test_the_setpoint_s_jerk_reaches_the_law(tree, reference, monkeypatch):
+    from quadcog.crazyflie import firmware
+    text = firmware.loop_source()
+    jerk = b"sp->jerk.x = (float)r[9]; sp->jerk.y = (float)r[10]; sp->jerk.z = (float)r[11];"
+    assert jerk in text
+    monkeypatch.setattr(firmware, "loop_source", lambda: text.replace(jerk, b""))
+    assert not _agrees(_differences(_loop("composite"), reference["composite"]))
