@@ -186,7 +186,8 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                         "docs: The Crazyflie firmware in the loop)")
     p.add_argument("--controller", dest="stack_controller", default=None, metavar="NAME",
                    help="with --stack: the stack's controller (crazyflie: pid, mellinger, indi, "
-                        "brescianini, lee or an out-of-tree controller's folder; default pid)")
+                        "brescianini, lee, an out-of-tree controller's folder or a quadcog "
+                        "law such as composite, flown as its app; default pid)")
     p.add_argument("--vehicle", type=Path, default=None, metavar="FILE",
                    help="fly the vehicle of a URDF or SDF file (Vehicle.from_urdf, "
                         "Vehicle.from_sdf) as the truth; the controller's model starts from it")
@@ -360,7 +361,7 @@ def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                    help="c (default: the C99 module) or crazyflie (an out-of-tree controller "
                         "app of the Crazyflie firmware, float32; docs: On a Crazyflie)")
     p.add_argument("--vehicle", help="with --target crazyflie: the vehicle preset the law is "
-                                     "designed for (default the Crazyflie's)")
+                                     "designed for (default crazyflie21, the Crazyflie 2.1)")
     p.add_argument("--build", action="store_true",
                    help="with --target crazyflie: also build cf2.elf with the app in quadcog's "
                         "cache and print its size (needs gcc-arm-none-eabi)")

@@ -48,13 +48,23 @@ class ExportError(QuadcogError):
     """A controller cannot be exported: the message names the controller and the reason."""
 
 
-class FirmwareError(QuadcogError):
-    """A Crazyflie firmware tree is missing or is not one: the message names the folder, where
-    it came from (argument, environment variable) and the file that is missing."""
+class StackError(QuadcogError):
+    """A third-party tree (a flight stack, a peer suite, a firmware) is missing or is not one,
+    or its build failed; the message says what is missing and how to get it
+    (quadcog.codegen.third_party, quadcog.stacks). Its subclass FirmwareError is the
+    Crazyflie firmware builds' of the embedded export."""
 
 
-class FirmwareBuildError(CompileError):
-    """A firmware build failed: the message gives the compiler's first error line and the log."""
+class FirmwareError(StackError):
+    """A Crazyflie firmware tree that ``quadcog export --target crazyflie`` builds in is
+    missing or is not one: the message names the folder, where it came from (argument,
+    environment variable) and the files that are missing. A StackError: the same tree finder
+    (quadcog.codegen.third_party) as the firmware in the loop's."""
+
+
+class FirmwareBuildError(FirmwareError, CompileError):
+    """A firmware build failed: the message gives the compiler's first error line and the log.
+    Both a FirmwareError (the firmware's build) and a CompileError (a compiler's failure)."""
 
 
 class ScenarioError(InputError):
@@ -196,11 +206,6 @@ class Interrupted(KeyboardInterrupt):
         self.signum = int(signum)
         self.status = 128 + self.signum
         super().__init__(f"interrupted by {signal.Signals(self.signum).name}")
-
-
-class StackError(QuadcogError):
-    """A flight stack's or peer suite's tree is missing or is not one, or its build failed;
-    the message says what is missing and how to get it (quadcog.stacks)."""
 
 
 class AttitudeError(InputError):

@@ -215,7 +215,7 @@ def test_velocity_setpoints(tree, flights, tmp_path):
 
 def test_bad_input(tmp_path, monkeypatch):
     with pytest.raises(FirmwareError, match=r"firmware = .*not a Crazyflie firmware tree: "
-                                            r"Makefile, tools/make/oot.mk"):
+                                            r"it has no Makefile, tools/make/oot.mk"):
         firmware.firmware_tree(tmp_path)
     monkeypatch.setenv(firmware.FIRMWARE_ENV, str(tmp_path / "nowhere"))
     with pytest.raises(FirmwareError, match=r"\$QUADCOG_CRAZYFLIE_FIRMWARE = .*nowhere.*not a "

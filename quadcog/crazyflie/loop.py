@@ -26,6 +26,7 @@ import numpy.typing as npt
 from quadcog import validate
 from quadcog.codegen.compiler import compile_library
 from quadcog.crazyflie.firmware import CONTROLLERS, OUT_OF_TREE, build_firmware, constants
+from quadcog.crazyflie.law import LAWS, law_sources
 from quadcog.errors import InputError, StackError
 from quadcog.model.conventions import IDX, N_STATE, R_G
 from quadcog.model.functions import load
@@ -35,7 +36,7 @@ from quadcog.sim.prepare import prepare_flight
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
 from quadcog.sim.schedule import cog_at
 from quadcog.sim.sensing import Sensing
-from quadcog.trajectories.analytic import ACC, POS, VEL, YAW, YAW_RATE
+from quadcog.trajectories.analytic import ACC, JERK, POS, VEL, YAW, YAW_RATE
 from quadcog.vehicles.vehicle import CRAZYFLIE_21, Vehicle, x_layout
 
 __all__ = ["DT", "DEFAULT_LOG", "sensing_noise", "simulate"]
@@ -46,7 +47,7 @@ FIRMWARE_DIVERGED = 4      # the loop's code when the firmware asserted
 DEFAULT_LOG = ("controller.cmd_thrust", "controller.cmd_roll", "controller.cmd_pitch",
                "controller.cmd_yaw", "motor.m1", "motor.m2", "motor.m3", "motor.m4")
 _REF_COLUMNS = [*range(POS.start, POS.stop), *range(VEL.start, VEL.stop),
-                *range(ACC.start, ACC.stop), YAW, YAW_RATE]
+                *range(ACC.start, ACC.stop), *range(JERK.start, JERK.stop), YAW, YAW_RATE]
 
 
 class _Flight(ctypes.Structure):
@@ -121,8 +122,10 @@ def _controller(controller: Any) -> tuple[int, Path | None, str]:
         return CONTROLLERS[controller], None, controller
     if isinstance(controller, (str, os.PathLike)) and Path(controller).is_dir():
         return OUT_OF_TREE, Path(controller), f"out-of-tree {Path(controller).name}"
-    validate.fail("controller", f"one of {tuple(CONTROLLERS)} or the folder of an out-of-tree "
-                  "controller's C sources", controller)
+    if isinstance(controller, str) and controller in LAWS:      # its app, once the vehicle is known
+        return OUT_OF_TREE, None, f"quadcog {controller}"
+    validate.fail("controller", f"one of {tuple(CONTROLLERS)}, a quadcog law {tuple(LAWS)} or "
+                  "the folder of an out-of-tree controller's C sources", controller)
 
 
 def sensing_noise(sensing: Sensing, n: int) -> npt.NDArray[np.float64] | None:
@@ -167,10 +170,13 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
         ``"pid"``, ``"mellinger"``, ``"indi"``, ``"brescianini"``, ``"lee"``, or the folder of
         an out-of-tree controller app (C sources in it or in its ``src/`` defining
         ``controllerOutOfTreeInit``, ``controllerOutOfTreeTest``, ``controllerOutOfTree``),
-        compiled in with ``CONFIG_CONTROLLER_OOT``.
+        compiled in with ``CONFIG_CONTROLLER_OOT``, or a quadcog law's name (a key of
+        ``quadcog.controllers.CONTROLLERS``): its app (``quadcog export --target crazyflie``)
+        written for ``vehicle`` as ``quadcog.simulate`` designs the law by default
+        (``quadcog.crazyflie.law``) and flown as that out-of-tree controller.
     trajectory : Trajectory, str or callable
         As for ``quadcog.simulate``; the firmware gets it as the high-level commander's
-        full-state setpoint (position, velocity, acceleration, yaw, yaw rate).
+        full-state setpoint (position, velocity, acceleration, jerk, yaw, yaw rate).
     duration : float
         Seconds.
     vehicle : Vehicle, optional
@@ -230,6 +236,8 @@ def simulate(controller: Any = "pid", trajectory: Any = "hover", duration: float
     if not isinstance(vehicle, Vehicle):
         validate.fail("vehicle", "a quadcog Vehicle", vehicle)
     _check_x_frame(vehicle)
+    if kind == OUT_OF_TREE and oot is None:     # a quadcog law: its app written for the vehicle
+        oot = law_sources(controller, vehicle)
     battery = validate.real(battery_voltage, "battery_voltage", lo=2.0, hi=5.0, unit="V")
     params = dict(params or {})
     log = tuple(log)

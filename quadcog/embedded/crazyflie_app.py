@@ -41,9 +41,9 @@ from quadcog.vehicles.vehicle import PRESETS, Vehicle
 __all__ = ["DEFAULT_VEHICLE", "RATE", "CONTROL_PERIOD", "resolve_vehicle", "app_files",
            "write_crazyflie_app"]
 
-# the Crazyflie 2.1 preset when it is there (it comes with the firmware-in-the-loop work),
-# else the Crazyflie 2.0
-DEFAULT_VEHICLE = "crazyflie21" if "crazyflie21" in PRESETS else "crazyflie"
+# the Crazyflie 2.1 preset, built from the firmware's own constants (the firmware's default
+# 2.1+ propellers): the vehicle the firmware is built for
+DEFAULT_VEHICLE = "crazyflie21"
 RATE = 500                       # Hz: ATTITUDE_RATE of the firmware's stabilizer_types.h
 CONTROL_PERIOD = 1.0 / RATE      # s: the dt the law is designed and simulated for
 

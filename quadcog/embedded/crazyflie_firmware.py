@@ -1,46 +1,50 @@
 """Build a Crazyflie out-of-tree controller app inside the firmware, in quadcog's cache.
 
-The firmware tree is the ``firmware`` argument, else ``$QUADCOG_CRAZYFLIE_FIRMWARE``, else the
-vendored ``shared/vendor/crazyflie-firmware.tar.xz`` in the folder of the checkout, unpacked once
-into the cache. A user's tree is copied into the cache (without ``.git`` and ``build``
-folders) and built there, so it is never written. The app (``write_crazyflie_app``) is
-copied into one workspace per firmware and built there with the firmware's own Makefiles
+The firmware tree is the ``firmware`` argument (a folder or a tarball), else
+``$QUADCOG_CRAZYFLIE_FIRMWARE``, else the vendored ``crazyflie-firmware.tar.xz`` of
+``quadcog.codegen.third_party.vendor_dir()``, unpacked once into the cache: the one tree finder
+that the firmware in the loop (``quadcog.crazyflie``) uses too. A user's tree is copied into
+the cache (without ``.git`` and ``build`` folders) and built there, so it is never written.
+The app (``write_crazyflie_app``) is copied into one workspace per firmware and built there
+with the firmware's own Makefiles
 (``make cf2_defconfig``, ``make``: its toolchain and flags, ``-Os -Werror``; incremental:
 the next app rebuilds only its own objects); the ELF lands in
 ``<cache>/crazyflie/app/<firmware hash>-<app hash>/`` and is found there again. The plain
 firmware (``make cf2_defconfig && make`` from the same copy, so that its ``__FILE__``
 strings are as long) gives the sizes the app adds.
 """
-import contextlib
 from dataclasses import dataclass
-import fcntl
-import hashlib
 import os
 from pathlib import Path
-import re
 import shutil
 import subprocess
-import tarfile
 import tempfile
 
+from quadcog.codegen.compiler import file_digest
+from quadcog.codegen.third_party import SKIP_FOLDERS, locate_tree, locked, unpack_tarball, vendor_dir
+from quadcog.codegen.third_party import check_tree as _check_tree
+from quadcog.codegen.third_party import first_error_line as first_error
+from quadcog.codegen.third_party import tree_hash as _tree_hash
 from quadcog.embedded.target import ARM_GCC, ARM_SIZE
 from quadcog.errors import FirmwareBuildError, FirmwareError, TargetError
 from quadcog.paths import cache_dir
 
 __all__ = ["FIRMWARE_ENV", "VENDOR_TARBALL", "ARM_INSTALL", "TREE_FILES", "FirmwareBuild",
-           "check_tree", "tree_hash", "firmware_tree", "require_arm_toolchain", "first_error",
+           "GET_FIRMWARE", "TARBALL_NAME", "check_tree", "tree_hash", "firmware_tree",
+           "require_arm_toolchain", "first_error",
            "elf_size", "build_app", "build_plain"]
 
 FIRMWARE_ENV = "QUADCOG_CRAZYFLIE_FIRMWARE"
-# in the folder that holds a checkout: <folder>/<checkout>/quadcog/embedded/this file
-VENDOR_TARBALL = (Path(__file__).resolve().parents[3] / "shared" / "vendor"
-                  / "crazyflie-firmware.tar.xz")
+TARBALL_NAME = "crazyflie-firmware.tar.xz"
+VENDOR_TARBALL = vendor_dir() / TARBALL_NAME
+GET_FIRMWARE = ("expected a checkout of github.com/bitcraze/crazyflie-firmware with its "
+                "submodules: git clone --recursive https://github.com/bitcraze/crazyflie-firmware")
 ARM_INSTALL = "apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi"
 # what makes a folder a firmware tree for an out-of-tree app
 TREE_FILES = ("Makefile", "tools/make/oot.mk", "configs/cf2_defconfig",
               "src/modules/interface/stabilizer_types.h",
               "src/modules/interface/controller/controller.h")
-_SKIP = {".git", "build", "__pycache__"}
+_SKIP = SKIP_FOLDERS
 _BUILD_TIMEOUT = 1800.0            # s: a full firmware build is about 90 s on 2 cores
 
 
@@ -98,24 +102,8 @@ def check_tree(path: str | os.PathLike[str], where: str) -> Path:
     quadcog.errors.FirmwareError
         Not a folder, or a file of ``TREE_FILES`` is missing.
     """
-    tree = Path(path).expanduser().resolve()
-    if not tree.is_dir():
-        raise FirmwareError(f"{where} = {str(path)!r}: not a folder; expected a Crazyflie "
-                            "firmware tree (git clone --recursive "
-                            "https://github.com/bitcraze/crazyflie-firmware)")
-    missing = [f for f in TREE_FILES if not (tree / f).is_file()]
-    if missing:
-        raise FirmwareError(f"{where} = {str(path)!r} is not a Crazyflie firmware tree: "
-                            f"{', '.join(missing)} missing (expected a checkout of "
-                            "github.com/bitcraze/crazyflie-firmware with its submodules)")
-    return tree
-
-
-def _files(tree):
-    for dirpath, dirnames, filenames in os.walk(tree):
-        dirnames[:] = sorted(d for d in dirnames if d not in _SKIP)
-        for f in sorted(filenames):
-            yield Path(dirpath) / f
+    return _check_tree(path, where, TREE_FILES, "Crazyflie firmware tree", GET_FIRMWARE,
+                       FirmwareError)
 
 
 def tree_hash(tree: str | os.PathLike[str]) -> str:
@@ -131,24 +119,7 @@ def tree_hash(tree: str | os.PathLike[str]) -> str:
     str
         64 hex digits.
     """
-    h = hashlib.sha256()
-    tree = Path(tree)
-    for path in _files(tree):
-        h.update(str(path.relative_to(tree)).encode() + b"\0")
-        if path.is_symlink():
-            h.update(b"->" + os.readlink(path).encode())
-        elif path.is_file():
-            h.update(path.read_bytes())
-        h.update(b"\0")
-    return h.hexdigest()
-
-
-def _file_hash(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+    return _tree_hash(tree, _SKIP)
 
 
 def _root():
@@ -185,32 +156,23 @@ def firmware_tree(firmware: str | os.PathLike[str] | None = None) -> tuple[Path,
     quadcog.errors.FirmwareError
         The tree named is not a firmware tree, or none is named and the tarball is absent.
     """
-    if firmware is not None and Path(firmware).is_file() and tarfile.is_tarfile(firmware):
-        source, where = Path(firmware).resolve(), "tarball"
-    elif firmware is not None:
-        source, where = check_tree(firmware, "firmware"), "firmware"
-    elif os.environ.get(FIRMWARE_ENV):
-        source, where = check_tree(os.environ[FIRMWARE_ENV], f"${FIRMWARE_ENV}"), FIRMWARE_ENV
-    elif VENDOR_TARBALL.is_file():
-        source, where = VENDOR_TARBALL, "tarball"
-    else:
-        raise FirmwareError(f"no Crazyflie firmware: pass firmware=PATH (--firmware), set "
-                            f"${FIRMWARE_ENV}, or provide {VENDOR_TARBALL} (git clone "
-                            "--recursive https://github.com/bitcraze/crazyflie-firmware)")
-    key = (_file_hash(source) if where == "tarball" else tree_hash(source))[:16]
+    source, is_tarball = locate_tree(firmware, FIRMWARE_ENV, TARBALL_NAME, TREE_FILES,
+                                     "Crazyflie firmware tree", GET_FIRMWARE,
+                                     tarball_argument=True, argument_name="firmware",
+                                     error=FirmwareError)
+    where = "tarball" if is_tarball else "firmware"
+    key = (file_digest(source) if where == "tarball" else tree_hash(source))[:16]
     final = _root() / "firmware" / key
     tree = final / "crazyflie-firmware"
-    if not tree.is_dir():
+    if where == "tarball":
+        unpack_tarball(source, final.parent, name=key, error=FirmwareError)
+        if not tree.is_dir():
+            raise FirmwareError(f"{source}: no crazyflie-firmware/ folder in the tarball")
+    elif not tree.is_dir():
         final.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f"{key}.", dir=final.parent))
-        if where == "tarball":
-            with tarfile.open(source) as tar:
-                tar.extractall(tmp, filter="tar")
-            if not (tmp / "crazyflie-firmware").is_dir():
-                raise FirmwareError(f"{source}: no crazyflie-firmware/ folder in the tarball")
-        else:
-            shutil.copytree(source, tmp / "crazyflie-firmware", symlinks=True,
-                            ignore=lambda d, names: [n for n in names if n in _SKIP])
+        shutil.copytree(source, tmp / "crazyflie-firmware", symlinks=True,
+                        ignore=lambda d, names: [n for n in names if n in _SKIP])
         _publish(tmp, final)
     check_tree(tree, f"the cached copy of {source}")
     return tree, key
@@ -228,28 +190,6 @@ def require_arm_toolchain() -> None:
     if missing:
         raise TargetError(f"{', '.join(missing)} not found on PATH: the Crazyflie firmware "
                           f"builds with the GNU Arm toolchain (Debian, as root: {ARM_INSTALL})")
-
-
-def first_error(log: str) -> str:
-    """The compiler's first error line of a build log.
-
-    Parameters
-    ----------
-    log : str
-        The build's output.
-
-    Returns
-    -------
-    str
-        The first line with ``error`` (a compiler's ``file:line:col: error: ...``
-        preferred, else make's ``***`` line), else the last line of the log.
-    """
-    lines = log.splitlines()
-    for pattern in (r":\d+(:\d+)?: (fatal )?error:", r"\berror\b", r"\*\*\*"):
-        for line in lines:
-            if re.search(pattern, line, re.IGNORECASE):
-                return line.strip()
-    return lines[-1].strip() if lines else "(no output)"
 
 
 def elf_size(elf: str | os.PathLike[str]) -> tuple[int, int, int]:
@@ -297,17 +237,6 @@ def _build_info(build, key):
 def _finished(folder, cached):
     elf = folder / "build" / "cf2.elf"
     return FirmwareBuild(elf, *elf_size(elf), cached=cached)
-
-
-@contextlib.contextmanager
-def _exclusive(lock_path):
-    """One build at a time in a workspace (across processes)."""
-    with open(lock_path, "a+") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _sync_app(app, ws):
@@ -366,7 +295,7 @@ def build_app(app: str | os.PathLike[str], firmware: str | os.PathLike[str] | No
         return _finished(final, cached=True)
     ws = _root() / "workspace" / fw_key / "app"
     ws.parent.mkdir(parents=True, exist_ok=True)
-    with _exclusive(ws.parent / "lock"):
+    with locked(ws.parent / "lock"):
         if (final / "build" / "cf2.elf").is_file():          # built while we waited
             return _finished(final, cached=True)
         _sync_app(app, ws)

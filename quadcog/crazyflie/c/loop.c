@@ -166,6 +166,7 @@ LOG_ADD_CORE(LOG_UINT16, m4, &motor_ratios[3])
 LOG_GROUP_STOP(motor)
 
 /* ---- the flight ---- */
+#define QC_REF 14                  /* columns of a reference row (quadcog's ref) */
 struct qc_flight {
   long n_steps;                /* ticks */
   int controller;              /* ControllerType */
@@ -181,7 +182,7 @@ struct qc_flight {
   const double *payload;       /* (n, 10) */
   const double *r_stated;      /* (3) */
   const double *wrench;        /* (n, 6) */
-  const double *ref;           /* (n + 1, 11): position, velocity, acceleration (m, m/s, m/s^2), yaw (rad), yaw rate (rad/s) */
+  const double *ref;           /* (n + 1, QC_REF): position, velocity, acceleration, jerk (m, m/s, m/s^2, m/s^3), yaw (rad), yaw rate (rad/s) */
   const double *noise;         /* (n, 12) or NULL: added to position, velocity (world), Euler angles, body rates */
   double *X;                   /* (n + 1, 12 + nf); row 0 holds the start */
   double *U;                   /* (n, 4) the input the rotors gave */
@@ -253,8 +254,9 @@ static void qc_setpoint(const double *r, uint32_t tick, setpoint_t *sp)
   sp->position.x = (float)r[0]; sp->position.y = (float)r[1]; sp->position.z = (float)r[2];
   sp->velocity.x = (float)r[3]; sp->velocity.y = (float)r[4]; sp->velocity.z = (float)r[5];
   sp->acceleration.x = (float)r[6]; sp->acceleration.y = (float)r[7]; sp->acceleration.z = (float)r[8];
-  sp->attitude.yaw = (float)qc_deg(r[9]);
-  sp->attitudeRate.yaw = (float)qc_deg(r[10]);
+  sp->jerk.x = (float)r[9]; sp->jerk.y = (float)r[10]; sp->jerk.z = (float)r[11];
+  sp->attitude.yaw = (float)qc_deg(r[12]);
+  sp->attitudeRate.yaw = (float)qc_deg(r[13]);
   sp->mode.x = modeAbs; sp->mode.y = modeAbs; sp->mode.z = modeAbs;
   sp->mode.roll = modeDisable; sp->mode.pitch = modeDisable; sp->mode.yaw = modeAbs;
   sp->mode.quat = modeDisable;
@@ -298,7 +300,7 @@ long qc_run(struct qc_flight *f, int *code)
       }
     }
     qc_sense(x, f->noise ? f->noise + 12 * k : 0, acc, &state, &sensors);
-    qc_setpoint(f->ref + 11 * k, tick, &setpoint);
+    qc_setpoint(f->ref + QC_REF * k, tick, &setpoint);
     controller(&control, &setpoint, &sensors, &state, tick);
     /* a non-finite force-torque command reaches the motors as the firmware makes it (its
      * float-to-integer conversion in powerDistributionForceTorque); count it */
@@ -327,7 +329,7 @@ long qc_run(struct qc_flight *f, int *code)
     for (int j = 0; j < f->n_log; j++)
       f->log_out[(long)f->n_log * k + j] = (float)qc_log_value(f->log_index[j]);
     if (qc_asserted) { *code = 4; return k + 1; }
-    const double *r_next = f->ref + 11 * (k + 1);
+    const double *r_next = f->ref + QC_REF * (k + 1);
     double sum = 0, ex = x_next[0] - r_next[0], ey = x_next[1] - r_next[1], ez = x_next[2] - r_next[2];
     for (int i = 0; i < nx; i++) sum += fabs(x_next[i]);
     if (!(sum < INFINITY)) { *code = 1; return k + 1; }
