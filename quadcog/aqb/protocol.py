@@ -77,8 +77,12 @@ class MotionPrimitive(Trajectory):
 
     Parameters
     ----------
-    goal_position, goal_velocity, goal_acceleration : (3,) array_like
-        The state at ``duration`` (m, m/s, m/s^2), ground axes.
+    goal_position : (3,) array_like
+        The position at ``duration`` (m), ground axes.
+    goal_velocity : (3,) array_like
+        The velocity at ``duration`` (m/s), ground axes.
+    goal_acceleration : (3,) array_like
+        The acceleration at ``duration`` (m/s^2), ground axes.
     duration : float
         T (s), > 0.
 
@@ -119,8 +123,12 @@ class PayloadTrial:
     ----------
     index : int
         Its number in the draw (AdaptiveQuadBench's ``traj_number``).
-    goal_position, goal_velocity, goal_acceleration : tuple of 3 float
-        The motion primitive's goal (m, m/s, m/s^2).
+    goal_position : tuple of 3 float
+        The motion primitive's goal position (m).
+    goal_velocity : tuple of 3 float
+        The motion primitive's goal velocity (m/s).
+    goal_acceleration : tuple of 3 float
+        The motion primitive's goal acceleration (m/s^2).
     payload_mass : float
         kg (0: no payload).
     payload_position : tuple of 3 float
@@ -250,8 +258,10 @@ def rmse(position: npt.ArrayLike, reference: npt.ArrayLike) -> float:
 
     Parameters
     ----------
-    position, reference : (N, 3) array_like
-        Positions and reference positions (m).
+    position : (N, 3) array_like
+        Positions flown (m).
+    reference : (N, 3) array_like
+        Reference positions at the same samples (m).
 
     Returns
     -------

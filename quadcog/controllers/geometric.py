@@ -114,9 +114,15 @@ class GeometricAdaptive(Controller):
     poles_attitude : sequence of float, optional
         2 poles (rad/s) of the attitude error (k_R, k_W per unit inertia); default the
         design's poles_attitude.
-    filter_rate, ls_gain, forgetting, covariance_bound : float, optional
-        The estimator's lam (1/s), least-squares weight (1/s), beta (1/s) and k0; defaults
-        the design's (``quadcog.controllers.design``).
+    filter_rate : float, optional
+        The estimator's filter rate lam (1/s); default the design's
+        (``quadcog.controllers.design``).
+    ls_gain : float, optional
+        The estimator's least-squares weight (1/s); default the design's.
+    forgetting : float, optional
+        The estimator's forgetting rate beta (1/s); default the design's.
+    covariance_bound : float, optional
+        k0, the bound of the estimator's covariance; default the design's.
     force_weight : float
         Weight of the force rows against the moment rows, default 1.
     mass_bounds : (2,) sequence of float

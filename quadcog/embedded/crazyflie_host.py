@@ -188,8 +188,12 @@ class HostApp:
 
         Parameters
         ----------
-        state, gyro, setpoint : array_like
-            (N, 16), (N, 3), (N, 14) rows (``firmware_units``).
+        state : array_like
+            (N, 16) rows of the firmware's state (``firmware_units``).
+        gyro : array_like
+            (N, 3) rows of the gyroscope (``firmware_units``).
+        setpoint : array_like
+            (N, 14) rows of the setpoint (``firmware_units``).
         modes : tuple of int
             ``setpoint.mode`` of x, y, z, yaw (``MODE_ABS``, ...).
         tick0 : int

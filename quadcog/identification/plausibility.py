@@ -284,8 +284,10 @@ def check_types(logs: Sequence[FlightLog], baseline: Sequence[FlightLog],
 
     Parameters
     ----------
-    logs, baseline : sequence of FlightLog
-        The flights and the baseline flights.
+    logs : sequence of FlightLog
+        The flights.
+    baseline : sequence of FlightLog
+        The baseline flights.
     vehicle : Vehicle, optional
         A preset the user named (its name's first word is its type).
 

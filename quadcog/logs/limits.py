@@ -67,8 +67,10 @@ def check_range(log: FlightLog, name: str, values: npt.ArrayLike, fmt: str,
         What would be written.
     fmt : str
         The format's name.
-    lo, hi : float
-        The range it holds (default: float32's).
+    lo : float
+        The lowest value the range holds (default: float32's).
+    hi : float
+        The highest value the range holds (default: float32's).
     why : str
         What the range is (``"float32"``, ``"0..1 of full scale"``).
 

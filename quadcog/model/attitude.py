@@ -102,8 +102,12 @@ def quaternion_of_euler(phi: Any, theta: Any, psi: Any, ops: ModuleType = np) ->
 
     Parameters
     ----------
-    phi, theta, psi : float, numpy.ndarray or casadi.SX
-        ZYX Euler angles (rad).
+    phi : float, numpy.ndarray or casadi.SX
+        Roll, the ZYX Euler angle about x (rad).
+    theta : float, numpy.ndarray or casadi.SX
+        Pitch, the ZYX Euler angle about y (rad).
+    psi : float, numpy.ndarray or casadi.SX
+        Yaw, the ZYX Euler angle about z (rad).
     ops : module
         ``numpy`` (default) or ``casadi``: where sin and cos come from.
 

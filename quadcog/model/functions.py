@@ -587,9 +587,9 @@ class Model:
         Parameters
         ----------
         xq : array_like, shape (13,)
-            State [x, y, z (m), q_w, q_x, q_y, q_z, u, v, w (m/s), p, q, r (rad/s)]: position
-            of O in ground axes, the attitude as a unit quaternion (Hamilton, scalar first, body
-            to ground; else AttitudeError), body-axis velocities and rates.
+            SE(3) state [x, y, z, q_w, q_x, q_y, q_z, u, v, w, p, q, r]: position of O in
+            ground axes (m), the attitude as a unit quaternion (Hamilton, scalar first, body
+            to ground; else AttitudeError), body-axis velocities (m/s) and rates (rad/s).
         U : array_like, shape (4,)
             Thrust (N) and body moments about O (N m).
         pi : array_like, shape (10,)

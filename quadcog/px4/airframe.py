@@ -73,8 +73,10 @@ class RotorMap:
 
     Parameters
     ----------
-    omega_min, omega_max : tuple of 4 float
-        Rotor speed (rad/s) at output 0 and 1, per motor.
+    omega_min : tuple of 4 float
+        Rotor speed (rad/s) at output 0, per motor.
+    omega_max : tuple of 4 float
+        Rotor speed (rad/s) at output 1, per motor.
     thrust_constant : float
         k in ``f = k omega^2`` (N s^2/rad^2).
     """

@@ -60,8 +60,10 @@ def compare(name: str, result: SimulationResult, vehicle: Vehicle, t0: float, t1
         The flight.
     vehicle : Vehicle
         Its rotor limits (``max_rotor_thrust``, N).
-    t0, t1 : float
-        The span (s of scenario time).
+    t0 : float
+        The span's start (s of scenario time).
+    t1 : float
+        The span's end (s of scenario time).
     offset : float
         The result's time at scenario t = 0 (PX4: its arming time).
     diverged : bool

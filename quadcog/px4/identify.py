@@ -104,9 +104,10 @@ def identify_flight(flight: Any, baseline: Any, settle: float = 5.0,
 
     Parameters
     ----------
-    flight, baseline : Px4Flight
-        ``quadcog.px4.fly``'s, with their ULogs (the same vehicle; the baseline without the
-        payload).
+    flight : Px4Flight
+        ``quadcog.px4.fly``'s, with its ULog.
+    baseline : Px4Flight
+        ``quadcog.px4.fly``'s, with its ULog: the same vehicle without the payload.
     settle : float
         Seconds after the flight's first payload or CoG event that are left out.
     method : str

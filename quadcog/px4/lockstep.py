@@ -74,13 +74,24 @@ class Recording:
         The plant's step (s).
     n : int
         Samples recorded.
-    x, rotor_states, U, rotor_thrust, rotor_command, target : numpy.ndarray
-        State (n, 12), rotor-thrust states (n, 0 or 4), applied input (n, 4), rotor thrust
-        (n, 4, N), commanded rotor thrust (n, 4, N), the mission's target (n, 3, m).
+    x : numpy.ndarray
+        State (n, 12).
+    rotor_states : numpy.ndarray
+        Rotor-thrust states (n, 0 or 4).
+    U : numpy.ndarray
+        Applied input (n, 4).
+    rotor_thrust : numpy.ndarray
+        Rotor thrust (n, 4, N).
+    rotor_command : numpy.ndarray
+        Commanded rotor thrust (n, 4, N).
+    target : numpy.ndarray
+        The mission's target (n, 3, m).
     schedule_index : numpy.ndarray
         (n,) the schedule's row at each sample (0 before arming).
-    armed_at, disarmed_at : float or None
-        PX4's times (s).
+    armed_at : float or None
+        PX4's time of arming (s).
+    disarmed_at : float or None
+        PX4's time of disarming (s).
     partial : bool
         The run stopped before the mission ended.
     reason : str
@@ -92,10 +103,12 @@ class Recording:
     wait_seconds : float
         Of ``wall_seconds``, the time spent waiting for PX4's answers (the rest is
         quadcog's: sensors, codec, plant, mission link).
-    cpu_px4, cpu_quadcog : float
-        CPU seconds (user + system) PX4 and this process spent in that span: lockstep is
-        serial, so ``lockstep_seconds / (cpu_px4 + cpu_quadcog)`` is the speed on an idle
-        machine, less the wake-up latencies.
+    cpu_px4 : float
+        CPU seconds (user + system) PX4 spent in that span.
+    cpu_quadcog : float
+        CPU seconds (user + system) this process spent in that span: lockstep is serial, so
+        ``lockstep_seconds / (cpu_px4 + cpu_quadcog)`` is the speed on an idle machine, less
+        the wake-up latencies.
     statustext : list
         PX4's STATUSTEXT messages on the mission link, (t, text).
     """

@@ -136,8 +136,10 @@ def frame(message: Message, payload: bytes, seq: int, sysid: int = 1, compid: in
         MAVLink 2 sends it (at least one byte stays).
     seq : int
         Sequence number (taken modulo 256).
-    sysid, compid : int
-        The sender's system and component ids.
+    sysid : int
+        The sender's system id.
+    compid : int
+        The sender's component id.
 
     Returns
     -------
@@ -218,16 +220,24 @@ def pack_hil_gps(time_usec: int, lat: int, lon: int, alt: int, eph: int, epv: in
     ----------
     time_usec : int
         Time stamp (us).
-    lat, lon : int
-        Latitude and longitude (degrees * 1e7).
+    lat : int
+        Latitude (degrees * 1e7).
+    lon : int
+        Longitude (degrees * 1e7).
     alt : int
         Altitude above mean sea level (mm).
-    eph, epv : int
-        Horizontal and vertical dilution of precision (* 100).
+    eph : int
+        Horizontal dilution of precision (* 100).
+    epv : int
+        Vertical dilution of precision (* 100).
     vel : int
         Ground speed (cm/s).
-    vn, ve, vd : int
-        Velocity north, east, down (cm/s).
+    vn : int
+        Velocity north (cm/s).
+    ve : int
+        Velocity east (cm/s).
+    vd : int
+        Velocity down (cm/s).
     cog : int
         Course over ground (cdeg, 0..35999).
     fix_type : int

@@ -108,8 +108,10 @@ def earth_field(tree: Path, lat: float, lon: float) -> npt.NDArray[np.float64]:
     ----------
     tree : pathlib.Path
         The PX4-Autopilot source folder.
-    lat, lon : float
-        Position (deg).
+    lat : float
+        Latitude (deg).
+    lon : float
+        Longitude (deg).
 
     Returns
     -------
