@@ -105,7 +105,7 @@ FIGURES: tuple[Figure, ...] = tuple(
            "error, CoG and its estimate, rotor thrusts with the commanded ones dashed, and "
            "the moments.",
            ("getting-started.md", "tour/simulate.md", "tour/scenarios.md",
-            "howto/controller.md")),
+            "howto/controller.md", "px4.md")),
     Figure("pd-sigma", "analysis", "pd_sigma.png",
            "Singular values of cascade PD's loop transfer matrix at hover: the crossover "
            "frequencies of the four loops, no peak that would signal a small margin.",
