@@ -2,6 +2,7 @@
 tests/test_docsite.py): every figure a page names is shown there, the derived equations are
 rendered, lists stay lists, code fits the column, nav labels are the pages' titles, the site
 works offline and opened as files, and the defects a reader found do not come back."""
+import functools
 from html.parser import HTMLParser
 import importlib.util
 from pathlib import Path
@@ -197,9 +198,15 @@ class _Counter(HTMLParser):
             self.depth -= 1
 
 
-def _built(page):
+@functools.cache
+def _site():
+    # one build for every page: a second background_result() call would build the site again
     from conftest import background_result
-    folder, done = background_result("docs site")
+    return background_result("docs site")
+
+
+def _built(page):
+    folder, done = _site()
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     return folder / "site" / (page.removesuffix(".md") + ".html")
 
