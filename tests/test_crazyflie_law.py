@@ -129,7 +129,7 @@ def test_quadcog_run_flies_a_law_on_the_stack(tree, tmp_path):
 
     from quadcog.cli import main
     main(["run", "parcel-crazyflie", "--stack", "crazyflie", "--controller", "payload_adaptive",
-          "--set", "duration=3", "--out", str(tmp_path), "--quiet", "--no-plot"])
+          "--set", "duration=13", "--out", str(tmp_path), "--quiet", "--no-plot"])
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["controller"] == "crazyflie quadcog payload_adaptive"
     assert not metrics["diverged"]
