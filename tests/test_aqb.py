@@ -332,6 +332,26 @@ def test_the_adapter_is_an_aqb_controller():
 
 
 @needs_aqb
+def test_the_adapter_flies_the_geometric_law():
+    """AdaptiveQuadBench's factory builds quadcog's SE(3) law from its quad_params: at rest on
+    the reference it commands the textbook hover speed, below the reference more thrust, and
+    its estimate moves and stays finite (a wrong state layout or a law that is not stepped
+    fails here)."""
+    from aqb.quad_param.quadrotor import quad_params
+
+    from quadcog.aqb.adapter import aqb_controller_factory
+    ctl = aqb_controller_factory()("qc-geometric", quad_params)
+    assert ctl.controller.name == "geometric" and ctl.controller.n_state > 0
+    hover = ctl.update(0.0, _state(x=np.zeros(3)), _flat())["cmd_motor_speeds"]
+    np.testing.assert_allclose(hover, np.sqrt(M * G / (4 * K_ETA)), rtol=1e-6)
+    low = _state(x=np.array([0.0, 0.0, -0.2]))
+    for k in range(1, 30):
+        out = ctl.update(0.01 * k, low, _flat())
+    assert np.all(np.isfinite(ctl.c)) and not np.allclose(ctl.c, ctl.controller.initial_state())
+    assert out["cmd_thrust"] > M * G and ctl.failures == 0
+
+
+@needs_aqb
 def test_the_shipped_payload_models_flaws_are_measured_and_the_corrected_one_is_a_rigid_body():
     from aqb.quad_param.quadrotor import quad_params
 
