@@ -90,13 +90,18 @@ def test_the_compiler_refusing_the_flags_gives_the_portable_build(monkeypatch):
 
 
 @needs_cc
-def test_an_isa_the_cpu_lacks_is_refused():
-    native = qk.detect_isa()
-    wider = qk.ISAS[:qk.ISAS.index(native)]
-    if not wider:
-        pytest.skip("this CPU runs the widest ISA")
-    with pytest.raises(qk.KernelError, match=wider[-1]):
-        qk.VectorKernel(_step_fn(), isa=wider[-1])
+@pytest.mark.parametrize("cpu, refused", [
+    (("sse2", "avx", "avx2", "fma"), "avx512"),      # an AVX2 CPU (most users' machines)
+    (("sse2",), "avx2"),                              # an old x86-64 CPU
+])
+def test_an_isa_the_cpu_lacks_is_refused(monkeypatch, cpu, refused):
+    """Runs on any x86-64 machine: the CPU's flags are those of a narrower CPU, so an AVX-512
+    machine checks the refusal an AVX2 machine makes (its instructions would stop the
+    process with SIGILL there, not an error)."""
+    monkeypatch.setattr(qk, "cpu_features", lambda: frozenset(cpu))
+    assert qk.ISAS.index(qk.detect_isa()) > qk.ISAS.index(refused)
+    with pytest.raises(qk.KernelError, match=f"isa='{refused}'"):
+        qk.VectorKernel(_step_fn(), isa=refused)
 
 
 @needs_cc
