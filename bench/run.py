@@ -483,6 +483,41 @@ def bench_scale(sizes=(10, 100, 1000, 10000), duration=2.0, threads=2):
     return out
 
 
+def bench_numba(n_flights, quadcog_rate, threads=2):
+    """The afternoon baseline (bench/numba_peer.py): a hand-written numba RK4 of the plain
+    rigid body with a cascade PD law, same flight count, horizon and threads as the batch;
+    timed on its second full call (numba compiles once per argument types, on the first)."""
+    from bench import numba_peer
+    if not numba_peer.available():
+        record("peer: numba RK4, plain body + PD", "absent", "", "", "",
+               "not installed: pip install -e '.[bench]'")
+        return None
+    import numba
+    n_steps = 20000
+    print(f"numba baseline: {n_flights} flights x {n_steps} steps at 1 kHz, {threads} threads")
+    t0 = time.perf_counter()
+    numba_peer.fly(4, 10, threads, quadcog.HUMMINGBIRD)
+    compile_s = time.perf_counter() - t0
+    calls = []
+    for _ in range(2):
+        t0 = time.perf_counter()
+        X = numba_peer.fly(n_flights, n_steps, threads, quadcog.HUMMINGBIRD)
+        calls.append(time.perf_counter() - t0)
+    t = calls[-1]
+    rate = n_flights * n_steps / t
+    settled = bool(np.all(np.isfinite(X)) and np.max(np.abs(X[:, :3])) < 1e-3)
+    record(f"peer: numba {numba.__version__} RK4, plain body + PD, {n_flights} flights x "
+           f"{n_steps} steps", f"{t:.2f}", "s", "", "",
+           f"{rate:.0f} flight-steps/s, {threads} threads, float64; the 2nd full call (the "
+           f"1st {calls[0]:.2f} s); compile {compile_s:.1f} s; every flight within 1 mm of "
+           f"hover at the end: {settled}")
+    record("peer: quadcog vector kernel / numba RK4", f"{quadcog_rate / rate:.2f}",
+           "x (flight-steps/s)", "", "", "same flight count, horizon and threads, wall time, "
+           "one run; numba's step has no CoG offset and no adaptation (several times less "
+           "arithmetic): a floor, not a like-for-like peer")
+    return rate
+
+
 def bench_crazyflow(n_flights, n_steps, quadcog_rate):
     """crazyflow (JAX, CPU, float64): first-principles dynamics, its state controller, RK4 at
     1 kHz; the steps timed after a run of the same length that compiles them."""
@@ -653,6 +688,7 @@ def main():
         bench_scale(tuple(args.scale))
     bench_rotorpy_batched(args.flights, args.peer_seconds, rate)
     bench_crazyflow(args.flights, args.peer_steps, rate)
+    bench_numba(args.flights, rate)
     bench_rotorpy(flight_total)
     record("machine: load after", loadavg(), "1/5/15 min", "", "", "/proc/loadavg")
     lines = ["| measurement | value | unit | ratio | goal | note |", "|---|---|---|---|---|---|"]

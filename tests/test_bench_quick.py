@@ -39,12 +39,13 @@ def test_smallest_configuration(run):
 
 
 def test_absent_peers_are_reported_absent(run, monkeypatch):
-    for name in ("crazyflow", "rotorpy", "jax", "torch"):
+    for name in ("crazyflow", "rotorpy", "jax", "torch", "numba"):
         monkeypatch.setitem(sys.modules, name, None)          # import raises ImportError
     run.bench_crazyflow(10, 5, 1.0)
     run.bench_rotorpy_batched(10, 0.01, 1.0)
     run.bench_rotorpy(0.015)
-    assert [r[1] for r in run.rows] == ["absent"] * 3
+    run.bench_numba(10, 1.0)
+    assert [r[1] for r in run.rows] == ["absent"] * 4
     assert all("not installed" in r[5] for r in run.rows)
 
 
