@@ -651,6 +651,63 @@ SUBCOMMANDS: list[Callable[[_Subparsers[argparse.ArgumentParser]], None]] = [
 SUBCOMMANDS.append(add_px4)
 
 
+def add_cache(sub: _Subparsers[argparse.ArgumentParser]) -> None:
+    """Declare `quadcog cache`.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of ``parser()``.
+    """
+    p = sub.add_parser("cache", help="list quadcog's cache (compiled code, PX4's build, ...) "
+                                     "and clear it",
+                       description="List the entries of quadcog's cache ($QUADCOG_CACHE_DIR, "
+                                   "else ~/.cache/quadcog) by kind with their sizes; --clear "
+                                   "removes them (all, or the kinds named). Each entry is "
+                                   "rebuilt when it is next needed; one being built is left.")
+    p.add_argument("--clear", nargs="*", metavar="KIND", default=None,
+                   help="remove every entry, or those of the kinds named (libraries, px4, "
+                        "aqb, crazyflie, stacks, vendor)")
+    p.add_argument("--all", action="store_true", help="list every entry, not only the kinds")
+    p.set_defaults(func=cmd_cache)
+
+
+def cmd_cache(args: argparse.Namespace) -> None:
+    """Run `quadcog cache` (``quadcog.codegen.cache``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    """
+    import time
+
+    from quadcog.codegen.cache import clear, entries, human_size
+    from quadcog.paths import cache_dir
+    if args.clear is not None:
+        removed, busy = clear(args.clear)
+        print(f"removed {len(removed)} entries ({human_size(sum(e.size for e in removed))}) "
+              f"from {cache_dir()}")
+        for e in busy:
+            print(f"left {e.name}: a build holds its lock")
+        return
+    found = entries()
+    print(f"{cache_dir()}: {len(found)} entries, {human_size(sum(e.size for e in found))}")
+    kinds: dict[str, list] = {}
+    for e in found:
+        kinds.setdefault(e.kind, []).append(e)
+    for kind, group in kinds.items():
+        newest = time.strftime("%Y-%m-%d", time.localtime(max(e.modified for e in group)))
+        print(f"  {kind:<10} {len(group):>5} entries {human_size(sum(e.size for e in group)):>9}"
+              f"  newest {newest}")
+        if args.all:
+            for e in group:
+                print(f"    {e.name}  {human_size(e.size)}")
+
+
+SUBCOMMANDS.append(add_cache)
+
+
 def _version() -> str:
     from quadcog import __version__
     return f"quadcog {__version__}"
@@ -706,6 +763,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         restore_handlers(previous)
 
 
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null: Python's flush at exit would raise the broken pipe again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):   # stdout without a descriptor (captured in a test)
+        pass
+    finally:
+        os.close(devnull)
+
+
 def _main(argv):
     from quadcog.errors import Interrupted
     try:
@@ -723,6 +791,9 @@ def _main(argv):
             return received().status
         print(f"quadcog: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:         # `quadcog ... | head`: the reader left, as for any tool
+        _silence_stdout()
+        return 141                  # 128 + SIGPIPE, as shells report it
     except OSError as e:
         print(f"quadcog: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
         return 2
