@@ -9,7 +9,15 @@ from derive.inertial import InertialModel, inertial_model
 from derive.kinematics import kinematics
 from derive.lie import OutputDerivatives, output_derivatives
 from derive.linearization import linearization
-from derive.newton_euler import RigidBody, inverse_inertia_definition, rigid_body, solve_accelerations
+from derive.newton_euler import (
+    RigidBody,
+    factored_check,
+    inverse_inertia_definition,
+    rigid_body,
+    solve_accelerations,
+    solve_accelerations_factored,
+    velocity_terms,
+)
 from derive.regressor import regressor
 from derive.se3 import SE3Model, se3_model
 from derive.vector_field import dynamics, vector_field
@@ -82,9 +90,21 @@ def _placeholders(body):
 def _general_inertia_dynamics(R, Q):
     """The truth model: the same derivation with a full symmetric I_O (diagonal from p,
     products extra) and an external wrench [F (ground axes, at O); M (body axes)]; returns
-    (the rigid body, x_dot, its I_G^{-1} placeholders)."""
+    (the rigid body, x_dot, its I_G^{-1} placeholders).
+
+    Written as the simulators evaluate it, four times per RK4 step: every generalized force
+    (rotors, wrench, drag, gravity, C(nu) nu in Newton-Euler's cross products) summed first,
+    then one block elimination in cross products. It is proved here, term by term, to be the
+    control-affine form f + G U of the same body plus the wrench's accelerations.
+    """
     body = rigid_body(R, sym.I_O_full)
-    f, G = vector_field(R, Q, body)
+    placeholders = _placeholders(body)
+    Cnu = velocity_terms(body.I_O)
+    factored_check(Cnu, body.C * sym.nu, "C(nu) nu")
     tau_ext = sp.Matrix.vstack(R.T * sym.wrench[:3, :], sym.wrench[3:, :])
+    rhs = body.B_u * sym.U + tau_ext - Cnu - body.D * sym.nu - body.g_G
+    xdot = sp.Matrix.vstack(R * sym.nu1, Q * sym.nu2, solve_accelerations_factored(body, rhs))
+    f, G = vector_field(R, Q, body)
     f_ext = sp.Matrix.vstack(sp.zeros(6, 1), solve_accelerations(body, tau_ext))
-    return body, dynamics(f, G) + f_ext, _placeholders(body)
+    factored_check(xdot, dynamics(f, G) + f_ext, "truth model")
+    return body, xdot, placeholders
