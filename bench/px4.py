@@ -78,8 +78,7 @@ def codec_rows():
 
 def _fly(name, out, overrides=(), seed=1):
     from quadcog.px4 import fly, scenario_path
-    from quadcog.px4.sensors import Px4Sensing
-    return fly(scenario_path(name), out=out, overrides=overrides, sensing=Px4Sensing(seed=seed))
+    return fly(scenario_path(name), out=out, overrides=overrides + (f"sensing.seed={seed}",))
 
 
 def flights(out: Path):
