@@ -49,3 +49,17 @@ def test_px4_ulog_reads_back_in_the_plants_frame(flight):
     log = read_log(out / "px4.ulg")
     z_est = log.signal("position")[:, 2]
     assert abs(z_est.max() - f.result.x[:, 2].max()) < 0.2   # PX4's EKF2 against the truth
+
+
+def test_px4_setpoint_reads_back_as_the_hold_point(flight):
+    """The position setpoint PX4's position controller tracked (its ULog's
+    vehicle_local_position_setpoint, turned to quadcog's frame at the plant's times) is the
+    mission's hold point, 1.5 m up, while the truth holds there; the side-by-side table
+    measures PX4's error against it."""
+    f, out = flight
+    from quadcog.px4.compare import setpoint_reference
+    sp = setpoint_reference(out / "px4.ulg", f.result.t)
+    assert sp.shape == (f.result.t.size, 3)
+    holding = (f.result.x[:, 2] > 1.4) & np.isfinite(sp).all(axis=1)
+    assert holding.sum() > 1000                            # > 1 s of samples at 1 ms
+    assert np.allclose(np.median(sp[holding], axis=0), (0.0, 0.0, 1.5), atol=0.1)

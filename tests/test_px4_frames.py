@@ -144,6 +144,19 @@ def test_side_by_side_figures_of_a_known_error():
     assert isinstance(s, Comparison) and s.diverged == c.diverged
     assert (s.tail_rms, s.largest, s.settling, s.at_limit) == pytest.approx(
         (c.tail_rms, c.largest, c.settling, c.at_limit), abs=1e-9)
+    # an error that is still 0.2 m at the span's end never settles (None, not nan), and a
+    # reference given per sample replaces the result's: here the error itself, error 0
+    from quadcog.px4.compare import settling_text
+    held = SimulationResult(t, np.where(after[:, None], 0.2, 0.0) * np.eye(12)[0], result.U,
+                            ref, result.r_hat, result.r_G, result.metrics, rotor_thrust=f)
+    never = compare("held off", held, X500, 5.0, 15.0)
+    assert never.settling is None and settling_text(never.settling) == "never settles"
+    assert never.largest == pytest.approx(0.2) and settling_text(1.234) == "1.23"
+    on_ref = compare("own ref", held, X500, 5.0, 15.0, reference=held.x[:, :3])
+    assert on_ref.largest == 0.0 and on_ref.settling == 0.0
+    gaps = held.x[:, :3].copy()
+    gaps[after & (t < 6.0)] = np.nan                   # PX4 set no position: left out
+    assert compare("gaps", held, X500, 5.0, 15.0, reference=gaps).largest == 0.0
 
 
 def _at_rest(sensing, n):

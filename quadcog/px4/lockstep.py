@@ -8,9 +8,10 @@ Each lockstep period T (4 ms: PX4's SITL IMU rate, ``IMU_INTEG_RATE`` 250 Hz) th
 3. waits for PX4's ``HIL_ACTUATOR_CONTROLS`` of that time stamp: PX4 ran its estimator and
    controllers up to it;
 4. maps the motor outputs to rotor thrusts (``quadcog.px4.airframe.RotorMap``) and steps the
-   compiled truth plant (with the sensing model's ``delay``, ``Sensing.delay``, the answer of
-   the period before: the input computed from the measurement of step j-1 acts in step j) (``quadcog.sim.plant``: RK4, the schedule's CoG profile and payloads,
-   motor lag, drag, rotor limits) through the period in steps of the scenario's dt.
+   compiled truth plant (``quadcog.sim.plant``: RK4, the schedule's CoG profile and payloads,
+   motor lag, drag, rotor limits) through the period in steps of the scenario's dt; with the
+   sensing model's ``delay`` (``Sensing.delay``) on the answer of the period before: the input
+   computed from the measurement of period j-1 acts in period j.
 
 The ground: the plant has none, so the loop holds the vehicle at rest on the ground plane
 z = 0 (level, its heading kept) while the rotors' thrust is below its weight, and puts it
