@@ -210,9 +210,11 @@ class Sensors:
         s, imu = self.sensing, self.sensing.imu
         accel_std, gyro_std = imu.imu_sigmas(1.0 / rate) if imu.noise else (0.0, 0.0)
         self._imu_std = np.array([accel_std] * 3 + [gyro_std] * 3 + [s.mag] * 3 + [s.baro])
-        # the constant biases in quadcog's body axes (FLU), added before the turn to FRD
+        # the constant biases, drawn in quadcog's body axes (FLU), turned to FRD and added to
+        # each block of noise (no cost per sample)
         self.accel_bias = imu.accel_offset() if imu.noise else np.zeros(3)
         self.gyro_bias = imu.bias() if imu.noise else np.zeros(3)
+        self._imu_offset = np.r_[self.accel_bias * FLIP, self.gyro_bias * FLIP, np.zeros(4)]
         self._gps_std = np.array([s.gps_position] * 3 + [s.gps_velocity] * 3)
         self._imu_noise = np.empty((0, 10))
         self._gps_noise = np.empty((0, 6))
@@ -222,7 +224,8 @@ class Sensors:
 
     def _imu(self) -> npt.NDArray[np.float64]:
         if self._k >= len(self._imu_noise):
-            self._imu_noise = self._rng.standard_normal((self._BLOCK, 10)) * self._imu_std
+            self._imu_noise = (self._rng.standard_normal((self._BLOCK, 10)) * self._imu_std
+                               + self._imu_offset)
             self._k = 0
         self._k += 1
         return self._imu_noise[self._k - 1]
@@ -266,12 +269,11 @@ class Sensors:
         cols[:, 0] = accel_ground
         cols[2, 0] += self.g
         f_body, m_body = (R.T @ cols).T                 # specific force and field, body axes
-        f_body = f_body + self.accel_bias
         h = self.home[2] + altitude
         pressure, temperature = isa_pressure(h)
         pressure += n[9]
         acc = (f_body[0] + n[0], -f_body[1] + n[1], -f_body[2] + n[2])
-        w = np.asarray(rates, float) + self.gyro_bias
+        w = np.asarray(rates, float)
         gyro = (w[0] + n[3], -w[1] + n[4], -w[2] + n[5])
         mag = (m_body[0] + n[6], -m_body[1] + n[7], -m_body[2] + n[8])
         alt = 288.15 / 0.0065 * (1.0 - (pressure / 1013.25) ** (1 / 5.25588))
