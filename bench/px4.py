@@ -257,12 +257,15 @@ def main(argv=None):
     for name, sim, wall, sp, cpx, cq, idle, what in flight_rows(done):
         speed.append(f"| {name} | {sim:.1f} | {wall:.1f} | {sp:.1f} | {cpx:.2f} | {cq:.2f} | "
                      f"{idle:.1f} | {what} |")
-    ident = ["| ULog | baseline | true x_G mm | true y_G mm | found x_G mm | found y_G mm | "
-             "true mass kg | found mass kg | mass error % |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    ident = ["| ULog | baseline | true x_G mm | true y_G mm | found x_G mm (95 %) | "
+             "found y_G mm (95 %) | truth within the interval x, y | true mass kg | "
+             "found mass kg | mass error % |",
+             "|---|---|---:|---:|---:|---:|---|---:|---:|---:|"]
     for fl, base, tx, ty, x, hx, y, hy, tm, m, err in identification_rows(done):
-        ident.append(f"| {fl} | {base} | {tx:+.2f} | {ty:+.2f} | {x:+.2f} +- {hx:.2f} | "
-                     f"{y:+.2f} +- {hy:.2f} | {tm:.3f} | {m:.4f} | {err:+.2f} |")
+        inside = ", ".join("yes" if abs(f - t) <= h else f"no ({abs(f - t):.3f} mm off)"
+                           for f, t, h in ((x, tx, hx), (y, ty, hy)))
+        ident.append(f"| {fl} | {base} | {tx:+.3f} | {ty:+.3f} | {x:+.3f} +- {hx:.3f} | "
+                     f"{y:+.3f} +- {hy:.3f} | {inside} | {tm:.3f} | {m:.4f} | {err:+.2f} |")
     from quadcog.px4.compare import settling_text
     side = ["| case (span, s from arming / start) | who flies | state it sees | diverged | "
             "tail RMS m | largest m | settling s (5 cm) | at a rotor limit s |",
