@@ -22,8 +22,8 @@ from machine import loadavg  # noqa: E402
 from quadcog.files import cpu_model  # noqa: E402
 from quadcog.px4.mavlink import MESSAGES, FrameReader, frame, pack_hil_sensor, unpack_hil_actuator_controls  # noqa: E402
 
-__all__ = ["codec_rows", "flights", "flight_rows", "identification_rows", "side_by_side_rows",
-           "main"]
+__all__ = ["SIDE_CASES", "codec_rows", "flights", "flight_rows", "identification_rows",
+           "side_by_side_rows", "main"]
 
 _SENSOR = (123456789, (0.25, -0.5, -9.75), (0.01, -0.02, 0.03), (0.21, 0.013, 0.43), 955.98,
            0.0, 488.0, 11.8)
@@ -78,8 +78,7 @@ def codec_rows():
 
 def _fly(name, out, overrides=(), seed=1):
     from quadcog.px4 import fly, scenario_path
-    from quadcog.px4.sensors import Px4Sensing
-    return fly(scenario_path(name), out=out, overrides=overrides, sensing=Px4Sensing(seed=seed))
+    return fly(scenario_path(name), out=out, overrides=overrides + (f"sensing.seed={seed}",))
 
 
 def flights(out: Path):
@@ -94,8 +93,8 @@ def flights(out: Path):
     -------
     dict or None
         name -> Px4Flight: the hover and mission flights with the parcel, their baselines
-        without it, and a second baseline (another noise seed) where nothing changed; None
-        without a build.
+        without it, a second baseline (another noise seed) where nothing changed, and the
+        hover with a CoG step; None without a build.
     """
     from quadcog.px4.tree import cached_build
     if cached_build() is None:
@@ -106,7 +105,8 @@ def flights(out: Path):
             "px4-payload, no parcel": ("px4-payload", none, 2),
             "px4-payload, no parcel, again": ("px4-payload", none, 3),
             "px4-mission": ("px4-mission", (), 1),
-            "px4-mission, no parcel": ("px4-mission", none, 2)}
+            "px4-mission, no parcel": ("px4-mission", none, 2),
+            "px4-cog-step": ("px4-cog-step", (), 1)}
     return {key: _fly(name, out / key.replace(", ", "-").replace(" ", "-"), over, seed)
             for key, (name, over, seed) in plan.items()}
 
@@ -153,7 +153,8 @@ def identification_rows(done):
     from quadcog.px4.identify import identify_flight
     cases = (("px4-payload", "px4-payload, no parcel"),
              ("px4-mission", "px4-mission, no parcel"),
-             ("px4-payload, no parcel, again", "px4-payload, no parcel"))
+             ("px4-payload, no parcel, again", "px4-payload, no parcel"),
+             ("px4-cog-step", "px4-payload, no parcel"))
     rows = []
     for flight, base in cases:
         r = identify_flight(done[flight], done[base])
@@ -165,9 +166,25 @@ def identification_rows(done):
     return rows
 
 
+# (case, flight, span start, span end (s of scenario time))
+SIDE_CASES = (("hover, parcel picked up", "px4-payload", 25.0, 50.0),
+              ("waypoint mission, parcel picked up", "px4-mission", 25.0, 60.0),
+              ("hover, CoG step", "px4-cog-step", 25.0, 50.0))
+PX4_SEES = "EKF2 of the IMU (Sensing()), GPS, baro, mag"
+TRUE_STATE = "true state"
+SENSED = "Sensing(): noise, gyro bias, 1-period delay"
+
+
 def side_by_side_rows(done):
-    """PX4's controllers (default parameters) against quadcog's laws on px4-payload's vehicle,
-    parcel and hover point, over scenario time [25, 50] s (from the pickup).
+    """PX4's controllers (default parameters) against quadcog's laws on each case's vehicle,
+    events and trajectory (``SIDE_CASES``), over the same span of scenario time (from the
+    event to the end of the trajectory).
+
+    PX4's error is against the position setpoint its position controller tracked (the ULog's
+    ``vehicle_local_position_setpoint``: the hold point, or the path between waypoints), the
+    laws' against the scenario's trajectory; PX4 sees its EKF2's estimate of the sensors made
+    from quadcog's Sensing model, each law flies twice: on the true state and with the same
+    Sensing model (``quadcog.Sensed``) at its 1 kHz.
 
     Parameters
     ----------
@@ -176,19 +193,26 @@ def side_by_side_rows(done):
 
     Returns
     -------
-    list of Comparison
-        PX4, then quadcog's pd and payload_adaptive laws (perfect state, no take-off).
+    list of tuple
+        (case, span, state seen, Comparison), PX4 first in each case.
     """
     from quadcog.px4 import scenario_path
-    from quadcog.px4.compare import compare
+    from quadcog.px4.compare import compare, setpoint_reference
     from quadcog.scenarios.scenario import load_scenario
-    f = done["px4-payload"]
-    vehicle = f.scenario.vehicle
-    rows = [compare("PX4 (EKF2, mc_pos/att/rate_control)", f.result, vehicle, 25.0, 50.0,
-                    offset=f.recording.armed_at or 0.0, diverged=f.partial)]
-    for law in ("pd", "payload_adaptive"):
-        sc = load_scenario(scenario_path("px4-payload"), (f"controller={law!r}",))
-        rows.append(compare(f"quadcog {law}", sc.run(), vehicle, 25.0, 50.0))
+    rows = []
+    for case, name, t0, t1 in SIDE_CASES:
+        f = done[name]
+        vehicle = f.scenario.vehicle
+        ref = setpoint_reference(f.ulog, f.result.t)
+        rows.append((case, (t0, t1), PX4_SEES,
+                     compare("PX4 (EKF2, mc_pos/att/rate_control)", f.result, vehicle, t0, t1,
+                             offset=f.recording.armed_at or 0.0, diverged=f.partial,
+                             reference=ref)))
+        for law in ("pd", "payload_adaptive"):
+            for seen, extra in ((TRUE_STATE, ()), (SENSED, ("sensing.seed=1",))):
+                sc = load_scenario(scenario_path(name), (f"controller={law!r}",) + extra)
+                rows.append((case, (t0, t1), seen,
+                             compare(f"quadcog {law}", sc.run(), vehicle, t0, t1)))
     return rows
 
 
@@ -210,7 +234,8 @@ def main(argv=None):
     ap.add_argument("--out", type=Path, default=Path("out/px4"))
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
-    print(f"CPU: {cpu_model()}; load average before: {loadavg()}\n")
+    load_before = loadavg()
+    print(f"CPU: {cpu_model()}; load average before: {load_before}\n")
     print("| simulator-link message | quadcog (struct) us | pymavlink us |")
     print("|---|---:|---:|")
     for op, ours, theirs in codec_rows():
@@ -223,7 +248,8 @@ def main(argv=None):
     from quadcog.px4.tree import cached_build
     built = cached_build()
     machine = (f"{time.strftime('%Y-%m-%d')}, CPU: {cpu_model()}, 2 cores shared with other "
-               f"work (load average {loadavg()} after the flights); PX4 {built.commit()} "
+               f"work (load average {load_before} before the flights, {loadavg()} after); "
+               f"PX4 {built.commit()} "
                f"(PX4-Autopilot main 02e73e3b6f, tree {built.key}), airframe 10016 with the "
                f"x500's parameters, lockstep period 4 ms, plant dt 1 ms.")
     speed = ["| flight | lockstep s | wall s | speed x | PX4 CPU s | quadcog CPU s | "
@@ -231,17 +257,23 @@ def main(argv=None):
     for name, sim, wall, sp, cpx, cq, idle, what in flight_rows(done):
         speed.append(f"| {name} | {sim:.1f} | {wall:.1f} | {sp:.1f} | {cpx:.2f} | {cq:.2f} | "
                      f"{idle:.1f} | {what} |")
-    ident = ["| ULog | baseline | true x_G mm | true y_G mm | found x_G mm | found y_G mm | "
-             "true mass kg | found mass kg | mass error % |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    ident = ["| ULog | baseline | true x_G mm | true y_G mm | found x_G mm (95 %) | "
+             "found y_G mm (95 %) | truth within the interval x, y | true mass kg | "
+             "found mass kg | mass error % |",
+             "|---|---|---:|---:|---:|---:|---|---:|---:|---:|"]
     for fl, base, tx, ty, x, hx, y, hy, tm, m, err in identification_rows(done):
-        ident.append(f"| {fl} | {base} | {tx:+.2f} | {ty:+.2f} | {x:+.2f} +- {hx:.2f} | "
-                     f"{y:+.2f} +- {hy:.2f} | {tm:.3f} | {m:.4f} | {err:+.2f} |")
-    side = ["| px4-payload from the pickup (25..50 s) | diverged | tail RMS m | largest m | "
-            "settling s (5 cm) | at a rotor limit s |", "|---|---|---:|---:|---:|---:|"]
-    for c in side_by_side_rows(done):
-        side.append(f"| {c.name} | {'yes' if c.diverged else 'no'} | {c.tail_rms:.4f} | "
-                    f"{c.largest:.4f} | {c.settling:.2f} | {c.at_limit:.2f} |")
+        inside = ", ".join("yes" if abs(f - t) <= h else f"no ({abs(f - t):.3f} mm off)"
+                           for f, t, h in ((x, tx, hx), (y, ty, hy)))
+        ident.append(f"| {fl} | {base} | {tx:+.3f} | {ty:+.3f} | {x:+.3f} +- {hx:.3f} | "
+                     f"{y:+.3f} +- {hy:.3f} | {inside} | {tm:.3f} | {m:.4f} | {err:+.2f} |")
+    from quadcog.px4.compare import settling_text
+    side = ["| case (span, s from arming / start) | who flies | state it sees | diverged | "
+            "tail RMS m | largest m | settling s (5 cm) | at a rotor limit s |",
+            "|---|---|---|---|---:|---:|---:|---:|"]
+    for case, (t0, t1), seen, c in side_by_side_rows(done):
+        side.append(f"| {case} ({t0:g}..{t1:g}) | {c.name} | {seen} | "
+                    f"{'yes' if c.diverged else 'no'} | {c.tail_rms:.4f} | {c.largest:.4f} | "
+                    f"{settling_text(c.settling)} | {c.at_limit:.2f} |")
     for name, table in (("speed", speed), ("identify", ident), ("side", side)):
         text = f"# PX4 in the loop: {name}\n\n{machine}\n\n" + "\n".join(table) + "\n"
         (args.out / f"{name}.md").write_text(text)

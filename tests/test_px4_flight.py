@@ -49,3 +49,21 @@ def test_px4_ulog_reads_back_in_the_plants_frame(flight):
     log = read_log(out / "px4.ulg")
     z_est = log.signal("position")[:, 2]
     assert abs(z_est.max() - f.result.x[:, 2].max()) < 0.2   # PX4's EKF2 against the truth
+
+
+def test_px4_setpoint_reads_back_as_the_hold_point(flight):
+    """The position setpoint PX4's position controller tracked (its ULog's
+    vehicle_local_position_setpoint, moved from EKF2's origin to the plant's, at the plant's
+    times) is the mission's hold point over home, 1.5 m up (up to PX4's own error of home's
+    altitude, from the barometer), and the truth holds within centimetres of it; the
+    side-by-side table measures PX4's error against it."""
+    f, out = flight
+    from quadcog.px4.compare import setpoint_reference
+    sp = setpoint_reference(out / "px4.ulg", f.result.t)
+    assert sp.shape == (f.result.t.size, 3)
+    holding = (f.result.x[:, 2] > 1.0) & np.isfinite(sp).all(axis=1)
+    assert holding.sum() > 3000                            # > 3 s of samples at 1 ms
+    assert np.allclose(np.median(sp[holding], axis=0), (0.0, 0.0, 1.5), atol=0.2)
+    assert np.allclose(np.median(sp[holding, :2], axis=0), 0.0, atol=0.05)   # EKF2's origin
+    x = f.result.x[holding, :3]
+    assert np.median(np.linalg.norm(x - sp[holding], axis=1)) < 0.1

@@ -13,10 +13,10 @@ from quadcog.model.conventions import rotation_matrix
 from quadcog.px4.compare import Comparison
 from quadcog.px4.frames import flip, flip_rotation
 from quadcog.px4.sensors import EARTH_RADIUS, HOME, Px4Sensing, Sensors, isa_pressure
+from quadcog.sim.sensing import Sensing
 
 G = 9.81
-QUIET = Px4Sensing(accel_density=0.0, gyro_density=0.0, mag=0.0, baro=0.0, gps_position=0.0,
-                   gps_velocity=0.0)
+QUIET = Px4Sensing(Sensing(noise=False), mag=0.0, baro=0.0, gps_position=0.0, gps_velocity=0.0)
 FIELD_NED = np.array([0.21, 0.013, 0.43])          # gauss, about Zurich's
 
 
@@ -105,8 +105,8 @@ def test_gps_offsets_north_and_west():
 
 
 def test_noise_is_there_and_seeded():
-    a = Sensors(FIELD_NED, G, 250.0, Px4Sensing(seed=3))
-    b = Sensors(FIELD_NED, G, 250.0, Px4Sensing(seed=3))
+    a = Sensors(FIELD_NED, G, 250.0, Px4Sensing(Sensing(seed=3)))
+    b = Sensors(FIELD_NED, G, 250.0, Px4Sensing(Sensing(seed=3)))
     ra = [a.imu(np.eye(3), np.zeros(3), np.zeros(3), 0.0) for _ in range(200)]
     rb = [b.imu(np.eye(3), np.zeros(3), np.zeros(3), 0.0) for _ in range(200)]
     assert ra == rb
@@ -144,3 +144,64 @@ def test_side_by_side_figures_of_a_known_error():
     assert isinstance(s, Comparison) and s.diverged == c.diverged
     assert (s.tail_rms, s.largest, s.settling, s.at_limit) == pytest.approx(
         (c.tail_rms, c.largest, c.settling, c.at_limit), abs=1e-9)
+    # an error that is still 0.2 m at the span's end never settles (None, not nan), and a
+    # reference given per sample replaces the result's: here the error itself, error 0
+    from quadcog.px4.compare import settling_text
+    held = SimulationResult(t, np.where(after[:, None], 0.2, 0.0) * np.eye(12)[0], result.U,
+                            ref, result.r_hat, result.r_G, result.metrics, rotor_thrust=f)
+    never = compare("held off", held, X500, 5.0, 15.0)
+    assert never.settling is None and settling_text(never.settling) == "never settles"
+    assert never.largest == pytest.approx(0.2) and settling_text(1.234) == "1.23"
+    on_ref = compare("own ref", held, X500, 5.0, 15.0, reference=held.x[:, :3])
+    assert on_ref.largest == 0.0 and on_ref.settling == 0.0
+    gaps = held.x[:, :3].copy()
+    gaps[after & (t < 6.0)] = np.nan                   # PX4 set no position: left out
+    assert compare("gaps", held, X500, 5.0, 15.0, reference=gaps).largest == 0.0
+
+
+def _at_rest(sensing, n):
+    s = Sensors(FIELD_NED, G, 250.0, Px4Sensing(sensing))
+    rows = [s.imu(np.eye(3), np.zeros(3), np.zeros(3), 0.0) for _ in range(n)]
+    return np.array([r[0] for r in rows]), np.array([r[1] for r in rows])
+
+
+def test_imu_at_rest_has_the_sensing_models_noise_and_bias():
+    """The IMU PX4 reads is quadcog's Sensing model: at rest, over 20000 samples at 250 Hz, the
+    gyroscope's std is the MPU-6000 density 0.005 deg/s/sqrt(Hz) x sqrt(250 / 2) (white noise
+    of one-sided density d up to Nyquist), 0.0559 deg/s; the accelerometer's 400 ug/sqrt(Hz) x
+    sqrt(125), 0.0439 m/s^2; their means are the seed's constant biases (numpy's normal of
+    seed, scale 0.1 deg/s; of (seed, 1), scale 0.02 m/s^2), turned to FRD (y, z negated)."""
+    n, seed = 20000, 7
+    acc, gyro = _at_rest(Sensing(seed=seed), n)
+    gyro_std = 0.005 * math.pi / 180.0 * math.sqrt(250.0 / 2.0)
+    accel_std = 400e-6 * 9.80665 * math.sqrt(250.0 / 2.0)
+    assert gyro_std == pytest.approx(9.76e-4, rel=1e-3)
+    assert np.allclose(gyro.std(axis=0), gyro_std, rtol=0.03)     # 1/sqrt(2n) = 0.5 %
+    assert np.allclose(acc.std(axis=0), accel_std, rtol=0.03)
+    frd = np.array([1.0, -1.0, -1.0])
+    gyro_bias = np.random.default_rng(seed).normal(scale=0.1 * math.pi / 180.0, size=3) * frd
+    accel_bias = np.random.default_rng((seed, 1)).normal(scale=0.02, size=3) * frd
+    assert np.abs(gyro_bias).max() > 5 * gyro_std / math.sqrt(n)   # a bias the test can see
+    assert np.allclose(gyro.mean(axis=0), gyro_bias, atol=4 * gyro_std / math.sqrt(n))
+    assert np.allclose(acc.mean(axis=0) - (0.0, 0.0, -G), accel_bias,
+                       atol=4 * accel_std / math.sqrt(n))
+
+
+def test_imu_follows_the_scenarios_sensing_table():
+    """A [sensing] table's densities and biases reach the IMU (10x the gyro density: 10x the
+    std; no noise: the truth, no bias); the magnetometer and barometer keep their noise."""
+    acc, gyro = _at_rest(Sensing(seed=2, gyro_density=0.05 * math.pi / 180.0, gyro_bias=0.0,
+                                 accel_bias=0.0), 5000)
+    assert np.allclose(gyro.std(axis=0), 0.05 * math.pi / 180 * math.sqrt(125.0), rtol=0.05)
+    quiet = Sensors(FIELD_NED, G, 250.0, Px4Sensing(Sensing(noise=False)))
+    rows = [quiet.imu(np.eye(3), np.zeros(3), np.zeros(3), 0.0) for _ in range(200)]
+    assert all(r[0] == (0.0, 0.0, -G) and r[1] == (0.0, 0.0, 0.0) for r in rows)
+    assert np.std([r[3] for r in rows]) > 0.005                   # PX4's barometer: not stale
+
+
+def test_px4_sensing_refuses_a_bad_imu_or_noise():
+    from quadcog.errors import Px4Error
+    with pytest.raises(Px4Error, match="Px4Sensing.imu"):
+        Px4Sensing(imu=3)
+    with pytest.raises(Px4Error, match="Px4Sensing.baro"):
+        Px4Sensing(baro=-1.0)

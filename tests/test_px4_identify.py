@@ -22,10 +22,9 @@ def flights():
     if built is None:
         pytest.skip("PX4 is not built in quadcog's cache; set-up: make px4-build")
     from quadcog.px4 import fly, scenario_path
-    from quadcog.px4.sensors import Px4Sensing
     short = ("duration=22.0", "payload[0].t=10.0")
     run = lambda extra, seed: fly(scenario_path("px4-payload"), allow_build=False,  # noqa: E731
-                                  overrides=short + extra, sensing=Px4Sensing(seed=seed))
+                                  overrides=short + extra + (f"sensing.seed={seed}",))
     return run((), 1), run(("payload=[]",), 2), run(("payload=[]",), 3)
 
 

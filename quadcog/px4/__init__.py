@@ -8,7 +8,8 @@ __all__ = ["fly", "Px4Flight", "Mission", "Waypoint", "mission_of", "write_px4_o
 
 
 def scenario_path(name: str) -> str:
-    """A PX4 scenario shipped with quadcog.px4 (``px4-hover``, ``px4-payload``), or ``name``.
+    """A PX4 scenario shipped with quadcog.px4 (``px4-hover``, ``px4-payload``,
+    ``px4-mission``, ``px4-cog-step``), or ``name``.
 
     Parameters
     ----------

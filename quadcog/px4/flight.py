@@ -41,6 +41,7 @@ from quadcog.sim.plant import PI_INDEX, Actuation, body_mass_and_cog
 from quadcog.sim.prepare import as_cog_profile, as_payload_profile, check_cog_changes, check_payload_events
 from quadcog.sim.result import SimulationResult, flight_metrics, position_errors
 from quadcog.sim.schedule import Schedule
+from quadcog.sim.sensing import Sensing
 from quadcog.trajectories.analytic import Hover
 from quadcog.trajectories.waypoints import MinimumSnap
 from quadcog.validate import positive, require_extra
@@ -200,7 +201,8 @@ def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str]
     mission : Mission, optional
         Instead of the scenario's (``mission_of``).
     sensing : Px4Sensing, optional
-        The sensors' noise (default ``Px4Sensing()``).
+        The sensors (``quadcog.px4.sensors``); default ``Px4Sensing(imu)`` with the
+        scenario's ``[sensing]`` table as the IMU, or ``Sensing()`` without one.
     max_time : float, optional
         Longest flight in PX4's time (s); default arm_timeout + the scenario's duration +
         the mission's travel + 60 s.
@@ -266,6 +268,10 @@ def fly(scenario: Scenario | str | os.PathLike[str], px4: str | os.PathLike[str]
     schedule = Schedule.build(Hover(), max_time, dt, cog, scenario.disturbances,
                               payloads=loads)
     actuation = Actuation.of(vehicle, scenario.truth)
+    if sensing is None:
+        sensing = Px4Sensing(scenario.sensing or Sensing())
+    elif not isinstance(sensing, Px4Sensing):
+        raise Px4Error(f"sensing: expected a quadcog.px4.sensors.Px4Sensing, got {sensing!r}")
     sensors = Sensors(earth_field(found.source, HOME[0], HOME[1]), float(P[IDX["g"]]),
                       1.0 / PERIOD, sensing)
 

@@ -124,7 +124,7 @@ def identify_flight(flight: Any, baseline: Any, settle: float = 5.0,
     log = read_log(flight.ulog)
     start_us = float(log.meta.get("start_timestamp_us", 0.0))
     events = sorted([e.t for e in flight.scenario.payloads]
-                    + [float(c[0]) for c in getattr(flight.scenario.cog, "changes", ())])
+                    + [float(c.t) for c in getattr(flight.scenario.cog, "changes", ())])
     t0 = float(log.t[0])
     if events and flight.recording.armed_at is not None:
         # the plant's time t is PX4's time stamp (t + one period) in us; the log counts from

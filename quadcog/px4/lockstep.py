@@ -9,7 +9,9 @@ Each lockstep period T (4 ms: PX4's SITL IMU rate, ``IMU_INTEG_RATE`` 250 Hz) th
    controllers up to it;
 4. maps the motor outputs to rotor thrusts (``quadcog.px4.airframe.RotorMap``) and steps the
    compiled truth plant (``quadcog.sim.plant``: RK4, the schedule's CoG profile and payloads,
-   motor lag, drag, rotor limits) through the period in steps of the scenario's dt.
+   motor lag, drag, rotor limits) through the period in steps of the scenario's dt; with the
+   sensing model's ``delay`` (``Sensing.delay``) on the answer of the period before: the input
+   computed from the measurement of period j-1 acts in period j.
 
 The ground: the plant has none, so the loop holds the vehicle at rest on the ground plane
 z = 0 (level, its heading kept) while the rotors' thrust is below its weight, and puts it
@@ -333,6 +335,8 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
     period_us = int(round(period * 1e6))
     gps_every = int(round(1.0 / (GPS_RATE * period)))
     answered = False
+    delay = bool(sensors.sensing.imu.delay)
+    held = np.zeros(4)          # with delay: PX4's answer of the period before
     wall0 = sim0 = 0.0
     cpu0 = (0.0, 0.0)
     j = 0                       # lockstep periods done
@@ -387,6 +391,8 @@ def run_lockstep(px4: Px4Process, server: socket.socket, mission: MissionLink,
             _, _, controls, mode = link.latest
             armed = bool(mode & _ARMED_FLAG)
             thrust_cmd = rotors.thrust(controls, armed)
+            if delay:
+                thrust_cmd, held = held, thrust_cmd
             U = mixer @ thrust_cmd
             pU[:] = U
             # 4. the plant through the period (the schedule's row of its start held; its

@@ -5,8 +5,7 @@ Everything PX4 receives is in its frames (FRD body, NED ground: ``quadcog.px4.fr
 - accelerometer: the specific force at the body origin O, ``R^T (a_O - g)`` with ``g`` =
   (0, 0, -g) in the z-up ground frame (a level vehicle at rest reads +g along its z axis,
   -g along FRD's z), m/s^2;
-- gyroscope: the body rates, rad/s (quadcog's gyroscope noise density,
-  ``quadcog.sim.sensing.GYRO_NOISE_DENSITY``, and the MPU-6000's accelerometer density);
+- gyroscope: the body rates, rad/s;
 - magnetometer: the Earth's field at the home position from PX4's own World Magnetic Model
   tables (``src/lib/world_magnetic_model/geo_magnetic_tables.hpp`` of the tree: declination,
   inclination, strength, interpolated as PX4 does), in body axes, gauss. A field that
@@ -15,8 +14,18 @@ Everything PX4 receives is in its frames (FRD body, NED ground: ``quadcog.px4.fr
 - GPS: latitude, longitude (a flat Earth about the home position, radius 6371 km),
   altitude, NED velocity, at ``GPS_RATE``.
 
-Each sensor has white noise of the size a real one has (``Px4Sensing``): PX4 calls a
-barometer or magnetometer whose reading does not change stale and refuses to arm.
+The IMU is quadcog's sensing model (``quadcog.sim.sensing.Sensing``, the scenario's
+``[sensing]`` table): white noise of its densities per sample at the IMU rate
+(``Sensing.imu_sigmas``: ``density sqrt(rate / 2)``) and its constant biases of the seed
+(``Sensing.bias`` on the gyroscope, ``Sensing.accel_offset`` on the accelerometer), both in
+quadcog's body axes before the turn to FRD; without ``noise`` the IMU reads the truth. Its
+``position``, ``velocity`` and ``attitude`` accuracies are not used: PX4 estimates those
+itself (EKF2) from these sensors. Its ``delay`` holds PX4's answer one lockstep period
+(``quadcog.px4.lockstep``).
+
+The magnetometer, the barometer and the GPS are PX4's additions (``Px4Sensing``), always
+noisy: PX4 calls a barometer or magnetometer whose reading does not change stale and refuses
+to arm.
 """
 from dataclasses import dataclass
 import math
@@ -28,32 +37,28 @@ import numpy.typing as npt
 
 from quadcog.errors import Px4Error
 from quadcog.px4.frames import FLIP
-from quadcog.sim.sensing import GYRO_NOISE_DENSITY
+from quadcog.sim.sensing import Sensing
 
-__all__ = ["HOME", "EARTH_RADIUS", "GPS_RATE", "ACCEL_NOISE_DENSITY", "Px4Sensing",
-           "earth_field", "isa_pressure", "Sensors"]
+__all__ = ["HOME", "EARTH_RADIUS", "GPS_RATE", "Px4Sensing", "earth_field", "isa_pressure",
+           "Sensors"]
 
 # PX4's default SITL home (SIH_LOC_LAT0, SIH_LOC_LON0; Zurich): lat, lon (deg), altitude (m)
 HOME = (47.397742, 8.545594, 488.0)
 EARTH_RADIUS = 6371000.0          # m, mean (PX4's CONSTANTS_RADIUS_OF_EARTH)
 GPS_RATE = 10.0                    # Hz
-# MPU-6000 accelerometer noise density, 400 ug/sqrt(Hz) (PS-MPU-6000A-00, table 6.2)
-ACCEL_NOISE_DENSITY = 400e-6 * 9.80665
 _TABLES = "src/lib/world_magnetic_model/geo_magnetic_tables.hpp"
 
 
 @dataclass(frozen=True)
 class Px4Sensing:
-    """Noise of the simulated sensors, one standard deviation per axis and sample.
+    """The sensors of a PX4 flight: quadcog's IMU model and PX4's additions (GPS, barometer,
+    magnetometer), one standard deviation per axis and sample.
 
     Parameters
     ----------
-    seed : int
-        Seed of the noise.
-    accel_density : float
-        Accelerometer noise density (m/s^2/sqrt(Hz)); per sample ``density sqrt(rate / 2)``.
-    gyro_density : float
-        Gyroscope noise density (rad/s/sqrt(Hz)).
+    imu : Sensing
+        The accelerometer and gyroscope (noise densities, biases, seed, delay: see the module
+        docstring); the seed also seeds the additions' noise.
     mag : float
         Magnetometer noise (gauss); 0.002 G is a few tenths of a degree of heading.
     baro : float
@@ -62,14 +67,31 @@ class Px4Sensing:
         GPS position noise (m), horizontal and vertical.
     gps_velocity : float
         GPS velocity noise (m/s).
+
+    Raises
+    ------
+    quadcog.Px4Error
+        ``imu`` not a Sensing, or a noise not a number >= 0.
     """
-    seed: int = 1
-    accel_density: float = ACCEL_NOISE_DENSITY
-    gyro_density: float = GYRO_NOISE_DENSITY
+    imu: Sensing = Sensing()
     mag: float = 0.002
     baro: float = 0.01
     gps_position: float = 0.05
     gps_velocity: float = 0.02
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.imu, Sensing):
+            raise Px4Error(f"Px4Sensing.imu must be a quadcog Sensing, got {self.imu!r}")
+        for name in ("mag", "baro", "gps_position", "gps_velocity"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v >= 0 \
+                    or not math.isfinite(v):
+                raise Px4Error(f"Px4Sensing.{name} must be a number >= 0, got {v!r}")
+
+    @property
+    def seed(self) -> int:
+        """The noise's seed (``imu.seed``)."""
+        return int(self.imu.seed)
 
 
 def _table(text: str, name: str) -> tuple[npt.NDArray[np.float64], float]:
@@ -170,7 +192,7 @@ class Sensors:
     rate : float
         IMU rate (Hz): the rate HIL_SENSOR is sent at, which sets the per-sample noise.
     sensing : Px4Sensing, optional
-        The noise (default ``Px4Sensing()``).
+        The sensors' models (default ``Px4Sensing()``).
     home : tuple of 3 float
         lat, lon (deg), altitude (m) of the plant's origin.
     """
@@ -185,10 +207,14 @@ class Sensors:
         self.g = float(g)
         self.home = home
         self._rng = np.random.default_rng(self.sensing.seed)
-        s = self.sensing
-        self._imu_std = np.array([s.accel_density * math.sqrt(rate / 2)] * 3
-                                 + [s.gyro_density * math.sqrt(rate / 2)] * 3
-                                 + [s.mag] * 3 + [s.baro])
+        s, imu = self.sensing, self.sensing.imu
+        accel_std, gyro_std = imu.imu_sigmas(1.0 / rate) if imu.noise else (0.0, 0.0)
+        self._imu_std = np.array([accel_std] * 3 + [gyro_std] * 3 + [s.mag] * 3 + [s.baro])
+        # the constant biases, drawn in quadcog's body axes (FLU), turned to FRD and added to
+        # each block of noise (no cost per sample)
+        self.accel_bias = imu.accel_offset() if imu.noise else np.zeros(3)
+        self.gyro_bias = imu.bias() if imu.noise else np.zeros(3)
+        self._imu_offset = np.r_[self.accel_bias * FLIP, self.gyro_bias * FLIP, np.zeros(4)]
         self._gps_std = np.array([s.gps_position] * 3 + [s.gps_velocity] * 3)
         self._imu_noise = np.empty((0, 10))
         self._gps_noise = np.empty((0, 6))
@@ -198,7 +224,8 @@ class Sensors:
 
     def _imu(self) -> npt.NDArray[np.float64]:
         if self._k >= len(self._imu_noise):
-            self._imu_noise = self._rng.standard_normal((self._BLOCK, 10)) * self._imu_std
+            self._imu_noise = (self._rng.standard_normal((self._BLOCK, 10)) * self._imu_std
+                               + self._imu_offset)
             self._k = 0
         self._k += 1
         return self._imu_noise[self._k - 1]

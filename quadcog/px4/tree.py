@@ -33,6 +33,8 @@ import tarfile
 import time
 from typing import Iterator
 
+from quadcog.codegen.compiler import file_digest
+from quadcog.codegen.third_party import locked
 from quadcog.errors import MissingDependencyError, Px4Error
 from quadcog.paths import cache_dir
 
@@ -165,14 +167,6 @@ def find_source(tree: str | os.PathLike[str] | None = None) -> Path:
                    f"PX4-Autopilot source folder or a .tar.xz of one")
 
 
-def _sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def _tree_files(root: Path) -> Iterator[Path]:
     for folder, dirs, files in os.walk(root):
         here = Path(folder)
@@ -196,7 +190,7 @@ def tree_key(source: Path) -> str:
         The key.
     """
     if source.is_file():
-        return _sha256_file(source)[:16]
+        return file_digest(source)[:16]
     h = hashlib.sha256()
     for path in _tree_files(source):
         rel = path.relative_to(source).as_posix().encode()
@@ -204,7 +198,7 @@ def tree_key(source: Path) -> str:
         if path.is_symlink():
             h.update(b"L" + os.readlink(path).encode())
         elif path.is_file():
-            h.update(b"F" + _sha256_file(path).encode())
+            h.update(b"F" + file_digest(path).encode())
     return "tree-" + h.hexdigest()[:16]
 
 
@@ -256,18 +250,6 @@ def cached_build(tree: str | os.PathLike[str] | None = None) -> Px4Build | None:
 def _missing_modules() -> list[str]:
     return [pkg for module, pkg in BUILD_MODULES.items()
             if importlib.util.find_spec(module) is None]
-
-
-@contextlib.contextmanager
-def _locked(folder: Path) -> Iterator[None]:
-    import fcntl
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / "lock", "w") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)      # another build of this tree: wait for it
-        try:
-            yield
-        finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _unpack(source: Path, folder: Path) -> Path:
@@ -379,7 +361,8 @@ def build(tree: str | os.PathLike[str] | None = None, jobs: int | None = None,
     source = find_source(tree)
     key = tree_key(source)
     folder = build_dir(key)
-    with _locked(folder):
+    folder.mkdir(parents=True, exist_ok=True)
+    with locked(folder / "lock"):           # another build of this tree: wait for it
         done = Px4Build(key, folder / "PX4-Autopilot", str(source))
         if (folder / "built.json").is_file() and done.binary.is_file():
             return done

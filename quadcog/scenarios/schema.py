@@ -42,7 +42,8 @@ STACK = {"name": str, "controller": str, "propellers": str, "battery_voltage": N
 STACKS = ("crazyflie",)
 TRUTH = {"parallel_axis": bool, "rotor_saturation": bool, "motor_lag": bool, "quaternion": bool}
 SENSING = {"noise": bool, "delay": bool, "seed": NUMBER, "position": NUMBER, "velocity": NUMBER,
-           "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER}
+           "attitude": NUMBER, "gyro_density": NUMBER, "gyro_bias": NUMBER,
+           "accel_density": NUMBER, "accel_bias": NUMBER}
 LIMITS = {"max_position_error": NUMBER, "max_tilt_deg": NUMBER}
 COG = {"t": NUMBER, "r": "vec3", "ramp": NUMBER}
 PAYLOAD = {"t": NUMBER, "action": str, "name": str, "mass": NUMBER, "position": "vec3",

@@ -27,8 +27,17 @@ Default accuracies (``Sensing()``), one standard deviation per axis:
   bias calibration (this project's assumption; the MPU-6000's uncalibrated zero-rate offset is
   +-20 deg/s).
 
-No law here needs an accelerometer: the composite law's filtered identity replaces the
-acceleration by the derivative of the filtered momentum.
+The accelerometer (``accel_density``, ``accel_bias``): 400 ug/sqrt(Hz), the MPU-6000's
+(table 6.2 of the same specification), about 0.044 m/s^2 per sample at 250 Hz, and a constant
+bias of 0.02 m/s^2 (2 mg) per axis drawn once per seed, the residual after calibration (this
+project's assumption; uncalibrated, +-50 mg). No law here needs an accelerometer (the
+composite law's filtered identity replaces the acceleration by the derivative of the filtered
+momentum): these two are the IMU that a flight stack's own estimator reads
+(``quadcog.px4.sensors``: PX4's EKF2).
+
+Per sample, a white noise of density ``d`` sampled every ``dt`` (one-sided density, the
+bandwidth up to Nyquist, ``1 / (2 dt)``) has the standard deviation ``d sqrt(1 / (2 dt))``
+(``per_sample``).
 """
 from dataclasses import dataclass
 
@@ -40,11 +49,33 @@ from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["DEG", "GYRO_NOISE_DENSITY", "Sensing", "gaussian", "Sensed"]
+__all__ = ["DEG", "GYRO_NOISE_DENSITY", "ACCEL_NOISE_DENSITY", "ACCEL_BIAS", "per_sample",
+           "Sensing", "gaussian", "Sensed"]
 
 DEG = np.pi / 180.0
 GYRO_NOISE_DENSITY = 0.005 * DEG          # rad/s/sqrt(Hz), MPU-6000
+ACCEL_NOISE_DENSITY = 400e-6 * 9.80665    # m/s^2/sqrt(Hz), MPU-6000 (400 ug/sqrt(Hz))
+ACCEL_BIAS = 0.02                          # m/s^2 per axis, residual after calibration
 MAX_SEED = 2**32 - 1                       # seeds: 0 .. 2^32 - 1
+
+
+def per_sample(density: float, dt: float) -> float:
+    """The per-sample standard deviation of white noise of one-sided density ``density``
+    sampled every ``dt``: ``density sqrt(1 / (2 dt))``.
+
+    Parameters
+    ----------
+    density : float
+        Noise density (unit/sqrt(Hz)).
+    dt : float
+        Sample period (s), > 0.
+
+    Returns
+    -------
+    float
+        One standard deviation per sample (unit).
+    """
+    return float(density) * float(np.sqrt(1.0 / (2.0 * dt)))
 
 
 @dataclass(frozen=True)
@@ -70,6 +101,11 @@ class Sensing:
         gyro_density * sqrt(1 / (2 dt)).
     gyro_bias : float
         Standard deviation of the constant gyroscope bias per axis (rad/s).
+    accel_density : float
+        Accelerometer noise density (m/s^2/sqrt(Hz)); only a flight stack's IMU reads it
+        (``quadcog.px4``).
+    accel_bias : float
+        Standard deviation of the constant accelerometer bias per axis (m/s^2); the same.
 
     Raises
     ------
@@ -84,6 +120,8 @@ class Sensing:
     attitude: float = 0.2 * DEG
     gyro_density: float = GYRO_NOISE_DENSITY
     gyro_bias: float = 0.1 * DEG
+    accel_density: float = ACCEL_NOISE_DENSITY
+    accel_bias: float = ACCEL_BIAS
 
     def __post_init__(self) -> None:
         for name in ("noise", "delay"):
@@ -95,7 +133,8 @@ class Sensing:
         if not 0 <= self.seed <= MAX_SEED:      # numpy's seeding refuses < 0; the noise
             raise InputError(f"Sensing.seed must be a whole number 0..{MAX_SEED}, got "
                              f"{self.seed!r}")  # hash needs 0.618 seed well inside floats
-        for name in ("position", "velocity", "attitude", "gyro_density", "gyro_bias"):
+        for name in ("position", "velocity", "attitude", "gyro_density", "gyro_bias",
+                     "accel_density", "accel_bias"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) \
                     or v < 0:
@@ -114,8 +153,25 @@ class Sensing:
         (12,) numpy.ndarray
             In the state's order [m, rad, m/s, rad/s].
         """
-        gyro = self.gyro_density * np.sqrt(1.0 / (2.0 * dt))
+        gyro = per_sample(self.gyro_density, dt)
         return np.repeat([self.position, self.attitude, self.velocity, gyro], 3)
+
+    def imu_sigmas(self, dt: float) -> tuple[float, float]:
+        """Per-sample standard deviations of an IMU sampled every ``dt`` (``per_sample``).
+
+        Parameters
+        ----------
+        dt : float
+            The IMU's sample period (s).
+
+        Returns
+        -------
+        accel : float
+            Accelerometer, per axis (m/s^2).
+        gyro : float
+            Gyroscope, per axis (rad/s): the body-rate entry of ``sigmas``.
+        """
+        return per_sample(self.accel_density, dt), per_sample(self.gyro_density, dt)
 
     def bias(self) -> npt.NDArray[np.float64]:
         """The constant gyroscope bias of this seed.
@@ -126,6 +182,16 @@ class Sensing:
             The bias of the body rates (rad/s).
         """
         return np.random.default_rng(self.seed).normal(scale=self.gyro_bias, size=3)
+
+    def accel_offset(self) -> npt.NDArray[np.float64]:
+        """The constant accelerometer bias of this seed (independent of ``bias``).
+
+        Returns
+        -------
+        (3,) numpy.ndarray
+            The bias of the specific force, body axes (m/s^2).
+        """
+        return np.random.default_rng((self.seed, 1)).normal(scale=self.accel_bias, size=3)
 
 
 def _uniform(t: ca.SX, channel: int, seed: int) -> ca.SX:
