@@ -99,7 +99,7 @@ def _general_inertia_dynamics(R, Q):
     """
     body = rigid_body(R, sym.I_O_full)
     placeholders = _placeholders(body)
-    Cnu = velocity_terms(body.I_O)
+    Cnu = velocity_terms(body.M)
     factored_check(Cnu, body.C * sym.nu, "C(nu) nu")
     tau_ext = sp.Matrix.vstack(R.T * sym.wrench[:3, :], sym.wrench[3:, :])
     rhs = body.B_u * sym.U + tau_ext - Cnu - body.D * sym.nu - body.g_G

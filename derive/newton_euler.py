@@ -64,17 +64,17 @@ def newton_euler_lhs(I_O):
     return sp.Matrix.vstack(force, moment).applyfunc(sp.expand)
 
 
-def velocity_terms(I_O):
-    """C(nu) nu as Newton-Euler writes it, in cross products and not expanded:
-    [m nu2 x v_G; nu2 x h_O + nu1 x (m v_G)] with v_G = nu1 + nu2 x r_G and
-    h_O = I_O nu2 + m r_G x nu1 (``newton_euler_lhs``'s terms without nu_dot).
+def velocity_terms(M):
+    """C(nu) nu in cross products, not expanded: with the momenta a = M11 nu1 + M12 nu2
+    (= m v_G) and b = M21 nu1 + M22 nu2 (= h_O, about O), C(nu) nu = [nu2 x a;
+    nu2 x b + nu1 x a] (Fossen's theorem, as ``coriolis_from_mass_matrix`` builds C).
 
     The same polynomial as ``C * nu`` (``factored_check`` proves it) in about a third of
-    the operations, which is what the exported truth model evaluates four times per RK4 step.
+    the operations: the simulators evaluate it four times per RK4 step, the laws once.
     """
-    v_G = nu1 + nu2.cross(r_G)
-    h_O = I_O * nu2 + m * r_G.cross(nu1)
-    return sp.Matrix.vstack(m * nu2.cross(v_G), nu2.cross(h_O) + nu1.cross(m * v_G))
+    a = M[:3, :3] * nu1 + M[:3, 3:] * nu2
+    b = M[3:, :3] * nu1 + M[3:, 3:] * nu2
+    return sp.Matrix.vstack(nu2.cross(a), nu2.cross(b) + nu1.cross(a))
 
 
 def factored_check(factored, expanded, what):
