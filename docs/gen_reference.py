@@ -407,7 +407,7 @@ def cli_page() -> str:
     sub = next(a for a in ap._actions if isinstance(a, argparse._SubParsersAction))
     parts = ["# The `quadcog` command\n",
              "Generated from the parser (`quadcog.cli.parser()`) at every build: what "
-             "`quadcog COMMAND --help` prints.\n", "```text\n" + _help(ap) + "```\n"]
+             "`quadcog COMMAND --help` prints (at 88 columns).\n", "```text\n" + _help(ap) + "```\n"]
     for name, p in sub.choices.items():
         parts += [f"## `quadcog {name}`\n", "```text\n" + _help(p) + "```\n"]
     return "\n".join(parts)
@@ -416,7 +416,7 @@ def cli_page() -> str:
 def _help(p: argparse.ArgumentParser) -> str:
     import os
     old = os.environ.get("COLUMNS")
-    os.environ["COLUMNS"] = "96"                # the same width on every machine
+    os.environ["COLUMNS"] = "90"     # the same width on every machine; argparse wraps at 88
     try:
         return p.format_help()
     finally:
