@@ -323,3 +323,90 @@ def test_scenario_key_meanings_are_their_own():
         assert not [m for m in meanings if re.match(r"(float|int|str|bool|sequence|tuple)\b"
                                                      r"[^.]*(, optional|\))", m)], table[:60]
         assert len(set(meanings)) == len(meanings), table.splitlines()[0]
+
+
+# -- tables fit the column -------------------------------------------------------------------
+# At 1280 px (and wider: Material's grid stops at 61rem) the content column is 688 px. A
+# table is as narrow as the sum of its columns' longest unbreakable words plus the cells'
+# padding (docs/stylesheets/extra.css: no min-width on the header cells, whose words may
+# break anywhere; code in a cell breaks anywhere; a cell's text also after "_", between
+# CamelCase humps (docs/gen_reference.py breakable_cells) and after a hyphen before a letter).
+# TABLE_CHAR: the advance of a character of DejaVu Sans (the fallback of a machine without
+# Roboto, wider than Roboto, Helvetica or Arial) at the tables' 12 px, digits (0.64 em) and
+# lowercase (0.55 em) mixed; TABLE_PADDING: 2 x 0.9375 em of a cell. Calibrated against
+# headless Chromium on every built page (no table wider than its column there), the
+# performance page's main table before issue 32's fix estimates over the column.
+CONTENT_PX, TABLE_CHAR, TABLE_PADDING = 688, 6.8, 23
+
+
+def _table_cells(line):
+    return [c.strip() for c in re.split(r"(?<!\\)\|", line.strip())[1:-1]]
+
+
+def _unbreakable(cell, gen):
+    cell = re.sub(r"`[^`]*`", " ", cell)                    # code in a cell breaks anywhere
+    cell = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", cell).replace("**", "").replace("\\|", "|")
+    html = gen.breakable_cells(f"<td>{cell}</td>")[len("<td>"):-len("</td>")]
+    return [w for part in html.split("<wbr>") for word in part.split()
+            for w in re.split(r"(?<=-)(?=[A-Za-z])", word)]
+
+
+def _tables(text):
+    found = []
+    for line in _prose(text).splitlines() + [""]:
+        if line.startswith("|"):
+            found.append(line)
+        elif found:
+            yield found
+            found = []
+
+
+def test_tables_fit_the_column():
+    """/performance/'s main table was 888 px in the column, its note column off-screen: every
+    table of the written and the generated pages fits CONTENT_PX (bench/publish.py puts a
+    bench table's notes below it)."""
+    gen = _module("gen_reference", DOCS / "gen_reference.py")
+    texts = {p.relative_to(DOCS).as_posix(): p.read_text() for p in _pages()} | gen.pages()
+    wide = [f"{name}: {_narrowest_px(t, gen):.0f} px: {t[0][:70]}"
+            for name, text in texts.items() for t in _tables(text)
+            if _narrowest_px(t, gen) > CONTENT_PX]
+    assert not wide, "\n".join(wide)
+    css = (DOCS / "stylesheets" / "extra.css").read_text()
+    assert re.search(r"table:not\(\[class\]\) th \{\s*min-width: 0;\s*overflow-wrap: anywhere;", css)
+    assert "font-size: 0.6rem" in css and "td code {\n  overflow-wrap: anywhere;" in css
+    assert "stylesheets/extra.css" in (ROOT / "mkdocs.yml").read_text()
+
+
+def _narrowest_px(table, gen, char=TABLE_CHAR, least=0.0):
+    """The narrowest width (px) a Markdown table (its lines) can take on the site; ``char``
+    and ``least`` (a column's minimum) for other styles than extra.css's."""
+    rows = [_table_cells(line) for line in table]
+    width = 0.0
+    for i in range(len(rows[0])):
+        words = [w for row in rows[2:] if i < len(row) for w in _unbreakable(row[i], gen)]
+        width += max(max((len(w) for w in words), default=0) * char + TABLE_PADDING, least)
+    return width
+
+
+def test_the_estimate_finds_the_table_the_reader_found():
+    """The bench table as the command writes it (its note column; the tracked
+    bench/results-avx512.md) in Material's own style (12.8 px, 100 px at least per column)
+    estimates over the column, as the reader measured (888 px); as the page shows it
+    (bench/publish.py page_table: notes below) in extra.css's style it fits."""
+    gen = _module("gen_reference", DOCS / "gen_reference.py")
+    pub = _module("publish", ROOT / "bench" / "publish.py")
+    raw = pub.table_of((ROOT / "bench" / "results-avx512.md").read_text()).splitlines()
+    assert raw[0].rstrip(" |").endswith("note")
+    assert _narrowest_px(raw, gen, char=TABLE_CHAR * 0.64 / 0.6, least=100) > CONTENT_PX
+    shown = pub.page_table("\n".join(raw)).split("\n\n")[0].splitlines()
+    assert _narrowest_px(shown, gen) <= CONTENT_PX
+
+
+def test_code_font_fits_88_columns_in_the_column():
+    """extra.css's code size: 88 columns of DejaVu Sans Mono (0.602 em, the widest common
+    monospace) plus Material's padding (1.1765 em a side) fit CONTENT_PX; Chromium measured
+    Material's default (0.85 em of 16 px) at 752 px for 88 columns, 64 px over."""
+    css = (DOCS / "stylesheets" / "extra.css").read_text()
+    em = float(re.search(r"pre > code \{\s*font-size: ([\d.]+)em;", css).group(1))
+    px = 16 * em
+    assert CODE_COLUMNS * 0.602 * px + 2 * 1.1765 * px <= CONTENT_PX

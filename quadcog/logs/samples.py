@@ -30,10 +30,6 @@ _NOT_LOGS = {"README.md", "LICENSE"}
 def sample_names() -> list[str]:
     """The names of the shipped sample logs, sorted.
 
-    Parameters
-    ----------
-    None
-
     Returns
     -------
     list of str
