@@ -115,8 +115,8 @@ def _cells(line):
 
 def page_table(table):
     """``table`` as a page shows it: a last column named ``note`` keeps only each note's
-    number (``[N]``; one number for one text), and the notes follow the table as a numbered
-    list (``N. text``)."""
+    number (``[N]``, under the header ``[n]``; one number for one text), and the notes follow
+    the table as a numbered list (``N. text``)."""
     lines = table.splitlines()
     if len(lines) < 3 or _cells(lines[0])[-1].lower() not in NOTE_HEADERS:
         return table
@@ -126,7 +126,7 @@ def page_table(table):
         if k == 1:
             last = cells[-1]
         elif k == 0:
-            last = "note"
+            last = "[n]"          # as narrow as the numbers: a bold "note" would break
         elif cells[-1]:
             if cells[-1] not in notes:
                 notes.append(cells[-1])

@@ -192,6 +192,12 @@ def test_site_settings_a_reader_needs():
         assert setting in text, setting
     start = (DOCS / "getting-started.md").read_text()
     assert "python -m http.server -d out/docs" in start and "mkdocs serve" in start
+    # no public address of the repository exists: none is named by default, and the page says
+    # where the source is and how a published copy sets its address
+    assert "repo_url: !ENV [QUADCOG_REPO_URL, null]" in text
+    assert "QUADCOG_REPO_URL=" in start and "built from the `docs/` folder" in start
+    for page in [ROOT / "README.md", ROOT / "CITATION.cff", *_pages()]:
+        assert not re.search(r"github\.com/[\w-]+/quadcog", page.read_text()), page
 
 
 def test_shipped_texts_agree_on_the_number_of_laws():
@@ -410,3 +416,11 @@ def test_code_font_fits_88_columns_in_the_column():
     em = float(re.search(r"pre > code \{\s*font-size: ([\d.]+)em;", css).group(1))
     px = 16 * em
     assert CODE_COLUMNS * 0.602 * px + 2 * 1.1765 * px <= CONTENT_PX
+
+
+def test_headings_are_not_in_the_first_person():
+    """/identify/ had "What does not fit, and why I think so" as a heading."""
+    found = [f"{p.relative_to(DOCS)}: {line}" for p in _pages()
+             for line in _prose(p.read_text()).splitlines()
+             if line.startswith("#") and re.search(r"\b(I|we|my|our|us|me)\b", line, re.I)]
+    assert not found, "\n".join(found)

@@ -42,7 +42,7 @@ def test_page_table_moves_the_notes_below_the_table():
     table = ("| measurement | value | note |\n|---|---|---|\n| a | 1 | long text, a \\| pipe |\n"
              "| b | 2 |  |\n| c | 3 | other |\n| d | 4 | long text, a \\| pipe |")
     assert pub.page_table(table) == (
-        "| measurement | value | note |\n| --- | --- | --- |\n| a | 1 | [1] |\n| b | 2 |  |\n"
+        "| measurement | value | [n] |\n| --- | --- | --- |\n| a | 1 | [1] |\n| b | 2 |  |\n"
         "| c | 3 | [2] |\n| d | 4 | [1] |\n\nNotes:\n\n1. long text, a \\| pipe\n2. other")
     plain = "| a | b |\n|---|---|\n| 1 | 2 |"
     assert pub.page_table(plain) == plain
