@@ -103,6 +103,41 @@ def table_of(text):
     return "\n".join(lines)
 
 
+# The last column of a bench table, when it is named so, is shown as numbered notes under the
+# table: in the page's column (720 px at 1280 px) the long notes pushed the table to 888 px,
+# the notes off-screen (issue 32). The file a command wrote keeps its column.
+NOTE_HEADERS = ("note", "notes")
+
+
+def _cells(line):
+    return [c.strip() for c in re.split(r"(?<!\\)\|", line.strip())[1:-1]]
+
+
+def page_table(table):
+    """``table`` as a page shows it: a last column named ``note`` keeps only each note's
+    number (``[N]``, under the header ``[n]``; one number for one text), and the notes follow
+    the table as a numbered list (``N. text``)."""
+    lines = table.splitlines()
+    if len(lines) < 3 or _cells(lines[0])[-1].lower() not in NOTE_HEADERS:
+        return table
+    rows, notes = [], []
+    for k, line in enumerate(lines):
+        cells = _cells(line)
+        if k == 1:
+            last = cells[-1]
+        elif k == 0:
+            last = "[n]"          # as narrow as the numbers: a bold "note" would break
+        elif cells[-1]:
+            if cells[-1] not in notes:
+                notes.append(cells[-1])
+            last = f"[{notes.index(cells[-1]) + 1}]"
+        else:
+            last = ""
+        rows.append("| " + " | ".join(cells[:-1] + [last]) + " |")
+    listed = "\n".join(f"{n}. {text}" for n, text in enumerate(notes, 1))
+    return "\n".join(rows) + ("\n\nNotes:\n\n" + listed if notes else "")
+
+
 def block(readme_text, name):
     """The text between the BEGIN/END markers of ``name`` in a page (stripped)."""
     mo = re.search(rf"<!-- BEGIN {name} -->\n(.*?)\n<!-- END {name} -->", readme_text, re.S)
@@ -175,6 +210,7 @@ def publish(name, source, readme=None):
         table = table_of(table)
         if not table:
             raise SystemExit(f"{source}: no Markdown table")
+        table = page_table(table)
         text = page.read_text()
         block(text, name)                       # the markers must exist
         text = re.sub(rf"(<!-- BEGIN {name} -->\n).*?(\n<!-- END {name} -->)",

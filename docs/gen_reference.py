@@ -43,7 +43,7 @@ from quadcog.layers import LAYERS as PACKAGE_LAYERS  # noqa: E402 (after the pat
 __all__ = ["TOP_MEANING", "COG_MEANING", "DISTURBANCE_MEANING", "LIMITS_MEANING",
            "SWEEP_MEANING", "DIMENSION_MEANING", "LAYERS", "pages", "parameter_docs",
            "scenario_keys_page", "sweep_keys_page", "cli_page", "shipped_page", "api_pages",
-           "on_files", "on_page_markdown", "equations", "figure_block", "MATHJAX",
+           "on_files", "on_page_markdown", "on_page_content", "breakable_cells", "equations", "figure_block", "MATHJAX",
            "face_page"]
 
 # The meanings of the keys that have no class of their own (the others come from docstrings).
@@ -407,7 +407,7 @@ def cli_page() -> str:
     sub = next(a for a in ap._actions if isinstance(a, argparse._SubParsersAction))
     parts = ["# The `quadcog` command\n",
              "Generated from the parser (`quadcog.cli.parser()`) at every build: what "
-             "`quadcog COMMAND --help` prints.\n", "```text\n" + _help(ap) + "```\n"]
+             "`quadcog COMMAND --help` prints (at 88 columns).\n", "```text\n" + _help(ap) + "```\n"]
     for name, p in sub.choices.items():
         parts += [f"## `quadcog {name}`\n", "```text\n" + _help(p) + "```\n"]
     return "\n".join(parts)
@@ -416,7 +416,7 @@ def cli_page() -> str:
 def _help(p: argparse.ArgumentParser) -> str:
     import os
     old = os.environ.get("COLUMNS")
-    os.environ["COLUMNS"] = "96"                # the same width on every machine
+    os.environ["COLUMNS"] = "90"     # the same width on every machine; argparse wraps at 88
     try:
         return p.format_help()
     finally:
@@ -624,6 +624,57 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
             raise KeyError(f"{page.file.src_uri}: no equation {name!r} in derive/site.py")
         return f"\n$$\n{found[name]}\n$$\n"
     return _MARKER.sub(fill, markdown)
+
+
+_CELL = re.compile(r"(<td[^>]*>)(.*?)(</td>)", re.S)
+_CAMEL = re.compile(r"(?<=[a-z]{3})(?=[A-Z][a-z]{2})")       # Euler|Singularity|Error
+
+
+def breakable_cells(html: str) -> str:
+    """``html`` with a line-break opportunity (``<wbr>``) after every underscore in the text
+    of its table cells, and between the humps of a CamelCase word: ``add_weight_W1_near_M4``,
+    ``payload_adaptive`` or ``EulerSingularityError`` may then wrap, and a
+    table of ten columns fits the page's column (688 px at 1280 px; tests/
+    test_docsite_reader.py). Tags and their attributes are left as they are.
+
+    Parameters
+    ----------
+    html : str
+        A page's HTML.
+
+    Returns
+    -------
+    str
+        The same HTML, ``<wbr>`` added in the cells' text.
+    """
+    def cell(m: re.Match[str]) -> str:
+        parts = re.split(r"(<[^>]+>)", m.group(2))
+        text = "".join(p if p.startswith("<") else _CAMEL.sub("<wbr>", p.replace("_", "_<wbr>"))
+                       for p in parts)
+        return m.group(1) + text + m.group(3)
+    return _CELL.sub(cell, html)
+
+
+def on_page_content(html: str, page: Any, config: Any, files: Any) -> str:
+    """MkDocs hook: the tables' cells made breakable after underscores (``breakable_cells``).
+
+    Parameters
+    ----------
+    html : str
+        The page's HTML.
+    page : mkdocs.structure.pages.Page
+        The page.
+    config : mkdocs.config.defaults.MkDocsConfig
+        The site's configuration.
+    files : mkdocs.structure.files.Files
+        The site's files.
+
+    Returns
+    -------
+    str
+        The HTML with ``<wbr>`` in the cells.
+    """
+    return breakable_cells(html) if "<td" in html else html
 
 
 def on_files(files: Any, config: Any) -> Any:

@@ -497,12 +497,18 @@ def add_identify(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                        description="Estimate the CoG offset r_G and the mass from flight logs "
                                    "(Crazyflie uSD, PX4 ULog, CSV, Parquet; several are "
                                    "pooled) and print them with 95 % intervals (docs/"
-                                   "identify.md).")
-    p.add_argument("logs", nargs="+", type=Path, metavar="LOG", help="flight log file(s)")
+                                   "identify.md). Try it on the flights shipped with quadcog: "
+                                   "quadcog identify sample:crazypad/motor_data/"
+                                   "add_weight_W1_near_M4 --baseline sample:crazypad/"
+                                   "motor_data/normal_flight")
+    p.add_argument("logs", nargs="+", type=Path, metavar="LOG",
+                   help="flight log file(s); sample:NAME for a log shipped with quadcog, or "
+                        "a folder of them (python -m quadcog.logs.samples lists the names; "
+                        "e.g. sample:crazypad/motor_data/normal_flight)")
     p.add_argument("--vehicle", default="crazyflie", help="vehicle preset (default crazyflie)")
     p.add_argument("--baseline", nargs="+", type=Path, default=None, metavar="LOG",
-                   help="flights of the same vehicle without the payload: report the shift "
-                        "relative to them")
+                   help="flights of the same vehicle without the payload (files or "
+                        "sample:NAME): report the shift relative to them")
     p.add_argument("--method", default="auto", help="auto (default), static or regression")
     p.add_argument("--rotor-model", default=None,
                    help="rotor model name instead of the vehicle's (bitcraze-voltage, "
@@ -527,6 +533,10 @@ def cmd_identify(args: argparse.Namespace) -> None:
     from quadcog.files import RunFiles, atomic_write, output_path, strict_json
     from quadcog.identification import identify
     from quadcog.identification.figure import plot_identification
+    from quadcog.logs.samples import resolve_log_argument
+    args.logs = [p for arg in args.logs for p in resolve_log_argument(arg)]
+    if args.baseline is not None:
+        args.baseline = [p for arg in args.baseline for p in resolve_log_argument(arg)]
     inputs = list(args.logs) + list(args.baseline or [])
     for path in inputs:
         if not path.is_file():
@@ -566,12 +576,15 @@ def add_targets(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "targets.json and targets.md.")
     p.add_argument("--out", type=Path, default=Path("out/targets"),
                    help="output folder (default: out/targets)")
+    # a metavar, the choices in the help: the usage line stays within the docs' column
     p.add_argument("--vehicles", nargs="+", choices=tuple(PRESETS), default=tuple(PRESETS),
-                   help="preset names (default: all)")
-    p.add_argument("--laws", nargs="+", choices=LAWS, default=LAWS,
-                   help="controller short names (default: all)")
-    p.add_argument("--cases", nargs="+", choices=tuple(c.name for c in CASES), default=None,
-                   help="case names (default: all)")
+                   metavar="VEHICLE",
+                   help=f"preset names: {', '.join(PRESETS)} (default: all)")
+    p.add_argument("--laws", nargs="+", choices=LAWS, default=LAWS, metavar="LAW",
+                   help=f"controller short names: {', '.join(LAWS)} (default: all)")
+    cases = tuple(c.name for c in CASES)
+    p.add_argument("--cases", nargs="+", choices=cases, default=None, metavar="CASE",
+                   help=f"case names: {', '.join(cases)} (default: all)")
     p.set_defaults(func=cmd_targets)
 
 

@@ -3,9 +3,10 @@
 Each ```python block runs alone in a fresh interpreter (so a missing import fails, as it would
 on paste), each ```sh / ```bash block in bash with ``-e`` (a failing command fails the test),
 both in an empty temporary folder where ``.venv`` points at this interpreter's environment
-(the blocks say ``.venv/bin/quadcog``, as in a checkout) and ``tests/data`` and ``generated``
-at the checkout's (read only). An HTML comment on the line before a
-block changes that:
+(the blocks say ``.venv/bin/quadcog``, as in a checkout) and ``generated`` at the checkout's
+(read only). There is no ``tests/data`` there: a block reads the sample logs that ship in the
+package (``quadcog.logs.samples``), as a reader with a wheel would. An HTML comment on the
+line before a block changes that:
 
 - ``<!-- norun: why -->``: not run (a run of minutes, a command that needs root or a board);
 - ``<!-- slow -->``: run, marked ``slow``;
@@ -32,7 +33,7 @@ FENCE = re.compile(r"^(?P<indent>[ \t]*)```(?P<lang>[\w+-]*)[^\n]*\n(?P<body>.*?
                    re.M | re.S)
 MARK = re.compile(r"<!--\s*(norun|slow|output)\b[^>]*-->\s*$")
 TIMEOUT = 300
-READ_ONLY = ("tests/data", "generated")       # linked into the block's folder
+READ_ONLY = ("generated",)       # linked into the block's folder (not tests/data: a wheel has none)
 
 
 @dataclass

@@ -104,6 +104,10 @@ def test_wheel_and_sdist_ship_the_generated_files(wheels):
     expected |= {"quadcog/_generated/manifest.json"}
     expected |= {f"quadcog/scenarios/{p.name}" for p in (ROOT / "quadcog/scenarios").glob("*")
                  if p.is_file()}
+    # the sample logs of the docs' examples (quadcog.logs.samples), with their licence
+    samples = ROOT / "quadcog" / "logs" / "sample_data"
+    expected |= {p.relative_to(ROOT).as_posix() for p in samples.rglob("*") if p.is_file()}
+    assert len([n for n in expected if "/sample_data/" in n]) == 7
     listings = []
     for wheel in wheels:
         with zipfile.ZipFile(wheel) as z:
@@ -150,4 +154,12 @@ def test_wheel_runs_a_scenario_in_a_fresh_venv(wheels, tmp_path):
     metrics = json.loads((work / "flight" / "metrics.json").read_text())
     assert metrics["name"] == "fig3a" and not metrics["diverged"], out
     assert "fig3a" in _run([venv / "bin" / "quadcog", "scenarios"], cwd=work)
+    # the docs' examples read the sample logs from the installed package, from any folder
+    found = _run([python, "-c", "from quadcog.logs import read_log; from quadcog.logs.samples "
+                  "import sample; print(read_log(sample('crazypad/motor_data/normal_flight/"
+                  "E8_log00')).source)"], cwd=work).strip()
+    assert Path(found).is_relative_to(site / "quadcog" / "logs" / "sample_data"), found
+    out = _run([venv / "bin" / "quadcog", "identify", "sample:crazypad/motor_data/normal_flight"],
+               cwd=work)
+    assert "2 log(s)" in out, out
 

@@ -20,7 +20,7 @@ def test_bench_tables_are_the_published_bench_runs():
     for isa in pub.BENCH_ISAS:
         readme = pub.PAGES[f"bench-{isa}"].read_text()
         copy = (ROOT / "bench" / f"results-{isa}.md").read_text()
-        assert pub.block(readme, f"bench-{isa}") == pub.table_of(copy)
+        assert pub.block(readme, f"bench-{isa}") == pub.page_table(pub.table_of(copy))
         assert f"kernels built for {isa}" in pub.machine_of(copy)
 
 
@@ -33,6 +33,19 @@ def test_publish_replaces_only_its_block(tmp_path):
     pub.publish("paper", src, readme)
     assert readme.read_text() == ("intro\n<!-- BEGIN paper -->\n| a | b |\n|---|---|\n| 1 | 2 |"
                                   "\n<!-- END paper -->\nrest\n")
+
+
+def test_page_table_moves_the_notes_below_the_table():
+    """A bench table's note column becomes numbers and a numbered list (one number for one
+    text); a table without a note column is left as it is."""
+    pub = _publish()
+    table = ("| measurement | value | note |\n|---|---|---|\n| a | 1 | long text, a \\| pipe |\n"
+             "| b | 2 |  |\n| c | 3 | other |\n| d | 4 | long text, a \\| pipe |")
+    assert pub.page_table(table) == (
+        "| measurement | value | [n] |\n| --- | --- | --- |\n| a | 1 | [1] |\n| b | 2 |  |\n"
+        "| c | 3 | [2] |\n| d | 4 | [1] |\n\nNotes:\n\n1. long text, a \\| pipe\n2. other")
+    plain = "| a | b |\n|---|---|\n| 1 | 2 |"
+    assert pub.page_table(plain) == plain
 
 
 def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
@@ -148,7 +161,7 @@ def test_every_published_markdown_table_is_its_tracked_copy():
         if copy.suffix != ".md" or name not in pub.PAGES:
             continue
         page = pub.PAGES[name].read_text()
-        assert pub.block(page, name) == pub.table_of(copy.read_text()), name
+        assert pub.block(page, name) == pub.page_table(pub.table_of(copy.read_text())), name
         machine = pub.machine_of(copy.read_text())
         if f"<!-- BEGIN {name}-machine -->" in page:
             assert pub.block(page, f"{name}-machine") == machine, name

@@ -11,7 +11,7 @@ onnxruntime and acados unconditionally, and the plots ask for LaTeX (``text.uset
 RotorPy fork is laid out as pip wants it (``rotorpy-pkg/pyproject.toml`` beside
 ``rotorpy-pkg/rotorpy/``) so that ``make aqb`` can ``pip install -e`` it.
 
-    python -m quadcog.aqb setup      # prints the folders to pip install -e (make aqb does it)
+    python -m quadcog.aqb setup   # the folders to pip install -e (make aqb does it)
 """
 import hashlib
 import json

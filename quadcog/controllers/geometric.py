@@ -10,8 +10,9 @@ at every attitude, also at and beyond 90 degrees of pitch), and everything after
 Tracking (ground axes; p, v of O; a_d, j_d, yaw from the reference row):
 
     e_x = p - p_d,  e_v = v - v_d,  a_c = a_d - k_x e_x - k_v e_v
-    f = m_hat (a_c + g e3) + R (w x (w x h_hat) + D_v nu1)     (the force the body needs)
-    b3_c = f / |f|,  b1_c = (b2_d x b3_c) / |b2_d x b3_c|,  b2_c = b3_c x b1_c,  U1 = f . R e3
+    f = m_hat (a_c + g e3) + R (w x (w x h_hat) + D_v nu1)  (the force the body needs)
+    b3_c = f / |f|,  b1_c = (b2_d x b3_c) / |b2_d x b3_c|,  b2_c = b3_c x b1_c,
+    U1 = f . R e3
 
 The heading enters through b2_d = [-sin yaw, cos yaw, 0] (Lee's construction turned by 90
 degrees: b1_c from b2_d rather than b2_c from b1_d). A flip about the body y axis, where b3_c

@@ -39,7 +39,8 @@ CoG moment in arm lengths l (``theta_n = [m / m0, m r_G / (m0 l)]``). The rows a
 m0 g (forces) and m0 g l (moments): ``Y_n = S_r Y_f S_p``, ``z_n = S_r z`` are of order one on
 any airframe. Least squares with forgetting and a bounded covariance, as the composite law:
 
-    theta_n_dot = Proj(P tau),  tau = -kappa S_p Phi^T B^T P_L e_s - Y_n^T G (Y_n theta_n - z_n)
+    theta_n_dot = Proj(P tau),
+    tau = -kappa S_p Phi^T B^T P_L e_s - Y_n^T G (Y_n theta_n - z_n)
     P_dot = beta P (I - P / k0) - P Y_n^T G Y_n P,      P(0) = k0 I (4x4)
 
 The tracking-error term (``gamma``, kappa = gamma / k0; Phi = Y_th(x, nu_dot_star),

@@ -6,7 +6,8 @@ Both are a point moving on a circle, ``p = center + radius (e_a cos th + e_b sin
 angle th(t) a smooth function of time, so position, velocity, acceleration and jerk are exact:
 with ``u = e_a cos th + e_b sin th`` and ``u' = -e_a sin th + e_b cos th``,
 
-    v = r th' u',   a = r (th'' u' - th'^2 u),   j = r ((th''' - th'^3) u' - 3 th' th'' u).
+    v = r th' u',   a = r (th'' u' - th'^2 u),
+    j = r ((th''' - th'^3) u' - 3 th' th'' u).
 
 th(t) starts and ends at rest through the septic step ``s(tau) = 35 tau^4 - 84 tau^5 + 70 tau^6
 - 20 tau^7`` (zero velocity, acceleration and jerk at both ends), so a flight starts in hover.
