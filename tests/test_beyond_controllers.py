@@ -127,23 +127,59 @@ def test_fl_integral_poles_are_placed():
     assert np.allclose(roots, [-11.0, -9.0, -3.0])
 
 
-def test_allocation_respects_the_rotor_limits_and_gives_up_yaw_first():
+def _thrust_interval(inv, U_rp, lo, hi):
+    """[lo_T, hi_T]: the U1 for which U1 with the moment U_rp (roll, pitch, yaw) keeps every
+    rotor within the limits, by numpy (empty when lo_T > hi_T)."""
+    a, r = inv[:, 0], inv[:, 1:] @ U_rp
+    return np.max((lo - r) / a), np.min((hi - r) / a)
+
+
+def test_allocation_gives_up_yaw_first_and_a_thrust_beyond_the_rotors_to_roll_pitch():
     Us = ca.SX.sym("U", 4)
     alloc = ca.Function("alloc", [Us], [prioritized_input(Us, HUMMINGBIRD)])
     inv = np.linalg.inv(HUMMINGBIRD.mixer())
     lo, hi = HUMMINGBIRD.min_rotor_thrust, HUMMINGBIRD.max_rotor_thrust
     rng = np.random.default_rng(0)
-    for _ in range(200):
-        U = np.r_[rng.uniform(2.0, 20.0), rng.normal(scale=0.5, size=2), rng.normal(scale=0.1)]
+    seen = set()
+    for k in range(400):
+        # thrusts from below zero to beyond the rotors' total (a payload too heavy to lift)
+        U = np.r_[rng.uniform(-5.0, 4 * hi + 10.0), rng.normal(scale=0.5 if k % 2 else 3.0,
+                                                               size=2), rng.normal(scale=0.1)]
         Ua = np.array(alloc(U)).ravel()
         f = inv @ Ua
         assert np.all(f >= lo - 1e-9) and np.all(f <= hi + 1e-9)
-        assert Ua[0] == U[0]
         if np.all((inv @ U >= lo) & (inv @ U <= hi)):
             assert np.allclose(Ua, U)                       # feasible: untouched
-        elif np.isclose(Ua[1], U[1]) and np.isclose(Ua[2], U[2]):
-            assert abs(Ua[3]) < abs(U[3])                    # yaw gave way
-        else:                      # roll-pitch scaled: as far as the limits allow without yaw
-            f_rp = inv @ np.r_[Ua[:3], 0.0]
-            assert min(np.min(f_rp - lo), np.min(hi - f_rp)) < 1e-9
-            assert np.allclose(Ua[1:3] / np.linalg.norm(Ua[1:3]), U[1:3] / np.linalg.norm(U[1:3]))
+            seen.add("feasible")
+            continue
+        s = np.linalg.norm(Ua[1:3]) / np.linalg.norm(U[1:3])
+        assert np.allclose(Ua[1:3], s * U[1:3]) and s <= 1 + 1e-12   # direction kept
+        if np.all((inv[:, 0] * U[0] >= lo) & (inv[:, 0] * U[0] <= hi)):
+            # the thrust alone fits: it is kept, roll-pitch scaled as far as it allows
+            assert Ua[0] == U[0]
+            more = inv @ np.r_[U[0], min(1.0, 1.001 * s) * U[1:3], 0.0]
+            assert s == pytest.approx(1.0, abs=1e-9) or np.any(more < lo - 1e-12) or \
+                np.any(more > hi + 1e-12)
+            seen.add("thrust kept")
+        else:
+            # beyond the rotors' range: roll-pitch first (full when some thrust carries it,
+            # else no larger scale fits), then the thrust nearest to U1 that carries it
+            full = _thrust_interval(inv, np.r_[U[1:3], 0.0], lo, hi)
+            if full[0] <= full[1]:
+                assert s == pytest.approx(1.0, abs=1e-9)
+            else:
+                wider = _thrust_interval(inv, np.r_[1.001 * s * U[1:3], 0.0], lo, hi)
+                assert wider[0] > wider[1]
+                seen.add("roll-pitch scaled")
+            t_lo, t_hi = _thrust_interval(inv, np.r_[Ua[1:3], 0.0], lo, hi)
+            assert Ua[0] == pytest.approx(min(max(U[0], t_lo), t_hi), abs=1e-9)
+            assert Ua[0] != U[0]
+            seen.add("thrust moved")
+        # yaw last: same sign, no larger, and as large as the limits leave
+        assert abs(Ua[3]) <= abs(U[3]) + 1e-12 and Ua[3] * U[3] >= 0
+        if abs(Ua[3]) < abs(U[3]) - 1e-9:
+            more = inv @ np.r_[Ua[:3], Ua[3] + 1e-3 * np.sign(U[3])]
+            assert np.any(more < lo - 1e-12) or np.any(more > hi + 1e-12)
+            seen.add("yaw gave way")
+    assert seen == {"feasible", "roll-pitch scaled", "thrust moved", "thrust kept",
+                    "yaw gave way"}, seen

@@ -4,6 +4,7 @@ preset, and a short run of the targets harness (quadcog.studies.targets).
 The oracles are the rules written out here from the vehicles' fields, not the module's own
 functions: a pole above the rotor bandwidth, a gain not scaled with the vehicle or a
 projection radius in metres of another vehicle fails them."""
+import dataclasses
 import math
 from pathlib import Path
 import tomllib
@@ -199,3 +200,22 @@ def test_targets_smoke(tmp_path):
     assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == \
         ["targets.csv", "targets.json", "targets.md"]
     assert "| crazyflie | adaptive | short-hover | estimate drift" in markdown_table(rows)
+
+
+def test_the_mass_bound_is_what_the_rotors_lift():
+    """m_hi / m = 4 max_rotor_thrust / (m g) for every preset, in both mass-learning laws;
+    a vehicle whose rotors cannot lift it has no default bound (typed error, named)."""
+    from quadcog.controllers.geometric import GeometricAdaptive
+    from quadcog.controllers.payload_adaptive import PayloadAdaptive
+    from quadcog.errors import InputError
+    for v in [HUMMINGBIRD, *PRESETS.values()]:
+        lift = 4 * v.max_rotor_thrust / v.g                 # kg: what the rotors hold up
+        assert design(v).mass_bounds == pytest.approx((0.5, lift / v.m), rel=1e-12)
+    assert PayloadAdaptive(HUMMINGBIRD).mass_bounds[1] == pytest.approx(
+        4 * 6.00318901352 / (0.68 * HUMMINGBIRD.g), rel=1e-12)
+    assert GeometricAdaptive(HUMMINGBIRD).mass_bounds.tolist() == \
+        list(PayloadAdaptive(HUMMINGBIRD).mass_bounds)
+    weak = dataclasses.replace(HUMMINGBIRD, max_rotor_thrust=0.2 * HUMMINGBIRD.max_rotor_thrust)
+    with pytest.raises(InputError, match="max_rotor_thrust"):
+        PayloadAdaptive(weak)
+    assert PayloadAdaptive(weak, mass_bounds=(0.5, 1.5)).mass_bounds[1] == 1.5

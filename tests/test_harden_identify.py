@@ -384,7 +384,7 @@ def test_compiled_projection_brings_a_state_outside_the_cone_onto_it():
     rng = np.random.default_rng(3)
     for k in range(40):
         c = law.initial_state()
-        c[3] = HUMMINGBIRD.m * rng.uniform(0.2, 3.0)
+        c[3] = HUMMINGBIRD.m * rng.uniform(0.2, 4.5)        # both bounds exercised
         d = rng.normal(size=3)
         d /= np.linalg.norm(d)
         m = min(max(c[3], lo), hi)

@@ -32,21 +32,22 @@ from quadcog.vehicles.vehicle import HUMMINGBIRD, N_ROTORS, Vehicle
 __all__ = ["REFERENCE", "REFERENCE_VEHICLE", "DERIVED_SETTINGS", "Design", "design",
            "rotor_bandwidth", "thrust_to_weight", "pendulum_rate", "attitude_rate",
            "similarity", "tilt_limit_of", "adaptation_gain", "filter_rate_of",
-           "admissible_estimate_radius", "PROJECTION_ARM_FRACTION", "ROTOR_FRACTION",
-           "FILTER_ROTOR_FRACTION", "TILT_FRACTION"]
+           "admissible_estimate_radius", "mass_bounds_of", "PROJECTION_ARM_FRACTION",
+           "ROTOR_FRACTION", "FILTER_ROTOR_FRACTION", "TILT_FRACTION", "MASS_LOWER_FRACTION"]
 
 REFERENCE_VEHICLE = HUMMINGBIRD
 
 # The settings whose default comes from the vehicle (the docs' reference says so).
 DERIVED_SETTINGS = ("poles_attitude", "poles_z", "poles_psi", "poles_position", "poles_x",
                     "poles_y", "max_tilt", "gamma", "filter_rate", "ls_gain", "forgetting",
-                    "covariance_bound", "warm_up", "projection_radius", "integral_pole",
-                    "integral_limit")
+                    "covariance_bound", "warm_up", "projection_radius", "mass_bounds",
+                    "integral_pole", "integral_limit")
 
 ROTOR_FRACTION = 0.25          # the attitude loop at most a quarter of the rotor bandwidth
 FILTER_ROTOR_FRACTION = 0.25   # the composite law's filter at most a quarter of it too
 TILT_FRACTION = 0.75           # of the tilt at which full thrust just holds the weight
 PROJECTION_ARM_FRACTION = 1.0  # r_hat within the circle through the rotors
+MASS_LOWER_FRACTION = 0.5      # the lightest mass estimate, of the model's mass
 _MIN_TILT = 0.1                # rad: the floor of max_tilt for a vehicle that can barely hover
 
 
@@ -240,6 +241,30 @@ def admissible_estimate_radius(vehicle: Vehicle, margin: float = 0.95) -> float:
                      margin * math.sqrt(smallest / vehicle.m)))
 
 
+def mass_bounds_of(vehicle: Vehicle) -> tuple[float, float]:
+    """The bounds of a mass estimate, relative to the model's mass.
+
+    The upper bound is what the rotors can lift: ``4 max_rotor_thrust / g`` over the model's
+    mass, i.e. the thrust-to-weight ratio. A body heavier than that cannot be held at full
+    thrust, so no vehicle that flies has a mass beyond it, and an estimate beyond it would
+    only command more thrust than the rotors have. The lower bound is
+    ``MASS_LOWER_FRACTION`` (a payload law learns what is added, and half the airframe is
+    never lost in flight).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The controller's model of the vehicle.
+
+    Returns
+    -------
+    tuple of float
+        (m_lo, m_hi) / m: (0.5, thrust_to_weight(vehicle)); m_hi <= 1 for rotors that cannot
+        lift the vehicle, which the mass-learning laws refuse (naming max_rotor_thrust).
+    """
+    return (MASS_LOWER_FRACTION, float(thrust_to_weight(vehicle)))
+
+
 @dataclass(frozen=True)
 class Design:
     """Every default setting of every controller for one vehicle (``design(vehicle)``).
@@ -277,6 +302,9 @@ class Design:
         5 / filter_rate (s): until the filters' start-up term exp(-lam t) has died out.
     projection_radius : float
         ``admissible_estimate_radius`` (m).
+    mass_bounds : tuple of float
+        ``mass_bounds_of``: [m_lo, m_hi] relative to the model's mass, m_hi what the rotors
+        lift.
     integral_pole : float
         The reference's -4 1/s times ``similarity``.
     integral_limit : float
@@ -297,6 +325,7 @@ class Design:
     covariance_bound: float
     warm_up: float
     projection_radius: float
+    mass_bounds: tuple[float, float]
     integral_pole: float
     integral_limit: float
 
@@ -323,6 +352,7 @@ def design(vehicle: Vehicle) -> Design:
                   ls_gain=10.0 * lam, forgetting=lam / 2.5,
                   covariance_bound=REFERENCE.covariance_bound, warm_up=5.0 / lam,
                   projection_radius=admissible_estimate_radius(vehicle),
+                  mass_bounds=mass_bounds_of(vehicle),
                   integral_pole=REFERENCE.integral_pole * s,
                   integral_limit=REFERENCE.integral_limit / s)
 
@@ -335,5 +365,6 @@ REFERENCE = Design(
     poles_position=(-1.5, -2.0), poles_x=(-2.0, -2.5, -10.0, -12.0),
     poles_y=(-2.0, -2.5, -10.0, -12.0), max_tilt=0.6, gamma=0.01, filter_rate=20.0,
     ls_gain=200.0, forgetting=8.0, covariance_bound=1.0, warm_up=0.25,
-    projection_radius=admissible_estimate_radius(REFERENCE_VEHICLE), integral_pole=-4.0,
+    projection_radius=admissible_estimate_radius(REFERENCE_VEHICLE),
+    mass_bounds=mass_bounds_of(REFERENCE_VEHICLE), integral_pole=-4.0,
     integral_limit=1.0)

@@ -48,15 +48,17 @@ the estimator (``gamma``) does not exist here: the update is the prediction erro
 Defaults from the vehicle (``quadcog.controllers.design``): k_R, k_W from the attitude poles,
 k_x, k_v from the z poles of feedback linearization (the geometric law has no small-angle
 cascade, so every axis gets the loop the thrust axis has), the estimator's filter, gain and
-forgetting from the design's rules, lam_d = min(rotor bandwidth, 8 attitude rates) (80 1/s for
-the Hummingbird: the feedforward acts through the motors, no faster).
+forgetting from the design's rules, the mass bounds (0.5, what the rotors lift: the
+thrust-to-weight ratio) from ``design.mass_bounds_of``, lam_d = min(rotor bandwidth,
+8 attitude rates) (80 1/s for the Hummingbird: the feedforward acts through the motors, no
+faster).
 """
 import casadi as ca
 import numpy as np
 
 from quadcog import validate
 from quadcog.controllers.base import Controller
-from quadcog.controllers.design import attitude_rate, design, rotor_bandwidth
+from quadcog.controllers.design import attitude_rate, design, mass_bounds_of, rotor_bandwidth
 from quadcog.controllers.payload_adaptive import N_THETA, PayloadAdaptive
 from quadcog.controllers.shaping import second_order_gains
 from quadcog.kinds import Flag, Number, Poles, Vector
@@ -126,8 +128,9 @@ class GeometricAdaptive(Controller):
         k0, the bound of the estimator's covariance; default the design's.
     force_weight : float
         Weight of the force rows against the moment rows, default 1.
-    mass_bounds : (2,) sequence of float
-        [m_lo, m_hi] relative to the model's mass, default (0.5, 3.0).
+    mass_bounds : (2,) sequence of float, optional
+        [m_lo, m_hi] relative to the model's mass; default ``design.mass_bounds_of``: (0.5,
+        the thrust-to-weight ratio), m_hi the heaviest body the rotors lift.
     consistency_margin : float
         delta in (0, 1), default 0.1.
     allocation : bool
@@ -167,7 +170,7 @@ class GeometricAdaptive(Controller):
                  poles_position: Poles | None = None, poles_attitude: Poles | None = None,
                  filter_rate: Number | None = None, ls_gain: Number | None = None,
                  forgetting: Number | None = None, covariance_bound: Number | None = None,
-                 force_weight: Number = 1.0, mass_bounds: Vector = (0.5, 3.0),
+                 force_weight: Number = 1.0, mass_bounds: Vector | None = None,
                  consistency_margin: Number = 0.1, allocation: Flag = True,
                  motor_lag: Flag = False, warm_up: Number = 0.0,
                  start_compensation: Flag = True, rate_filter: Number | None = None) -> None:
@@ -190,11 +193,15 @@ class GeometricAdaptive(Controller):
             "covariance_bound")
         self.force_weight = validate.nonnegative(force_weight, "force_weight")
         self.gamma = 0.0
-        bounds = validate.array(mass_bounds, "mass_bounds", (2,),
+        bounds = validate.array(mass_bounds_of(v) if mass_bounds is None else mass_bounds,
+                                "mass_bounds", (2,),
                                 what="[m_lo, m_hi] relative to the model's mass")
         if not 0 < bounds[0] < 1 < bounds[1]:
-            validate.fail("mass_bounds", "[m_lo, m_hi] with 0 < m_lo < 1 < m_hi (relative to "
-                          "the model's mass)", bounds.tolist())
+            validate.fail("mass_bounds" if mass_bounds is not None else
+                          "mass_bounds (default: 4 max_rotor_thrust / (m g) of the vehicle, "
+                          f"max_rotor_thrust = {v.max_rotor_thrust:g} N)",
+                          "[m_lo, m_hi] with 0 < m_lo < 1 < m_hi (relative to the model's "
+                          "mass; rotors that lift it)", bounds.tolist())
         self.mass_bounds = bounds
         self.consistency_margin = validate.real(consistency_margin, "consistency_margin",
                                                 lo=0.0, hi=1.0, lo_open=True, hi_open=True)

@@ -48,8 +48,9 @@ B = [0; H M_hat^-1]) is off by default: see "The paper's law" below.
 
 Defaults from the vehicle (``quadcog.controllers.design`` is not on main yet, so they are
 derived here): lam = 1 / (4 tau_m) from the rotor time constant tau_m (20 1/s at 12.5 ms; 20
-1/s without a lag), beta = lam / 2.5, the mass bounds relative to m0, the rows scaled by m0 g
-and the arm length as above. The feedback-linearization poles are the base class's.
+1/s without a lag), beta = lam / 2.5, the mass bounds relative to m0 (``design.mass_bounds_of``:
+m_hi = 4 f_max / (m0 g), what the rotors lift, m_lo = 0.5), the rows scaled by m0 g and the
+arm length as above. The feedback-linearization poles are the base class's.
 
 The projection: which set, and why the Lyapunov argument survives. With I_O held, pi is
 physically consistent when its pseudo-inertia ``J = [[Sigma_O, h], [h^T, m]]``,
@@ -117,6 +118,7 @@ import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.controllers.composite import believed_input
+from quadcog.controllers.design import mass_bounds_of
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.controllers.shaping import kinematics
 from quadcog.errors import PhysicalConsistencyError
@@ -210,8 +212,10 @@ class PayloadAdaptive(FeedbackLinearization):
     gamma : float
         Tracking-error gain at P = k0 I (normalized units), default 0: off (see "The paper's
         law" in the module docstring).
-    mass_bounds : (2,) sequence of float
-        [m_lo, m_hi] relative to the model's mass, default (0.5, 3.0), 0 < m_lo < 1 < m_hi.
+    mass_bounds : (2,) sequence of float, optional
+        [m_lo, m_hi] relative to the model's mass, 0 < m_lo < 1 < m_hi; default
+        ``design.mass_bounds_of``: (0.5, the thrust-to-weight ratio), m_hi the heaviest body
+        the rotors lift (3.60 for the Hummingbird).
     consistency_margin : float
         delta in (0, 1), default 0.1: the estimate keeps ``h^T Sigma_O^-1 h <= (1 - delta) m``.
     allocation : bool
@@ -244,7 +248,7 @@ class PayloadAdaptive(FeedbackLinearization):
                  filter_rate: Number | None = None, ls_gain: Number = 200.0,
                  forgetting: Number | None = None, covariance_bound: Number = 1.0,
                  force_weight: Number = 1.0, gamma: Number = 0.0,
-                 mass_bounds: Vector = (0.5, 3.0), consistency_margin: Number = 0.1,
+                 mass_bounds: Vector | None = None, consistency_margin: Number = 0.1,
                  allocation: Flag = True, motor_lag: Flag = False,
                  warm_up: Number = 0.0, start_compensation: Flag = True,
                  **kwargs: Any) -> None:
@@ -260,11 +264,15 @@ class PayloadAdaptive(FeedbackLinearization):
         self.covariance_bound = validate.positive(covariance_bound, "covariance_bound")
         self.force_weight = validate.nonnegative(force_weight, "force_weight")
         self.gamma = validate.nonnegative(gamma, "gamma")
-        bounds = validate.array(mass_bounds, "mass_bounds", (2,),
+        bounds = validate.array(mass_bounds_of(v) if mass_bounds is None else mass_bounds,
+                                "mass_bounds", (2,),
                                 what="[m_lo, m_hi] relative to the model's mass")
         if not 0 < bounds[0] < 1 < bounds[1]:
-            validate.fail("mass_bounds", "[m_lo, m_hi] with 0 < m_lo < 1 < m_hi (relative to "
-                          "the model's mass)", bounds.tolist())
+            validate.fail("mass_bounds" if mass_bounds is not None else
+                          "mass_bounds (default: 4 max_rotor_thrust / (m g) of the vehicle, "
+                          f"max_rotor_thrust = {v.max_rotor_thrust:g} N)",
+                          "[m_lo, m_hi] with 0 < m_lo < 1 < m_hi (relative to the model's "
+                          "mass; rotors that lift it)", bounds.tolist())
         self.mass_bounds = bounds
         self.consistency_margin = validate.real(consistency_margin, "consistency_margin",
                                                 lo=0.0, hi=1.0, lo_open=True, hi_open=True)

@@ -51,7 +51,7 @@
  *   kp = [12, 120, 120, 20]
  *   kp_pos = 3
  *   ls_gain = 200
- *   mass_bounds = [0.5, 3]
+ *   mass_bounds = [0.5, 3.59968]
  *   max_tilt = 0.6
  *   motor_states = 0
  *   n_state = 75

@@ -47,7 +47,7 @@
  *   k_v = 7
  *   k_x = 12
  *   ls_gain = 200
- *   mass_bounds = [0.5, 3]
+ *   mass_bounds = [0.5, 3.59968]
  *   motor_states = 0
  *   n_estimator = 75
  *   n_state = 78
