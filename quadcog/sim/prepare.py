@@ -31,7 +31,7 @@ from quadcog.sim.user_controller import user_state
 from quadcog.trajectories.analytic import POS, VEL, YAW
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.validate import positive, step_count
-from quadcog.vehicles.payload import PAYLOAD_REACH
+from quadcog.vehicles.payload import check_reach
 from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
 __all__ = ["RK4_LIMIT", "FlightSetup", "prepare_flight", "batch_start", "check_time",
@@ -459,11 +459,11 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
     if not loads.events:
         return
     import heapq
-    reach = PAYLOAD_REACH * vehicle.arm_length
     on_board = {p.name: (p, p.inertial_parameters()) for p in loads.carried}
     total = vehicle.airframe.inertial_parameters() + sum(
         (pi for _, pi in on_board.values()), np.zeros(N_PI))
     ends: list = []                  # (end time, index, name, target) of sliding moves
+    attached_at: dict[str, float] = {}     # the time each payload was last attached
 
     def place(name, payload):
         nonlocal total
@@ -485,17 +485,19 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
         if duration is not None and e.t > duration:
             raise InputError(f"{where}: after the end of the run (duration {duration:g} s), "
                              "so it would never happen; expected t <= duration")
-        if e.position is not None and not np.linalg.norm(e.position) <= reach:
-            raise InputError(f"{where}: position {list(e.position)} m is "
-                             f"{np.linalg.norm(e.position):.3g} m from O, beyond "
-                             f"{PAYLOAD_REACH:g} arm lengths of {vehicle.name!r} ({reach:.3g} m); "
-                             "a payload is carried on the vehicle")
+        if e.position is not None:
+            check_reach(e.position, e.size, vehicle.arm_length, where)
+        if e.action == "drop" and attached_at.get(e.name) == e.t:
+            raise InputError(f"{where}: at the time {e.name!r} is attached, so it is never "
+                             "carried (the drop undoes the attach at once); expected t after "
+                             f"the attach at {e.t:g} s")
         while ends and ends[0][0] <= e.t:
             end, j, name, target = heapq.heappop(ends)
             if name in on_board:
                 place(name, on_board[name][0].moved(target))
                 check(j, loads.events[j], end)
         if e.action == "attach":
+            attached_at[e.name] = e.t
             place(e.name, e.payload())
         elif e.action == "drop":
             place(e.name, None)
