@@ -628,3 +628,42 @@ def test_a_sweep_range_wider_than_the_float_range_is_refused():
                            "range": {"start": -1e308, "stop": 1e308, "num": 3}}]}
     with pytest.raises(SweepError, match="stop - start overflows"):
         from_dict(spec)
+
+
+@pytest.mark.parametrize("fmt", ["crazyflie-usd", "ulog"])
+def test_binary_writers_refuse_times_their_stamps_would_change(tmp_path, fmt):
+    """An integer-us stamp of a negative time wrapped around a uint64 (read back 0.0117 s
+    steps for 0.01 s); one of t = 1e12 s was rounded to 128 us (steps of 0.0099 s). The
+    oracle: what is written reads back with the same steps, or nothing is written."""
+    t = np.arange(5) * 0.01
+    for shift, message in ((-100.0, "before the first"), (1e12, "rounded")):
+        log = FlightLog("x", "csv", t + shift, {"position": np.zeros((5, 3))}, {}, {})
+        target = tmp_path / f"out{shift:g}.bin"
+        with pytest.raises(LogError, match=message):
+            write_log(log, target, fmt)
+        assert not target.exists() and not list(tmp_path.glob("*.part"))
+    back = read_log(write_log(FlightLog("x", "csv", t + 5.0, {"position": np.zeros((5, 3))},
+                                        {}, {}), tmp_path / "ok.bin", fmt), format=fmt)
+    assert np.allclose(np.diff(back.t), 0.01, rtol=0, atol=1e-6)
+
+
+def test_ulog_writer_refuses_a_log_its_reader_refuses(tmp_path):
+    log = FlightLog("x", "csv", np.arange(5) * 0.01, {"battery_voltage": np.full(5, 3.7)},
+                    {}, {})
+    with pytest.raises(LogError, match="time base"):
+        write_log(log, tmp_path / "v.ulg", "ulog")
+    assert not (tmp_path / "v.ulg").exists()
+
+
+@pytest.mark.parametrize("bad", [None, 5, "hummingbird", [1.0], {"m": 1}])
+def test_payload_api_refuses_what_is_not_a_vehicle_or_a_duration(bad):
+    ok = [{"t": 0.5, "action": "attach", "name": "a", "mass": 0.05, "position": [0.1, 0, 0]}]
+    with pytest.raises(InputError, match="vehicle"):
+        as_payload_profile(ok, bad)
+    with pytest.raises(InputError, match="vehicle"):
+        check_payload_events(bad, as_payload_profile(ok, HUMMINGBIRD), 1.0)
+    if not isinstance(bad, int) and bad is not None:      # 5 s is a duration
+        with pytest.raises(InputError, match="duration"):
+            check_payload_events(HUMMINGBIRD, as_payload_profile(ok, HUMMINGBIRD), bad)
+    with pytest.raises(InputError, match="duration"):
+        check_payload_events(HUMMINGBIRD, as_payload_profile(ok, HUMMINGBIRD), float("nan"))

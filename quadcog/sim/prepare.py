@@ -422,6 +422,9 @@ def as_payload_profile(payloads: Any, vehicle: Vehicle) -> PayloadProfile:
     if isinstance(payloads, (str, bytes, dict)) or not isinstance(payloads, (list, tuple)):
         validate.fail("payloads", "None or a list of payload events (PayloadEvent or dicts "
                       "with t, action, name, ...)", payloads)
+    if not isinstance(vehicle, Vehicle):
+        validate.fail("vehicle", "a quadcog Vehicle (the truth, with its payloads on board)",
+                      vehicle)
     return PayloadProfile(list(payloads), vehicle.payloads)
 
 
@@ -456,6 +459,12 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
     quadcog.PhysicalConsistencyError
         Naming the event after which the whole body is not physically consistent.
     """
+    if not isinstance(vehicle, Vehicle):
+        validate.fail("vehicle", "a quadcog Vehicle (the truth)", vehicle)
+    if not isinstance(loads, PayloadProfile):
+        validate.fail("loads", "a PayloadProfile (quadcog.sim.prepare.as_payload_profile)", loads)
+    if duration is not None:
+        duration = positive(duration, "duration", unit="s")
     if not loads.events:
         return
     import heapq
