@@ -122,6 +122,7 @@ def test_vehicle_files_never_open_a_fifo_or_a_device(tmp_path):
     device never ends. The alarm turns a hang into a failure here."""
     import os
     import signal
+
     from quadcog.errors import VehicleFileError
     from quadcog.vehicles.vehicle import Vehicle
     fifo = tmp_path / "v.urdf"

@@ -521,6 +521,7 @@ def test_pooled_intervals_stay_finite_for_tiny_or_zero_half_widths():
     NaN, reported 'not a number'); the oracle is the textbook weighted mean with the weights
     scaled by the narrowest interval."""
     from dataclasses import replace
+
     from quadcog.identification.core import pooled_estimate
     e = identify(hover_log(full=True), method="regression").flights[0]
     for h1 in (1e-200, 0.0, 1e-3):
@@ -572,6 +573,7 @@ def test_minimum_snap_solves_the_dense_system_and_grows_linearly():
     constraints: ends at rest, positions at the waypoints, derivatives 1..6 continuous), and
     1,500 waypoints build in seconds (the dense 12,000 x 12,000 solve took minutes and 1 GB)."""
     import time
+
     from quadcog.trajectories.waypoints import N_COEF, _derivative_row
     pts = np.random.default_rng(3).normal(size=(9, 3))
     traj = MinimumSnap(pts)
