@@ -108,6 +108,20 @@ def test_rotor_speeds_of_a_finite_thrust_are_finite():
         assert w[0] == pytest.approx(math.sqrt(f) / math.sqrt(k), rel=1e-15)
 
 
+def test_rotor_thrusts_near_the_float_range_raise_rather_than_return_nan():
+    with pytest.raises(InputError, match="overflow"):
+        HUMMINGBIRD.rotor_thrusts([1e308, 1e308, 1e308, 1e308])
+    f = HUMMINGBIRD.rotor_thrusts([1e300, 0, 0, 0])       # the mixer's first column: 1/4
+    assert np.allclose(f, 0.25e300, rtol=1e-12)
+
+
+def test_a_minimum_snap_out_of_range_is_named_by_its_waypoints_not_its_address():
+    from quadcog.trajectories.waypoints import MinimumSnap
+    traj = MinimumSnap([[0, 0, 0], [1, 0, 0], [2, 0, 0]], times=[0, 1e6 - 1, 1e6])
+    with pytest.raises(InputError, match=r"MinimumSnap\(3 waypoints from 0.0 s to 1000000.0 s\)"):
+        traj.sample(np.linspace(0, 1e6, 50))
+
+
 @pytest.mark.parametrize("path", [None, 5, b"cf2x.urdf", [], "", 1.5, {"a": 1}])
 @pytest.mark.parametrize("reader", ["from_file", "from_urdf", "from_sdf"])
 def test_vehicle_files_refuse_what_is_not_a_path(reader, path):

@@ -64,6 +64,10 @@ def _describe(trajectory):
         fields = ", ".join(f"{f.name}={validate.plain(getattr(trajectory, f.name))}"
                            for f in dataclasses.fields(trajectory))
         return f"{type(trajectory).__name__}({fields})"
+    times = getattr(trajectory, "times", None)
+    if isinstance(times, np.ndarray) and times.size:     # MinimumSnap: no dataclass
+        return (f"{type(trajectory).__name__}({times.size} waypoints from "
+                f"{validate.plain(times[0])} s to {validate.plain(times[-1])} s)")
     return repr(trajectory)
 
 

@@ -486,12 +486,19 @@ class Vehicle:
         Raises
         ------
         InputError
-            When ``U`` does not have 4 rows of finite numbers.
+            When ``U`` does not have 4 rows of finite numbers, or the thrusts overflow.
         """
         U = array(U, "U", what="4 rows [U1 (N), U2, U3, U4 (N m)] of finite numbers")
         if U.shape[:1] != (4,):
             raise InputError(f"U must have 4 rows [U1, U2, U3, U4], got shape {U.shape}")
-        return np.asarray(self.mixer_inverse() @ U, dtype=np.float64)
+        with np.errstate(over="ignore", invalid="ignore"):
+            f = np.asarray(self.mixer_inverse() @ U, dtype=np.float64)
+        if not np.isfinite(f).all():       # never a silent NaN: U near the float range
+            raise InputError(f"U: the rotor thrusts overflow (not finite) at max |U| = "
+                             f"{float(np.abs(U).max()):.3g}; expected an input a vehicle's "
+                             "rotors give (thrusts and moments within the float range over "
+                             "the mixer's entries)")
+        return f
 
     def rotor_speeds(self, f: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Rotor speeds of rotor thrusts: sqrt(f / thrust_constant).
