@@ -669,3 +669,15 @@ def test_payload_api_refuses_what_is_not_a_vehicle_or_a_duration(bad):
             check_payload_events(HUMMINGBIRD, as_payload_profile(ok, HUMMINGBIRD), bad)
     with pytest.raises(InputError, match="duration"):
         check_payload_events(HUMMINGBIRD, as_payload_profile(ok, HUMMINGBIRD), float("nan"))
+
+
+def test_a_csv_log_with_a_byte_that_is_not_utf8_in_its_rows_is_a_log_error(tmp_path):
+    """The cell-by-cell second reading (after numpy's parser refused a row) decoded the file
+    again without the first reading's guard: a raw UnicodeDecodeError."""
+    p = write_log(hover_log(T=3.0), tmp_path / "log.csv", "csv")
+    data = bytearray(p.read_bytes())
+    at = data.index(b"\n", len(data) // 2) + 1
+    data[at:at] = b"1.0,\xe9x\n"
+    p.write_bytes(bytes(data))
+    with pytest.raises(LogError, match="not a text"):
+        read_log(p)
