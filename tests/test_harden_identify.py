@@ -681,3 +681,24 @@ def test_a_csv_log_with_a_byte_that_is_not_utf8_in_its_rows_is_a_log_error(tmp_p
     p.write_bytes(bytes(data))
     with pytest.raises(LogError, match="not a text"):
         read_log(p)
+
+
+def test_a_cog_change_or_a_disturbance_after_the_end_is_said():
+    """Like a payload event after the end, it never happens; said as a QuadcogWarning (not
+    refused: shipped scenarios are flown shorter with --set duration=..., and fig6 with its
+    CoG step at 100 s flew 2 s and reported a 0.00 cm error without a word)."""
+    import warnings
+
+    from quadcog import simulate
+    from quadcog.controllers.registry import make_controller
+    from quadcog.errors import QuadcogWarning
+    from quadcog.sim.timeline import Disturbance
+    law = make_controller("adaptive")
+    with pytest.warns(QuadcogWarning, match=r"cog\[0\].*after the end of the run"):
+        simulate(law, "hover", duration=0.2, cog=[(5.0, [0.01, 0.0, 0.0], 0.0)])
+    with pytest.warns(QuadcogWarning, match=r"disturbance\[0\].*after the end of the run"):
+        simulate(law, "hover", duration=0.2,
+                 disturbances=[Disturbance(t=5.0, duration=0.1, force=(1.0, 0.0, 0.0))])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", QuadcogWarning)
+        simulate(law, "hover", duration=0.2, cog=[(0.1, [0.01, 0.0, 0.0], 0.0)])

@@ -9,6 +9,7 @@ state, and hands the loop a ``FlightSetup``. The batch paths (``quadcog.sim.batc
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
+import warnings
 
 import numpy as np
 import numpy.typing as npt
@@ -16,7 +17,7 @@ import numpy.typing as npt
 from quadcog import config, validate
 from quadcog.codegen.fastcall import evaluate
 from quadcog.controllers.base import Controller
-from quadcog.errors import InputError
+from quadcog.errors import InputError, QuadcogWarning
 from quadcog.model.conventions import IDX, N_STATE, R_G, rotation_matrix
 from quadcog.model.inertial_parameters import N_PI, check_physically_consistent
 from quadcog.model.inertial_parameters import is_physically_consistent as consistency_ok
@@ -155,8 +156,14 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     cog = as_cog_profile(cog)
     loads = as_payload_profile(payloads, vehicle)
     P = vehicle.airframe.parameters()        # the payloads reach the truth through the schedule
-    check_cog_changes(P, cog)
+    check_cog_changes(P, cog, duration)
     check_payload_events(vehicle, loads, duration)
+    for i, d in enumerate(disturbances or ()):
+        start = getattr(d, "t", None)
+        if isinstance(start, (int, float)) and start > duration:
+            warnings.warn(f"disturbance[{i}] (at t = {start:g} s): after the end of the run "
+                          f"(duration {duration:g} s), so it never happens in this run",
+                          QuadcogWarning, stacklevel=2)
     schedule = Schedule.build(trajectory, duration, dt, cog, disturbances, payloads=loads)
     x0 = start_at_reference(schedule.ref[0]) if x0 is None else validate.vector(x0, "x0", 12)
     if not np.abs(x0).max() <= LARGEST:
@@ -370,8 +377,10 @@ def as_cog_profile(cog: Any) -> CogProfile:
 
 
 
-def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile) -> None:
-    """Raise ParameterError if the vehicle is inadmissible with any CoG of the profile.
+def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile,
+                      duration: float | None = None) -> None:
+    """Raise ParameterError if the vehicle is inadmissible with any CoG of the profile, and
+    a QuadcogWarning for a change that starts after the end of the run (it never happens).
 
     The admissible set of r_G is convex (|r|^2 - (u.r)^2 is convex for every unit u), so
     checking where each change ends covers the ramps between them.
@@ -382,13 +391,28 @@ def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile) -> None:
         The vehicle's parameters.
     cog : CogProfile
         The CoG changes.
+    duration : float, optional
+        The run's length (s): a change that starts after it is refused.
 
     Raises
     ------
     quadcog.ParameterError
         Naming the change whose CoG makes the vehicle inadmissible.
+
+    Warns
+    -----
+    QuadcogWarning
+        A change that starts after the end of the run (it never happens in it; a shipped
+        scenario flown shorter with ``--set duration=...`` is told so, not refused).
     """
+    if duration is not None:
+        duration = positive(duration, "duration", unit="s")
     for i, change in enumerate(cog.changes):
+        if duration is not None and change.t > duration:
+            warnings.warn(f"cog[{i}] (the change to r = {list(change.r)} m at t = "
+                          f"{change.t:g} s): after the end of the run (duration "
+                          f"{duration:g} s), so it never happens in this run",
+                          QuadcogWarning, stacklevel=2)
         check_parameters(with_cog(P, cog_at(P[R_G], 1.0, np.asarray(change.r))),
                          f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
 
