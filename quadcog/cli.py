@@ -28,8 +28,19 @@ __all__ += ["add_px4", "cmd_px4"]
 _Subparsers = argparse._SubParsersAction  # the type of ``add_subparsers()``: for the hints
 
 
+def _check_out_dir(path: str | Path) -> Path:
+    """Refuse, before any work, an --out that exists and is not a folder (a file, a FIFO, a
+    device): QuadcogError naming --out."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise QuadcogError(f"--out {path}: is a file (or a FIFO or device), not a folder; "
+                           "expected a folder for the results (a new or existing folder)")
+    return p
+
+
 def _out_dir(path: str | Path) -> Path:
     """Create the output folder ``path``; QuadcogError naming --out if it cannot be made."""
+    _check_out_dir(path)
     try:
         Path(path).mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -543,6 +554,8 @@ def cmd_identify(args: argparse.Namespace) -> None:
             raise QuadcogError(f"{path}: no such log file")
     if args.json is not None:      # refused before the work: a link, a FIFO, a device, a log
         output_path(args.json, "--json", protect=inputs)
+    if args.out is not None:
+        _check_out_dir(args.out)
     result = identify(args.logs, vehicle=args.vehicle, baseline=args.baseline,
                       method=args.method, rotor_model=args.rotor_model)
     print(result.summary())

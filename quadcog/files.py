@@ -27,7 +27,7 @@ import numpy.typing as npt
 
 from quadcog.errors import InputError, QuadcogError
 
-__all__ = ["CSV_BLOCK", "CSV_DECIMALS", "plain_value", "strict_json", "rounded", "write_csv",
+__all__ = ["input_file", "CSV_BLOCK", "CSV_DECIMALS", "plain_value", "strict_json", "rounded", "write_csv",
            "plot_text", "RunFiles", "atomic_write", "atomic_write_bytes", "output_path",
            "replacing", "read_json", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "cpu_model",
            "run_stamp"]
@@ -481,6 +481,47 @@ def _depth(text: str) -> int:
         elif ch in "]}":
             depth -= 1
     return deepest
+
+
+def input_file(path: object, what: str, error: type[Exception] = InputError,
+               where: str | None = None) -> Path:
+    """``path`` checked as a file to read: a non-empty str or os.PathLike that is not a
+    folder, a FIFO, a device or a socket (opening a FIFO blocks until a writer comes; a
+    device never ends). A path that does not exist is returned (the reader says so).
+
+    Parameters
+    ----------
+    path : object
+        What the caller passed.
+    what : str
+        What the file is, for the message (``"a flight log file"``).
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+    where : str, optional
+        The argument's name, for a value that is not a path (default ``what``).
+
+    Returns
+    -------
+    pathlib.Path
+        The path.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) naming the path, or the argument and the value given.
+    """
+    text = None if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) \
+        else os.fspath(path)
+    if not isinstance(text, str) or not text.strip():
+        raise error(f"{where or what}: expected the path of {what} (a str or os.PathLike), "
+                    f"got {type(path).__name__} {path!r:.60}")
+    p = Path(text)
+    if p.is_dir():
+        raise error(f"{p}: is a folder; expected {what}")
+    if p.exists() and not p.is_file():     # a FIFO or a device would block or never end
+        raise error(f"{p}: is not a regular file (a FIFO, a device or a socket); expected "
+                    f"{what}")
+    return p
 
 
 def read_json(path: str | os.PathLike[str], what: str = "JSON file",

@@ -90,6 +90,72 @@ def test_vehicle_helpers_refuse_instead_of_nan(call):
         call()
 
 
+@pytest.mark.parametrize("directions", [[[1, -1], [1, -1]], [1, [-1], 1, -1], "1-11",
+                                        [1, -1, 1], [True, -1, 1, -1]])
+def test_rotor_directions_of_the_wrong_shape_are_an_input_error(directions):
+    with pytest.raises(InputError, match="rotor_directions"):
+        HUMMINGBIRD.replace(rotor_directions=directions)
+
+
+def test_rotor_speeds_of_a_finite_thrust_are_finite():
+    """sqrt(f / k) overflowed to inf for f = 1e308 N (f / k beyond the float range); the
+    oracle is sqrt(f) / sqrt(k) in Python's math."""
+    import math
+    k = HUMMINGBIRD.thrust_constant
+    for f in (1e308, 1.7e308, 1.0, 1e-300):
+        w = HUMMINGBIRD.rotor_speeds([f] * 4)
+        assert np.isfinite(w).all()
+        assert w[0] == pytest.approx(math.sqrt(f) / math.sqrt(k), rel=1e-15)
+
+
+def test_rotor_thrusts_near_the_float_range_raise_rather_than_return_nan():
+    with pytest.raises(InputError, match="overflow"):
+        HUMMINGBIRD.rotor_thrusts([1e308, 1e308, 1e308, 1e308])
+    f = HUMMINGBIRD.rotor_thrusts([1e300, 0, 0, 0])       # the mixer's first column: 1/4
+    assert np.allclose(f, 0.25e300, rtol=1e-12)
+
+
+def test_a_minimum_snap_out_of_range_is_named_by_its_waypoints_not_its_address():
+    from quadcog.trajectories.waypoints import MinimumSnap
+    traj = MinimumSnap([[0, 0, 0], [1, 0, 0], [2, 0, 0]], times=[0, 1e6 - 1, 1e6])
+    with pytest.raises(InputError, match=r"MinimumSnap\(3 waypoints from 0.0 s to 1000000.0 s\)"):
+        traj.sample(np.linspace(0, 1e6, 50))
+
+
+@pytest.mark.parametrize("path", [None, 5, b"cf2x.urdf", [], "", 1.5, {"a": 1}])
+@pytest.mark.parametrize("reader", ["from_file", "from_urdf", "from_sdf"])
+def test_vehicle_files_refuse_what_is_not_a_path(reader, path):
+    from quadcog.errors import VehicleFileError
+    from quadcog.vehicles.vehicle import Vehicle
+    with pytest.raises(VehicleFileError, match="path"):
+        getattr(Vehicle, reader)(path)
+
+
+def test_vehicle_files_never_open_a_fifo_or_a_device(tmp_path):
+    """Opening a FIFO to read blocks until a writer comes (the reader hung for ever); a
+    device never ends. The alarm turns a hang into a failure here."""
+    import os
+    import signal
+
+    from quadcog.errors import VehicleFileError
+    from quadcog.vehicles.vehicle import Vehicle
+    fifo = tmp_path / "v.urdf"
+    os.mkfifo(fifo)
+
+    def hung(*_):
+        raise AssertionError("the reader blocked on a FIFO")
+    old = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(10)
+    try:
+        for path, reader in ((fifo, "from_urdf"), (fifo, "from_file"),
+                             ("/dev/zero", "from_sdf")):
+            with pytest.raises(VehicleFileError, match="not a regular file"):
+                getattr(Vehicle, reader)(path)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+
+
 @settings(**SETTINGS)
 @given(value=HOSTILE, where=st.sampled_from(["with_cog", "rotor_thrusts", "plus", "x"]))
 def test_property_vehicle_helpers_error_or_finite(value, where):

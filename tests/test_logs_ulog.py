@@ -241,10 +241,17 @@ def test_ulog_time_must_increase(tmp_path):
         read_log(path)
 
 
-def test_ulog_without_a_time_base_topic(tmp_path):
+def test_ulog_without_a_time_base_topic(tmp_path, monkeypatch):
+    """The writer refuses such a log (its reader would); written with the writer's check
+    switched off, as another tool could write it, the reader refuses it."""
+    import quadcog.logs.ulog as ulog_module
     t = np.arange(5) * 0.1
-    path = write_log(FlightLog("x", "csv", t, {"battery_voltage": np.full(5, 3.9)}, {}, {}),
-                     tmp_path / "bat.ulg", "ulog")
+    log = FlightLog("x", "csv", t, {"battery_voltage": np.full(5, 3.9)}, {}, {})
+    with pytest.raises(LogSignalError, match="time base"):
+        write_log(log, tmp_path / "bat.ulg", "ulog")
+    with monkeypatch.context() as m:
+        m.setattr(ulog_module, "BASE_TOPICS", ("battery_status",))
+        path = write_log(log, tmp_path / "bat.ulg", "ulog")
     with pytest.raises(LogSignalError, match="none of the topics"):
         read_log(path)
 

@@ -259,9 +259,17 @@ def pooled_estimate(estimates: Sequence[FlightEstimate]
                                          np.concatenate([e.blocks_v for e in estimates]))
             half[2] = np.nan
         return r, half, float(m), float(m_half), samples
-    w = np.array([1.0 / np.maximum(e.r_G_ci95, 1e-300) ** 2 for e in estimates])
-    r = (w * np.array([e.r_G for e in estimates])).sum(axis=0) / w.sum(axis=0)
-    return r, 1.0 / np.sqrt(w.sum(axis=0)), float(m), float(m_half), samples
+    # inverse-variance weights relative to the narrowest interval, so that neither a tiny
+    # half-width (1/h^2 overflows to inf, inf/inf is NaN) nor a zero one gives NaN
+    h = np.array([e.r_G_ci95 for e in estimates], dtype=float)
+    rs = np.array([e.r_G for e in estimates], dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        h_min = np.min(h, axis=0)
+        w = np.where(h_min == 0, (h == 0).astype(float), (h_min / h) ** 2)
+        total = w.sum(axis=0)
+        r = (w * rs).sum(axis=0) / total
+        half = h_min / np.sqrt(total)
+    return r, half, float(m), float(m_half), samples
 
 
 def _estimate(logs, vehicle, method, rotor_model):

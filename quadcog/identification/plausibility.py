@@ -25,12 +25,15 @@ from collections.abc import Sequence
 import numpy as np
 
 from quadcog.errors import IdentificationError
+from quadcog.identification.segments import MAX_GAP
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_BODY_RATE",
-           "AGREE_SECONDS", "AGREE_TOLERANCE", "column_name", "check_log", "hover_physics",
+           "AGREE_SECONDS", "AGREE_TOLERANCE", "MAX_HOVER_TILT", "SATURATED",
+           "SATURATED_FRACTION", "YAW_IMBALANCE", "ACCEL_AGREE", "VELOCITY_SECONDS",
+           "VELOCITY_TOLERANCE", "column_name", "check_log", "hover_physics",
            "vehicle_type", "check_types"]
 
 RATE_HZ = (2.0, 1e5)              # a logger's sample rate (median step), Hz
@@ -42,6 +45,13 @@ RATE_MARGIN = 1.0                 # angular acceleration at most this times the 
 _SMOOTH_S = 0.1                   # s: rates averaged over this before differencing
 AGREE_SECONDS = 0.5               # s: the rates integrated over this (and 1/5, 1/2 of it) ...
 AGREE_TOLERANCE = 0.3             # rad: ... turn the logged roll and pitch to within this
+MAX_HOVER_TILT = np.radians(60.0)  # rad: tilted further over the hover, no level balance
+SATURATED = 0.99                  # a motor output at or above this fraction of full scale ...
+SATURATED_FRACTION = 0.5          # ... over more than this fraction of the hover: saturated
+YAW_IMBALANCE = 0.3               # |sum d_i f_i| / sum f_i over the hover: the yaw moment
+ACCEL_AGREE = 0.05                # fraction of g: mean logged a_z against the velocity's change
+VELOCITY_SECONDS = 1.0            # s: the velocity integrated over this ...
+VELOCITY_TOLERANCE = (0.25, 0.25)  # ... moves as far as the position, to 0.25 m + 25 %
 
 # signal: (lowest, highest, unit, what a value beyond says)
 LIMITS = {
@@ -126,6 +136,35 @@ def check_log(log: FlightLog) -> None:
                 f"{log.source}: {column_name(log, name, j)} is {float(a[k, j]):.6g}{u} at "
                 f"t = {float(log.t[k]):.6g} s, {why}; expected {lo:.6g}..{hi:.6g}{u}: "
                 "is the log in other units?")
+    _position_speed(log)
+
+
+def _stretches(t: np.ndarray) -> list[slice]:
+    """Runs of samples without a gap of more than ``MAX_GAP`` between them."""
+    cuts = np.flatnonzero(np.diff(t) > MAX_GAP) + 1
+    edges = np.r_[0, cuts, len(t)]
+    return [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+
+
+def _position_speed(log):
+    """The speed the position gives (over ``_SMOOTH_S``), against ``LIMITS["velocity"]``:
+    positions in mm (or cm) read as m climb and land a thousand times too fast."""
+    if not log.has("position"):
+        return
+    p, t = log.signal("position"), log.t
+    hi = LIMITS["velocity"][1]
+    n = max(int(round(_SMOOTH_S / float(np.median(np.diff(t))))), 1)
+    for part in _stretches(t):
+        tp, pp = t[part], p[part]
+        if len(tp) <= n:
+            continue
+        speed = np.abs(pp[n:] - pp[:-n]) / (tp[n:] - tp[:-n])[:, None]
+        if speed.max() > hi:
+            k, j = (int(i) for i in np.unravel_index(int(np.argmax(speed)), speed.shape))
+            raise IdentificationError(
+                f"{log.source}: {column_name(log, 'position', j)} changes at "
+                f"{float(speed[k, j]):.4g} m/s near t = {float(tp[k]):.6g} s, faster than any "
+                f"quadrotor flies ({hi:g} m/s): is the position in mm or cm? (quadcog reads m)")
 
 
 def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: np.ndarray,
@@ -154,6 +193,13 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
     """
     g, weight = vehicle.g, vehicle.m * vehicle.g
     h = float(np.median(log.signal("position")[mask, 2]))
+    cos_tilt = _hover_tilt(log, mask, h)
+    _saturation(log, mask, h)
+    _yaw_balance(log, vehicle, mask, thrusts, h)
+    if log.has("velocity"):
+        _velocity_agrees_with_position(log, mask)
+    if log.has("acceleration"):
+        _acceleration_agrees(log, mask, a_z, h, g)
     mean_a = float(np.mean(a_z[mask]))
     if abs(mean_a) > GRAVITY_FRACTION * g:
         where = column_name(log, "acceleration", 2) if log.has("acceleration") else a_from
@@ -162,7 +208,7 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
             f"over the hover at {h:.2f} m, where a vehicle holding its height averages 0; "
             f"expected the kinematic acceleration, without gravity (is g = {g:g} m/s^2 "
             "counted in it, or removed twice?)")
-    total = thrusts[mask].sum(axis=1)
+    total = thrusts[mask].sum(axis=1) * cos_tilt     # what carries the weight: the vertical
     ratio = float(np.mean(total)) / weight
     if not ratio >= WEIGHT_RATIO[0]:
         off = " (the motors are off: a log of the vehicle standing or carried?)" \
@@ -181,6 +227,111 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
         _rates_within_reach(log, vehicle, mask)
         if log.has("roll") and log.has("pitch"):
             _rates_agree_with_angles(log, mask)
+
+
+def _hover_tilt(log, mask, h):
+    """cos(roll) cos(pitch) over the hover (ones without both angles); refuse a hover
+    tilted beyond ``MAX_HOVER_TILT`` (upside down: a frame with z down read as z up)."""
+    if not (log.has("roll") and log.has("pitch")):
+        return np.ones(int(mask.sum()))
+    phi, theta = log.signal("roll")[mask], log.signal("pitch")[mask]
+    cos_tilt = np.cos(phi) * np.cos(theta)
+    tilt = float(np.degrees(np.arccos(np.clip(np.median(cos_tilt), -1.0, 1.0))))
+    if tilt > np.degrees(MAX_HOVER_TILT):
+        upside = " (upside down: angles in degrees, or of a frame with z down read as z up?)" \
+            if tilt > 90.0 else ""
+        raise IdentificationError(
+            f"{log.source}: over the hover at {h:.2f} m {column_name(log, 'roll')} and "
+            f"{column_name(log, 'pitch')} tilt the vehicle {tilt:.3g} deg (median), where its "
+            f"rotors cannot hold its height{upside}; expected a hover within "
+            f"{np.degrees(MAX_HOVER_TILT):g} deg of level (quadcog reads ZYX angles in rad, "
+            "body z up)")
+    return cos_tilt
+
+
+def _saturation(log, mask, h):
+    """A motor output at full scale over most of the hover: the thrust beyond the limit is
+    unknown, so no balance holds (and a vehicle at full thrust is not hovering)."""
+    for name in ("motor_pwm", "motor_command"):
+        if not log.has(name):
+            continue
+        u = log.signal(name)[mask]
+        at_top = (u >= SATURATED).mean(axis=0)
+        j = int(np.argmax(at_top))
+        if at_top[j] > SATURATED_FRACTION:
+            raise IdentificationError(
+                f"{log.source}: {column_name(log, name, j)} is at full scale (>= "
+                f"{SATURATED:g}) over {100 * float(at_top[j]):.3g} % of the hover at {h:.2f} m: "
+                "the motor is saturated, so its thrust is not known and the vehicle is not "
+                "hovering on it; expected outputs below full scale (a log of a flight that "
+                "held its height)")
+
+
+def _yaw_balance(log, vehicle, mask, thrusts, h):
+    """The rotors spinning one way against the others: their reaction moment turns the
+    vehicle in yaw unless they balance (a hover holds its heading)."""
+    f = thrusts[mask]
+    total = float(f.sum(axis=1).mean())
+    if not total > 0:
+        return
+    d = np.asarray(vehicle.rotor_directions, float)
+    share = float((f @ d).mean()) / total
+    if abs(share) > YAW_IMBALANCE:
+        one = float((f[:, d > 0].sum(axis=1)).mean()) / total
+        alpha = abs(share) * total * vehicle.moment_constant / vehicle.Izz
+        raise IdentificationError(
+            f"{log.source}: over the hover at {h:.2f} m the rotors spinning one way carry "
+            f"{100 * one:.3g} % of the thrust and the others {100 * (1 - one):.3g} %: their "
+            f"reaction moment would turn {vehicle.name!r} in yaw at {alpha:.3g} rad/s^2; a "
+            f"hover balances them (expected within {100 * YAW_IMBALANCE:g} % of the thrust): "
+            "are the motor outputs in the vehicle's rotor order, or a motor's output missing?")
+
+
+def _velocity_agrees_with_position(log, mask):
+    """The velocity integrated over ``VELOCITY_SECONDS`` against the position's change over
+    the hover: a velocity in mm/s, or in another frame, moves the vehicle elsewhere."""
+    t, p, v = log.t[mask], log.signal("position")[mask], log.signal("velocity")[mask]
+    h = np.diff(t)
+    if not len(h):
+        return
+    moved = np.vstack([np.zeros(3), np.cumsum(0.5 * (v[1:] + v[:-1]) * h[:, None], axis=0)])
+    n = max(int(round(VELOCITY_SECONDS / float(np.median(h)))), 1)
+    if len(t) <= n:
+        return
+    contiguous = (t[n:] - t[:-n]) < 2 * VELOCITY_SECONDS
+    dv, dp = (moved[n:] - moved[:-n])[contiguous], (p[n:] - p[:-n])[contiguous]
+    if not len(dv):
+        return
+    excess = np.abs(dv - dp) - (VELOCITY_TOLERANCE[0] + VELOCITY_TOLERANCE[1] * np.abs(dp))
+    k, j = (int(i) for i in np.unravel_index(int(np.argmax(excess)), excess.shape))
+    if excess[k, j] > 0:
+        raise IdentificationError(
+            f"{log.source}: {column_name(log, 'velocity', j)} integrated over "
+            f"{VELOCITY_SECONDS:g} s moves the vehicle {float(dv[k, j]):.3g} m where "
+            f"{column_name(log, 'position', j)} moves {float(dp[k, j]):.3g} m (expected within "
+            f"{VELOCITY_TOLERANCE[0]:g} m + {100 * VELOCITY_TOLERANCE[1]:g} %): is the velocity "
+            "in mm/s or in another frame? (quadcog reads m/s, ground frame z up)")
+
+
+def _acceleration_agrees(log, mask, a_z, h, g):
+    """The logged vertical acceleration averaged over the hover against the change of the
+    vertical velocity (logged, else of the position): an accelerometer in g, or with a
+    bias, reads a climb that the height does not show."""
+    t = log.t
+    if log.has("velocity"):
+        vz, source = log.signal("velocity")[:, 2], column_name(log, "velocity", 2)
+    else:
+        vz, source = np.gradient(log.signal("position")[:, 2], t), \
+            f"the derivative of {column_name(log, 'position', 2)}"
+    change = float(np.mean(np.gradient(vz, t)[mask]))
+    mean_a = float(np.mean(a_z[mask]))
+    if abs(mean_a - change) > ACCEL_AGREE * g and abs(mean_a) <= GRAVITY_FRACTION * g:
+        raise IdentificationError(
+            f"{log.source}: the vertical acceleration ({column_name(log, 'acceleration', 2)}) "
+            f"averages {mean_a:.3g} m/s^2 over the hover at {h:.2f} m, while {source} changes "
+            f"at {change:.3g} m/s^2 on average (expected to agree within "
+            f"{ACCEL_AGREE * g:.3g} m/s^2): is the acceleration in g, or biased? (quadcog reads "
+            "the kinematic acceleration in m/s^2, without gravity)")
 
 
 def _rates_within_reach(log, vehicle, mask):

@@ -20,7 +20,7 @@ from quadcog.validate import fail, real
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["check_arguments", "HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "MIN_BLOCKS", "HoverWindow",
+__all__ = ["check_arguments", "MAX_GAP", "HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "MIN_BLOCKS", "HoverWindow",
            "hover_window", "rotor_thrusts", "vertical_acceleration", "block_means",
            "block_mean_ci95", "ar1_inflation", "speed_corrected", "body_velocity",
            "SPEED_SPREAD", "t_quantile"]
@@ -35,6 +35,9 @@ MIN_BLOCKS = 3           # fewer blocks than this: too few hover samples for an 
 # as a CoG shift along the motion. When the blocks' mean speeds spread by more than this along
 # a body axis, the CoG is the zero-speed intercept of a line fitted through the blocks.
 SPEED_SPREAD = 0.1       # m/s
+# samples further apart than this are two stretches (a logging gap, or two flights in one
+# log): no plateau and no block spans the gap
+MAX_GAP = 0.5            # s
 
 
 @dataclass(frozen=True, eq=False)
@@ -168,9 +171,14 @@ def hover_window(log: FlightLog, band: float = HOVER_BAND, trim: float = HOVER_T
                                   f"{top:.3f} m): no flight to identify from")
     h = float(np.median(z[z > 0.5 * top]))
     inside = np.abs(z - h) < band * h
-    edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
+    # a run of samples at the plateau ends where it leaves the band or where the time stamps
+    # jump (a logging gap, two flights in one log): no segment spans a gap
+    gap = np.diff(t) > MAX_GAP
+    first = inside & ~(np.r_[False, inside[:-1]] & ~np.r_[False, gap])
+    last = inside & ~(np.r_[inside[1:], False] & ~np.r_[gap, False])
+    runs = zip(np.flatnonzero(first), np.flatnonzero(last) + 1)
     segments = []
-    for i, j in zip(edges[0::2], edges[1::2]):
+    for i, j in runs:
         a, b = t[i] + trim, t[j - 1] - trim
         if b - a >= BLOCK_SECONDS:
             segments.append((float(a), float(b)))

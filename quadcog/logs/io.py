@@ -5,7 +5,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from quadcog.errors import LogError, LogFormatError
-from quadcog.files import output_path
+from quadcog.files import input_file, output_path
 from quadcog.logs.signals import LOG_FORMATS
 from quadcog.validate import fail, plain
 
@@ -29,19 +29,12 @@ def _check_format(fmt, where):
 
 
 def _log_path(path: object, where: str) -> Path:
-    """``path`` as a Path: a non-empty str or os.PathLike naming a file (not a folder)."""
-    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
+    """``path`` as a Path: a non-empty str or os.PathLike naming a file (not a folder, a FIFO
+    or a device: quadcog.files.input_file)."""
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or \
+            not isinstance(os.fspath(path), str) or not os.fspath(path):
         fail(where, "the path of a flight log file (str or os.PathLike)", path, LogError)
-    text = os.fspath(path)
-    if not isinstance(text, str) or not text:
-        fail(where, "the path of a flight log file (str or os.PathLike)", path, LogError)
-    p = Path(text)
-    if p.is_dir():
-        raise LogError(f"{p}: is a folder; expected a flight log file")
-    if p.exists() and not p.is_file():     # a FIFO or a device would block or never end
-        raise LogError(f"{p}: is not a regular file (a FIFO, a device or a socket); expected "
-                       "a flight log file")
-    return p
+    return input_file(path, "a flight log file", LogError, where)
 
 
 def detect_format(path: str | os.PathLike) -> str:

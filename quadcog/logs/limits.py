@@ -10,12 +10,15 @@ import numpy.typing as npt
 from quadcog.errors import LogSignalError
 from quadcog.logs.flightlog import FlightLog
 
-__all__ = ["FLOAT32_MAX", "TICKS_MAX", "UNIT_SIGNALS", "microsecond_ticks", "check_range",
+__all__ = ["FLOAT32_MAX", "TICKS_MAX", "EXACT_US", "UNIT_SIGNALS", "microsecond_ticks", "check_range",
            "check_unit_signals"]
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 TICKS_MAX = 2 ** 64 - 1                         # a uint64 time stamp (us)
 UNIT_SIGNALS = ("motor_command", "motor_pwm")   # 0..1 of full scale in every format
+
+
+EXACT_US = float(2 ** 53)       # us: float64 holds every whole number of us below this
 
 
 def microsecond_ticks(log: FlightLog, start_us: int, fmt: str) -> npt.NDArray[np.uint64]:
@@ -39,13 +42,26 @@ def microsecond_ticks(log: FlightLog, start_us: int, fmt: str) -> npt.NDArray[np
     Raises
     ------
     LogSignalError
-        A stamp beyond a uint64, or samples closer than 1 us.
+        A stamp beyond a uint64, a time before the first stamp (negative), a time beyond
+        ``EXACT_US`` (float64 would round its stamp: the steps would change), or samples
+        closer than 1 us.
     """
     last = float(log.t[-1]) * 1e6 + start_us
     if not last < TICKS_MAX:
         raise LogSignalError(f"{log.source}: time t = {float(log.t[-1])!r} s is {last:.3g} us, "
                              f"past the largest {fmt} time stamp (a uint64 of us: "
                              f"{TICKS_MAX / 1e6:.3g} s); cannot write it", source=log.source)
+    first = float(log.t[0]) * 1e6 + start_us
+    if not first >= 0:
+        raise LogSignalError(f"{log.source}: time t = {float(log.t[0])!r} s is before the "
+                             f"first {fmt} time stamp (an unsigned count of us from "
+                             f"{start_us / 1e6:g} s); cannot write it: shift the log's time "
+                             "(t - t[0])", source=log.source)
+    if not last < EXACT_US:
+        raise LogSignalError(f"{log.source}: time t = {float(log.t[-1])!r} s is {last:.3g} us, "
+                             f"beyond the {EXACT_US:.3g} us that a float64 time holds to the "
+                             f"microsecond; the {fmt} stamps would be rounded (steps changed): "
+                             "shift the log's time (t - t[0])", source=log.source)
     ticks = np.round(log.t * 1e6)
     if not (np.diff(ticks) > 0).all():
         raise LogSignalError(f"{log.source}: samples closer than 1 us cannot be written as "

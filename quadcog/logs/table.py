@@ -100,11 +100,11 @@ def _read_csv(path):
                 ok = data.shape[1] == len(header) or data.size == 0
             except (ValueError, OverflowError):
                 ok = False
+        if not ok:        # read again cell by cell: a byte that is not UTF-8 may come here
+            data = _cells(path, header, lines_before)
     except UnicodeDecodeError as e:
         raise LogFormatError(f"{path}: not a text (UTF-8) CSV file ({e.reason} at byte "
                              f"{e.start})") from None
-    if not ok:
-        data = _cells(path, header, lines_before)
     data = data.reshape(-1, len(header))
     cols = {h: data[:, j].copy() for j, h in enumerate(header)}
     return _from_columns(path, "csv", cols, {"columns": str(len(header))})

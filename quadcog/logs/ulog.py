@@ -427,8 +427,10 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
     ------
     LogSignalError
         The log has a signal ULog does not carry here (``moment_command``),
-        only some of roll, pitch and yaw (an attitude quaternion needs all three), or no
-        signal at all.
+        only some of roll, pitch and yaw (an attitude quaternion needs all three), no
+        signal at all, none of the signals of the time-base topics (``BASE_TOPICS``: the
+        reader would refuse the file), or times the integer-us stamps cannot hold
+        (``quadcog.logs.limits.microsecond_ticks``).
     """
     path = Path(path)
     s = log.signals
@@ -472,6 +474,12 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
     if "thrust_command" in s:
         xyz = np.column_stack([np.zeros(n), np.zeros(n), -s["thrust_command"]])
         topics["vehicle_thrust_setpoint"] = [("xyz", "float[3]", xyz)]
+    if not any(name in topics for name in BASE_TOPICS):
+        raise LogSignalError(f"{log.source}: cannot write as ULog: it has none of position, "
+                             "velocity, acceleration, roll/pitch/yaw or body_rates, whose "
+                             f"topics {BASE_TOPICS} give a ULog its time base (read_ulog "
+                             "refuses a ULog without them)", source=log.source,
+                             available=tuple(s))
     out = bytearray(ULOG_MAGIC + bytes([1]) + struct.pack("<Q", _START_US))
     out += _message("B", bytes(40))                   # no compat/incompat flags, no appends
     for key, value in (("sys_name", "quadcog"), ("ver_hw", "quadcog.logs.write_log")):

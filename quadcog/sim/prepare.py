@@ -9,6 +9,7 @@ state, and hands the loop a ``FlightSetup``. The batch paths (``quadcog.sim.batc
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
+import warnings
 
 import numpy as np
 import numpy.typing as npt
@@ -16,7 +17,7 @@ import numpy.typing as npt
 from quadcog import config, validate
 from quadcog.codegen.fastcall import evaluate
 from quadcog.controllers.base import Controller
-from quadcog.errors import InputError
+from quadcog.errors import InputError, QuadcogWarning
 from quadcog.model.conventions import IDX, N_STATE, R_G, rotation_matrix
 from quadcog.model.inertial_parameters import N_PI, check_physically_consistent
 from quadcog.model.inertial_parameters import is_physically_consistent as consistency_ok
@@ -31,7 +32,7 @@ from quadcog.sim.user_controller import user_state
 from quadcog.trajectories.analytic import POS, VEL, YAW
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.validate import positive, step_count
-from quadcog.vehicles.payload import PAYLOAD_REACH
+from quadcog.vehicles.payload import check_reach
 from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
 
 __all__ = ["RK4_LIMIT", "FlightSetup", "prepare_flight", "batch_start", "check_time",
@@ -155,8 +156,14 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     cog = as_cog_profile(cog)
     loads = as_payload_profile(payloads, vehicle)
     P = vehicle.airframe.parameters()        # the payloads reach the truth through the schedule
-    check_cog_changes(P, cog)
+    check_cog_changes(P, cog, duration)
     check_payload_events(vehicle, loads, duration)
+    for i, d in enumerate(disturbances or ()):
+        start = getattr(d, "t", None)
+        if isinstance(start, (int, float)) and start > duration:
+            warnings.warn(f"disturbance[{i}] (at t = {start:g} s): after the end of the run "
+                          f"(duration {duration:g} s), so it never happens in this run",
+                          QuadcogWarning, stacklevel=2)
     schedule = Schedule.build(trajectory, duration, dt, cog, disturbances, payloads=loads)
     x0 = start_at_reference(schedule.ref[0]) if x0 is None else validate.vector(x0, "x0", 12)
     if not np.abs(x0).max() <= LARGEST:
@@ -370,8 +377,10 @@ def as_cog_profile(cog: Any) -> CogProfile:
 
 
 
-def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile) -> None:
-    """Raise ParameterError if the vehicle is inadmissible with any CoG of the profile.
+def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile,
+                      duration: float | None = None) -> None:
+    """Raise ParameterError if the vehicle is inadmissible with any CoG of the profile, and
+    a QuadcogWarning for a change that starts after the end of the run (it never happens).
 
     The admissible set of r_G is convex (|r|^2 - (u.r)^2 is convex for every unit u), so
     checking where each change ends covers the ramps between them.
@@ -382,13 +391,28 @@ def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile) -> None:
         The vehicle's parameters.
     cog : CogProfile
         The CoG changes.
+    duration : float, optional
+        The run's length (s): a change that starts after it is refused.
 
     Raises
     ------
     quadcog.ParameterError
         Naming the change whose CoG makes the vehicle inadmissible.
+
+    Warns
+    -----
+    QuadcogWarning
+        A change that starts after the end of the run (it never happens in it; a shipped
+        scenario flown shorter with ``--set duration=...`` is told so, not refused).
     """
+    if duration is not None:
+        duration = positive(duration, "duration", unit="s")
     for i, change in enumerate(cog.changes):
+        if duration is not None and change.t > duration:
+            warnings.warn(f"cog[{i}] (the change to r = {list(change.r)} m at t = "
+                          f"{change.t:g} s): after the end of the run (duration "
+                          f"{duration:g} s), so it never happens in this run",
+                          QuadcogWarning, stacklevel=2)
         check_parameters(with_cog(P, cog_at(P[R_G], 1.0, np.asarray(change.r))),
                          f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
 
@@ -422,6 +446,9 @@ def as_payload_profile(payloads: Any, vehicle: Vehicle) -> PayloadProfile:
     if isinstance(payloads, (str, bytes, dict)) or not isinstance(payloads, (list, tuple)):
         validate.fail("payloads", "None or a list of payload events (PayloadEvent or dicts "
                       "with t, action, name, ...)", payloads)
+    if not isinstance(vehicle, Vehicle):
+        validate.fail("vehicle", "a quadcog Vehicle (the truth, with its payloads on board)",
+                      vehicle)
     return PayloadProfile(list(payloads), vehicle.payloads)
 
 
@@ -456,14 +483,20 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
     quadcog.PhysicalConsistencyError
         Naming the event after which the whole body is not physically consistent.
     """
+    if not isinstance(vehicle, Vehicle):
+        validate.fail("vehicle", "a quadcog Vehicle (the truth)", vehicle)
+    if not isinstance(loads, PayloadProfile):
+        validate.fail("loads", "a PayloadProfile (quadcog.sim.prepare.as_payload_profile)", loads)
+    if duration is not None:
+        duration = positive(duration, "duration", unit="s")
     if not loads.events:
         return
     import heapq
-    reach = PAYLOAD_REACH * vehicle.arm_length
     on_board = {p.name: (p, p.inertial_parameters()) for p in loads.carried}
     total = vehicle.airframe.inertial_parameters() + sum(
         (pi for _, pi in on_board.values()), np.zeros(N_PI))
     ends: list = []                  # (end time, index, name, target) of sliding moves
+    attached_at: dict[str, float] = {}     # the time each payload was last attached
 
     def place(name, payload):
         nonlocal total
@@ -485,17 +518,19 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
         if duration is not None and e.t > duration:
             raise InputError(f"{where}: after the end of the run (duration {duration:g} s), "
                              "so it would never happen; expected t <= duration")
-        if e.position is not None and not np.linalg.norm(e.position) <= reach:
-            raise InputError(f"{where}: position {list(e.position)} m is "
-                             f"{np.linalg.norm(e.position):.3g} m from O, beyond "
-                             f"{PAYLOAD_REACH:g} arm lengths of {vehicle.name!r} ({reach:.3g} m); "
-                             "a payload is carried on the vehicle")
+        if e.position is not None:
+            check_reach(e.position, e.size, vehicle.arm_length, where)
+        if e.action == "drop" and attached_at.get(e.name) == e.t:
+            raise InputError(f"{where}: at the time {e.name!r} is attached, so it is never "
+                             "carried (the drop undoes the attach at once); expected t after "
+                             f"the attach at {e.t:g} s")
         while ends and ends[0][0] <= e.t:
             end, j, name, target = heapq.heappop(ends)
             if name in on_board:
                 place(name, on_board[name][0].moved(target))
                 check(j, loads.events[j], end)
         if e.action == "attach":
+            attached_at[e.name] = e.t
             place(e.name, e.payload())
         elif e.action == "drop":
             place(e.name, None)

@@ -240,7 +240,7 @@ def _table(spec, where, source, required, optional=()):
             raise _field_err(source, where, f"missing {k!r}")
     for k, v in spec.items():
         if k != "plane" and not _number(v):
-            raise _field_err(source, where, f"{k}: expected a finite number, got {v!r}")
+            raise _field_err(source, where, f"{k}: expected a finite number, got {plain(v)}")
     return spec
 
 
@@ -306,6 +306,9 @@ def _range_values(spec, where, source):
                          "and 'step'")
     _table(spec, where, source, ("start", "stop", "num" if has_num else "step"))
     start, stop = float(spec["start"]), float(spec["stop"])
+    if not math.isfinite(stop - start):
+        raise _field_err(source, where, f"start = {start}, stop = {stop}: a range wider than "
+                         "the float range (stop - start overflows)")
     if has_num:
         num = spec["num"]
         if not isinstance(num, int) or num < 1:

@@ -22,7 +22,7 @@ from quadcog.model.parameters import LARGEST
 _PVAJ = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64],
               npt.NDArray[np.float64]]
 
-__all__ = ["Trajectory", "Hover", "Circle", "Figure8", "Helix", "FromCallable", "REF_SIZE",
+__all__ = ["sample_times", "Trajectory", "Hover", "Circle", "Figure8", "Helix", "FromCallable", "REF_SIZE",
            "REF_NAMES", "REFERENCE_LIMIT", "POS", "VEL", "ACC", "JERK", "YAW", "YAW_RATE"]
 
 REF_SIZE = 14
@@ -64,6 +64,10 @@ def _describe(trajectory):
         fields = ", ".join(f"{f.name}={validate.plain(getattr(trajectory, f.name))}"
                            for f in dataclasses.fields(trajectory))
         return f"{type(trajectory).__name__}({fields})"
+    times = getattr(trajectory, "times", None)
+    if isinstance(times, np.ndarray) and times.size:     # MinimumSnap: no dataclass
+        return (f"{type(trajectory).__name__}({times.size} waypoints from "
+                f"{validate.plain(times[0])} s to {validate.plain(times[-1])} s)")
     return repr(trajectory)
 
 
@@ -81,6 +85,36 @@ def _checked_reference(ref, t, trajectory):
                          f"{validate.plain(t[k])} s is {validate.plain(ref[k, i])}; expected "
                          f"finite values within +-{REFERENCE_LIMIT:g} (SI units)")
     return ref
+
+
+def sample_times(t: npt.ArrayLike, where: str = "t") -> npt.NDArray[np.float64]:
+    """Times to sample a trajectory at: a real number or a 1-D array of them, finite (s).
+
+    Parameters
+    ----------
+    t : float or (N,) array_like
+        Times (s).
+    where : str
+        The argument's name, for messages.
+
+    Returns
+    -------
+    (N,) numpy.ndarray
+        A float64 copy (a number gives one time).
+
+    Raises
+    ------
+    InputError
+        A bool, complex, string, None, NaN or infinite time, or an array of more than one
+        dimension.
+    """
+    if isinstance(t, np.ndarray) and t.dtype == np.float64 and t.ndim == 1 and \
+            np.isfinite(t).all():
+        return t                     # the simulator's own grids: nothing to convert
+    a = validate.array(t, where, what="a time or a 1-D array of times (s)")
+    if a.ndim > 1:
+        validate.fail(where, "a time or a 1-D array of times (s)", t)
+    return np.atleast_1d(a)
 
 
 class Trajectory:
@@ -115,7 +149,7 @@ class Trajectory:
         InputError
             When a row is not finite or beyond REFERENCE_LIMIT (a radius of 1e300 m).
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = sample_times(t)
         with np.errstate(over="ignore", invalid="ignore"):
             # one array, no hstack of copies: the parts constant in time (broadcast views,
             # stride 0) go into one row that fills every row at once; a column block is a

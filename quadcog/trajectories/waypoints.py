@@ -24,7 +24,7 @@ from quadcog import validate
 from quadcog.errors import InputError
 from quadcog.kinds import Number, Points, Vector
 from quadcog.model.parameters import LARGEST
-from quadcog.trajectories.analytic import Trajectory
+from quadcog.trajectories.analytic import Trajectory, sample_times
 
 __all__ = ["MinimumSnap", "allocate_times", "DEGREE"]
 
@@ -65,8 +65,14 @@ def allocate_times(points: npt.ArrayLike, max_speed: float = 1.0,
     (n,) numpy.ndarray
         Duration of each segment (s).
     """
-    d = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    v, a = float(max_speed), float(max_acceleration)
+    what = "at least 2 rows of 3 finite numbers (m)"
+    pts = validate.array(points, "points", (None, 3), what=what)
+    if pts.shape[0] < 2:
+        validate.fail("points", what, points)
+    v = validate.positive(max_speed, "max_speed", unit="m/s")
+    a = validate.positive(max_acceleration, "max_acceleration", unit="m/s^2")
+    min_segment_time = validate.nonnegative(min_segment_time, "min_segment_time", unit="s")
+    d = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     full = d >= v * v / a
     T = np.where(full, d / v + v / a, 2 * np.sqrt(d / a))
     return np.maximum(T, min_segment_time)
@@ -143,14 +149,24 @@ class MinimumSnap(Trajectory):
         return float(self.times[-1] - self.times[0])
 
     def _solve(self):
+        # The system is sparse (each row touches one or two segments): built as triplets and
+        # solved by sparse LU, its cost grows linearly with the waypoints (a dense solve of the
+        # 8n x 8n matrix grows as n^3, and its memory as n^2: 1 GB at 1,600 waypoints)
+        from scipy.sparse import csc_matrix  # here: slow to import
+        from scipy.sparse.linalg import spsolve
         n = len(self.waypoints) - 1
         T = np.diff(self.times)
-        M = np.zeros((N_COEF * n, N_COEF * n))
+        rows: list[int] = []
+        cols: list[int] = []
+        vals: list[np.ndarray] = []
         rhs = np.zeros((N_COEF * n, 3))
         row = 0
+        span = np.arange(N_COEF)
 
         def put(seg, tau, order, value=None, sign=1.0):
-            M[row, N_COEF * seg:N_COEF * (seg + 1)] += sign * _derivative_row(tau, order)
+            rows.extend([row] * N_COEF)
+            cols.extend((N_COEF * seg + span).tolist())
+            vals.append(sign * _derivative_row(tau, order))
             if value is not None:
                 rhs[row] = value
 
@@ -169,7 +185,12 @@ class MinimumSnap(Trajectory):
                 put(i, T[i], order)
                 put(i + 1, 0.0, order, 0.0, sign=-1.0)
                 row += 1
-        coef = np.linalg.solve(M, rhs)
+        M = csc_matrix((np.concatenate(vals), (rows, cols)), shape=(N_COEF * n, N_COEF * n))
+        coef = np.column_stack([spsolve(M, rhs[:, k]) for k in range(3)])
+        if not np.isfinite(coef).all():
+            raise InputError(f"waypoints: the minimum-snap system of {len(self.waypoints)} "
+                             "waypoints and their times is singular (no finite polynomial "
+                             "passes them); expected distinct times and finite points")
         return coef.reshape(n, N_COEF, 3)
 
     def _pvaj(self, t):
@@ -204,7 +225,7 @@ class MinimumSnap(Trajectory):
         InputError
             When a row is not finite or beyond ``REFERENCE_LIMIT``.
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = sample_times(t)
         ref = super().sample(t)
         resting = (t < self.times[0]) | (t > self.times[-1])
         ref[resting, 3:12] = 0.0

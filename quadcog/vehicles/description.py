@@ -45,7 +45,9 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import VehicleFileError
+from quadcog.files import input_file
 from quadcog.model.inertial_parameters import check_physically_consistent, inertial_parameters
+from quadcog.validate import fail
 
 __all__ = ["urdf_fields", "sdf_fields", "file_fields", "GYM_PYBULLET_DIRECTIONS",
            "RPM_PER_RAD_S", "GAZEBO_PATH_VARIABLES"]
@@ -62,7 +64,18 @@ GAZEBO_PATH_VARIABLES = ("GZ_SIM_RESOURCE_PATH", "GAZEBO_MODEL_PATH")
 
 # -- XML reading -----------------------------------------------------------------------------
 
+def _file_path(path: object, where: str) -> Path:
+    """``path`` as a Path if it is a str or os.PathLike naming a file that is not a folder,
+    a FIFO or a device (quadcog.files.input_file), else a VehicleFileError."""
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or \
+            not str(os.fspath(path)).strip():
+        fail(where, "a vehicle file's path (a str or os.PathLike, .urdf or .sdf)", path,
+             VehicleFileError)
+    return input_file(path, "a vehicle file (.urdf or .sdf)", VehicleFileError, where)
+
+
 def _parse(path: Path) -> ET.Element:
+    input_file(path, "a vehicle file (.urdf or .sdf)", VehicleFileError)   # included ones too
     try:
         return ET.parse(path).getroot()
     except FileNotFoundError:
@@ -241,7 +254,7 @@ def urdf_fields(path: str | os.PathLike[str], *,
     PhysicalConsistencyError
         A link whose mass and inertia no rigid body has.
     """
-    path = Path(path)
+    path = _file_path(path, "path (Vehicle.from_urdf)")
     root = _parse(path)
     if root.tag != "robot":
         raise VehicleFileError(f"{path}: the root element is <{root.tag}>; expected <robot> "
@@ -406,7 +419,7 @@ def sdf_fields(path: str | os.PathLike[str], *,
     PhysicalConsistencyError
         A link whose mass and inertia no rigid body has.
     """
-    path = Path(path)
+    path = _file_path(path, "path (Vehicle.from_sdf)")
     model_name, links, joints, plugins = _sdf_model(
         path, tuple(Path(p) for p in model_paths))
     motors = [p for p in plugins if "MulticopterMotorModel" in (p.get("name", "")
@@ -498,7 +511,7 @@ def file_fields(path: str | os.PathLike[str], **options: Any) -> dict[str, Any]:
     VehicleFileError
         A suffix other than ``.urdf`` or ``.sdf``, or what the reader raises.
     """
-    path = Path(path)
+    path = _file_path(path, "path (Vehicle.from_file)")
     if path.suffix.lower() == ".urdf":
         return urdf_fields(path, **options)
     if path.suffix.lower() == ".sdf":

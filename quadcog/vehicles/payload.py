@@ -17,11 +17,45 @@ from quadcog.errors import InputError, ParameterError
 from quadcog.model.inertial_parameters import placed
 from quadcog.model.parameters import LARGEST
 
-__all__ = ["Payload", "as_payload", "PAYLOAD_REACH"]
+__all__ = ["Payload", "as_payload", "PAYLOAD_REACH", "check_reach"]
 
 # A payload is carried on the vehicle: its centre at most this many arm lengths from O (a
 # sling load hangs a few arm lengths below; 100 km away is a typing error, refused)
 PAYLOAD_REACH = 10.0
+
+
+def check_reach(position: npt.ArrayLike, size: npt.ArrayLike | None, arm: float,
+                where: str) -> None:
+    """Refuse a payload not carried on the vehicle: its centre, or its box's far corner,
+    farther from O than ``PAYLOAD_REACH`` arm lengths.
+
+    Parameters
+    ----------
+    position : (3,) array_like
+        The payload's centre (m, body frame).
+    size : (3,) array_like or None
+        The box's sides (m); None: a point mass.
+    arm : float
+        The vehicle's arm length (m).
+    where : str
+        The start of the message (the payload or the event).
+
+    Raises
+    ------
+    InputError
+        Naming the position (and size), the distance and the reach.
+    """
+    reach = PAYLOAD_REACH * arm
+    centre = float(np.linalg.norm(position))
+    corner = centre + (0.0 if size is None else 0.5 * float(np.linalg.norm(size)))
+    if not centre <= reach:
+        raise InputError(f"{where}: its centre {list(position)} m is {centre:.3g} m from O, "
+                         f"beyond {PAYLOAD_REACH:g} arm lengths ({reach:.3g} m); a payload is "
+                         "carried on the vehicle")
+    if not corner <= reach:
+        raise InputError(f"{where}: its box of size {list(size)} m at {list(position)} m "
+                         f"reaches {corner:.3g} m from O, beyond {PAYLOAD_REACH:g} arm lengths "
+                         f"({reach:.3g} m); a payload is carried on the vehicle")
 
 
 @dataclass(frozen=True)

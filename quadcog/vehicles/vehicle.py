@@ -32,7 +32,7 @@ from quadcog.model.parameters import check_parameters
 from quadcog.numerics import exact_inverse
 from quadcog.validate import array, plain, real, vector
 from quadcog.vehicles.description import file_fields, sdf_fields, urdf_fields
-from quadcog.vehicles.payload import PAYLOAD_REACH, Payload, as_payload
+from quadcog.vehicles.payload import Payload, as_payload, check_reach
 from quadcog.vehicles.rotor_model import CRAZYFLIE_21_PLUS_CUBIC, CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "CRAZYFLIE_21", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
@@ -206,7 +206,12 @@ class Vehicle:
             raise InputError(where(f"rotor_positions must be {N_ROTORS} pairs (x, y) of finite "
                                    f"numbers (m), got {self.rotor_positions!r}"))
         object.__setattr__(self, "rotor_positions", tuple(tuple(map(float, r)) for r in pos))
-        dirs = tuple(self.rotor_directions) if np.ndim(self.rotor_directions) == 1 else None
+        try:         # np.ndim of a ragged list raises ValueError
+            flat = not isinstance(self.rotor_directions, (str, bytes)) and \
+                np.ndim(self.rotor_directions) == 1
+        except ValueError:
+            flat = False
+        dirs = tuple(self.rotor_directions) if flat else None
         if dirs is None or len(dirs) != N_ROTORS or any(
                 isinstance(d, bool) or d not in (1, -1) for d in dirs):
             raise InputError(where(f"rotor_directions must be {N_ROTORS} numbers, each +1 or -1, "
@@ -481,12 +486,19 @@ class Vehicle:
         Raises
         ------
         InputError
-            When ``U`` does not have 4 rows of finite numbers.
+            When ``U`` does not have 4 rows of finite numbers, or the thrusts overflow.
         """
         U = array(U, "U", what="4 rows [U1 (N), U2, U3, U4 (N m)] of finite numbers")
         if U.shape[:1] != (4,):
             raise InputError(f"U must have 4 rows [U1, U2, U3, U4], got shape {U.shape}")
-        return np.asarray(self.mixer_inverse() @ U, dtype=np.float64)
+        with np.errstate(over="ignore", invalid="ignore"):
+            f = np.asarray(self.mixer_inverse() @ U, dtype=np.float64)
+        if not np.isfinite(f).all():       # never a silent NaN: U near the float range
+            raise InputError(f"U: the rotor thrusts overflow (not finite) at max |U| = "
+                             f"{float(np.abs(U).max()):.3g}; expected an input a vehicle's "
+                             "rotors give (thrusts and moments within the float range over "
+                             "the mixer's entries)")
+        return f
 
     def rotor_speeds(self, f: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Rotor speeds of rotor thrusts: sqrt(f / thrust_constant).
@@ -507,7 +519,9 @@ class Vehicle:
             ``f`` is not real numbers (a string, None, complex, ragged) or not finite.
         """
         thrusts = array(f, "f", what="rotor thrusts (N): finite real numbers")
-        return np.sqrt(np.maximum(thrusts, 0.0) / self.thrust_constant)
+        # sqrt of each factor: f / thrust_constant overflows to inf for a finite f near the
+        # float range (1e308 N over 1e-8 N s^2), its root does not
+        return np.sqrt(np.maximum(thrusts, 0.0)) / np.sqrt(self.thrust_constant)
 
     def hover_input(self) -> npt.NDArray[np.float64]:
         """The input that holds a level hover with this vehicle's CoG
@@ -628,11 +642,7 @@ def _check_payloads(vehicle, where):
         seen.add(p.name)
     arm = max(float(np.hypot(x, y)) for x, y in vehicle.rotor_positions)
     for p in loads:
-        if not np.linalg.norm(p.position) <= PAYLOAD_REACH * arm:
-            raise InputError(where(f"payload {p.name!r}: its centre {list(p.position)} m is "
-                                   f"{np.linalg.norm(p.position):.3g} m from O, beyond "
-                                   f"{PAYLOAD_REACH:g} arm lengths ({PAYLOAD_REACH * arm:.3g} m); "
-                                   "a payload is carried on the vehicle"))
+        check_reach(p.position, p.size, arm, where(f"payload {p.name!r}"))
     object.__setattr__(vehicle, "payloads", loads)
     if loads:
         check_physically_consistent(vehicle.inertial_parameters(),
