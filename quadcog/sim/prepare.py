@@ -158,7 +158,8 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     P = vehicle.airframe.parameters()        # the payloads reach the truth through the schedule
     check_cog_changes(P, cog, duration)
     check_payload_events(vehicle, loads, duration)
-    for i, d in enumerate(disturbances or ()):
+    # the type is checked by Schedule.build; only a sequence can hold a late disturbance
+    for i, d in enumerate(disturbances if isinstance(disturbances, (list, tuple)) else ()):
         start = getattr(d, "t", None)
         if isinstance(start, (int, float)) and start > duration:
             warnings.warn(f"disturbance[{i}] (at t = {start:g} s): after the end of the run "

@@ -49,11 +49,11 @@ def check_reach(position: npt.ArrayLike, size: npt.ArrayLike | None, arm: float,
     centre = float(np.linalg.norm(position))
     corner = centre + (0.0 if size is None else 0.5 * float(np.linalg.norm(size)))
     if not centre <= reach:
-        raise InputError(f"{where}: its centre {list(position)} m is {centre:.3g} m from O, "
+        raise InputError(f"{where}: its centre {np.asarray(position).tolist()} m is {centre:.3g} m from O, "
                          f"beyond {PAYLOAD_REACH:g} arm lengths ({reach:.3g} m); a payload is "
                          "carried on the vehicle")
     if not corner <= reach:
-        raise InputError(f"{where}: its box of size {list(size)} m at {list(position)} m "
+        raise InputError(f"{where}: its box of size {np.asarray(size).tolist()} m at {np.asarray(position).tolist()} m "
                          f"reaches {corner:.3g} m from O, beyond {PAYLOAD_REACH:g} arm lengths "
                          f"({reach:.3g} m); a payload is carried on the vehicle")
 
