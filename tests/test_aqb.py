@@ -403,3 +403,95 @@ def test_the_published_tables_are_the_runs(name):
     page = pub.PAGES[name].read_text()
     assert pub.block(page, name) == pub.table_of(data["table"])
     assert pub.block(page, f"{name}-machine") == data["machine"]
+
+
+# -- hostile input (third pass) -----------------------------------------------------------
+
+def _params(**changes):
+    import copy
+    p = copy.deepcopy(AQB_QUAD_PARAMS)
+    p.update(changes)
+    return p
+
+
+@pytest.mark.parametrize("key", ["mass", "Ixx", "k_m", "k_d", "tau_m", "rotor_speed_min",
+                                 "rotor_speed_max", "Ixy"])
+@pytest.mark.parametrize("value", [None, "1.0", True, np.array([1.0, 2.0]), 1 + 2j, 10**400,
+                                   float("nan")])
+def test_quad_params_numbers_are_checked_and_named(key, value):
+    """Each number of quad_params is a real number or an InputError naming its key (was a raw
+    TypeError/OverflowError for None, an array, a complex or a huge int; '1.0' and True were
+    read as numbers; a NaN mass warned from sqrt)."""
+    with pytest.raises(InputError, match=rf"quad_params\['{key}'\]"):
+        vehicle_from_quad_params(_params(**{key: value}))
+
+
+@pytest.mark.parametrize("key", ["rotor_speed_min", "rotor_speed_max"])
+def test_a_negative_rotor_speed_limit_is_refused(key):
+    """A negative rotor speed squared into a positive thrust limit: -1 rad/s as the maximum
+    made a vehicle that cannot lift itself, without a word."""
+    with pytest.raises(InputError, match=rf"quad_params\['{key}'\]"):
+        vehicle_from_quad_params(_params(**{key: -1.0}))
+
+
+@pytest.mark.parametrize("key, value", [
+    ("rotor_directions", np.array([1.5, -1, 1, -1])),       # was truncated to 1
+    ("rotor_directions", np.array([1, -1, np.nan, -1])),    # was a raw ValueError
+    ("rotor_directions", "abcd"),                           # was a raw TypeError
+    ("rotor_pos", [list(r) for r in AQB_QUAD_PARAMS["rotor_pos"].values()]),  # raw ValueError
+    ("num_rotors", np.array([4, 4])),                       # was a raw ValueError
+    ("num_rotors", 4.5)])
+def test_quad_params_rotors_are_checked_and_named(key, value):
+    with pytest.raises(InputError, match=rf"quad_params\['{key}'\]"):
+        vehicle_from_quad_params(_params(**{key: value}))
+
+
+def test_the_factory_checks_its_arguments_before_any_flight():
+    from quadcog.aqb.adapter import aqb_controller_factory
+    with pytest.raises(InputError, match="on_nonfinite"):      # was accepted until a call
+        aqb_controller_factory(on_nonfinite="ignore")
+    with pytest.raises(InputError, match="peer_factory"):      # was a raw TypeError later
+        aqb_controller_factory(peer_factory=3)
+    with pytest.raises(InputError, match="controller"):        # was a raw AttributeError
+        aqb_controller_factory()(3, AQB_QUAD_PARAMS)
+
+
+def test_a_time_gap_beyond_max_gap_is_refused_at_once():
+    """A call 1e6 s after the previous one (a clock in ms, a jump) advanced the law's state
+    in 1 ms Euler substeps: 1e9 evaluations, a hang. Now an InputError, nothing changed."""
+    import time
+
+    from quadcog.aqb.adapter import MAX_GAP, QuadcogAQBController
+    c = QuadcogAQBController(AQB_QUAD_PARAMS, "composite")
+    c.update(0.0, _state(), _flat())
+    c.update(0.01, _state(), _flat())
+    before = c.c.copy()
+    start = time.perf_counter()
+    with pytest.raises(InputError, match=r"^t: expected a time at most 1\.0 s after"):
+        c.update(1e6, _state(), _flat())
+    assert time.perf_counter() - start < 5.0
+    np.testing.assert_array_equal(c.c, before)
+    c.update(0.01 + MAX_GAP, _state(), _flat())       # the gap itself is allowed
+
+
+@pytest.mark.parametrize("seed", [-1, 1.5, "42", None, 2**40, True])
+def test_payload_trials_refuse_a_seed_numpy_refuses(seed):
+    """Was a raw ValueError/TypeError from numpy's RandomState (None drew from the OS's
+    entropy: trials that no seed repeats)."""
+    with pytest.raises(InputError, match="^seed: expected an integer in"):
+        payload_trials(2, seed=seed)
+
+
+def test_payload_trials_check_the_vehicle_and_the_size():
+    from quadcog.aqb.protocol import MAX_DRAWS
+    from quadcog.errors import SizeError
+    no_arm = _params()
+    del no_arm["arm_length"]
+    with pytest.raises(InputError, match=r"quad_params\['arm_length'\]"):   # raw KeyError
+        payload_trials(2, quad_params=no_arm)
+    with pytest.raises(InputError, match=r"quad_params\['mass'\]"):         # NaN payloads
+        payload_trials(2, quad_params=_params(mass=float("nan")))
+    with pytest.raises(SizeError, match="draws"):          # was a hang, draws linear in it
+        payload_trials(2, intensity=float(MAX_DRAWS))
+    with pytest.raises(SizeError, match="draws"):
+        payload_trials(MAX_DRAWS + 1)

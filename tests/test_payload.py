@@ -252,3 +252,13 @@ def test_a_sweep_over_payload_mass(tmp_path):
             "parcel-hover", overrides=["duration=3.0", "payload[1].t=2.5",
                                        f"payload[0].mass={mass}"])
         assert rms == pytest.approx(sc.run().metrics.rms_position_error, rel=1e-9), mass
+
+
+@pytest.mark.parametrize("position", [[True, False, False],      # was cast to [1.0, 0, 0]
+                                      np.array([0.01, 0.0, 0.0]) + 1e-3j,  # imaginary part dropped
+                                      "abc",                               # was a raw ValueError
+                                      [0.01, [0.0, 0.0], 0.0]])            # ragged: raw ValueError
+def test_a_payload_is_moved_only_to_three_real_numbers(position):
+    """Payload.moved checks the position as the constructor does (validate.array)."""
+    with pytest.raises(InputError, match=r"payload 'parcel': position"):
+        Payload(0.1, (0.0, 0.0, 0.0), name="parcel").moved(position)

@@ -129,3 +129,15 @@ def test_se3_dynamics_checks_pi_and_g(model):
         model.se3_dynamics(xq, np.zeros(4), pi, 0.0, np.zeros(6))
     with pytest.raises(InputError, match="wrench"):
         model.se3_dynamics(xq, np.zeros(4), pi, 9.81, np.zeros(6), np.zeros(5))
+
+
+@pytest.mark.parametrize("bad", [
+    np.eye(3, dtype=bool),                          # was cast: True, False read as 1, 0
+    np.eye(3) + 1e-3j,                              # was cast: the imaginary part dropped
+    [[True, False, False], [False, True, False], [False, False, True]],
+    [[1.0, 0.0, 0.0], [0.0, 1.0], [0.0, 0.0, 1.0]],  # ragged: np.size raised a raw ValueError
+])
+def test_refuses_a_rotation_of_booleans_complex_numbers_or_ragged_rows(model, bad):
+    """R goes through validate.array as every other argument does, never a cast to float."""
+    with pytest.raises(InputError, match=r"^R(\[[0-9, ]+\])?: expected"):
+        model.se3_regressor(bad, np.zeros(6), np.zeros(6), 9.81)

@@ -26,11 +26,16 @@ from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import controller_names, make_controller
 from quadcog.model.conventions import rotation_matrix
 
-__all__ = ["QuadcogAQBController", "AQB_PREFIX", "AQB_NAMES", "aqb_controller_factory", "register_template"]
+__all__ = ["QuadcogAQBController", "AQB_PREFIX", "AQB_NAMES", "MAX_GAP", "aqb_controller_factory",
+           "register_template"]
 
 # AdaptiveQuadBench's name of each quadcog law: "qc-" + quadcog's registry name
 AQB_PREFIX = "qc-"
 AQB_NAMES = {AQB_PREFIX + name: name for name in controller_names()}
+# the longest time between two calls (s) over which the law's own state advances on the state
+# held since the previous call: AdaptiveQuadBench calls every 10 ms; a longer gap (a time in
+# ms, a clock that jumped) would be that many Euler substeps on a stale measurement
+MAX_GAP = 1.0
 
 
 class QuadcogAQBController:
@@ -138,10 +143,15 @@ class QuadcogAQBController:
         quadcog.PeerStateError
             A key of ``state`` or ``flat_output`` missing or malformed (named).
         quadcog.InputError
-            A law that is not finite at this state.
+            A law that is not finite at this state, or a t more than ``MAX_GAP`` after the
+            previous call's (nothing changes then).
         """
         t = validate.real(t, "t", unit="s")
         x, ref = state_vector(state), reference_row(flat_output)
+        if self._t is not None and t - self._t > MAX_GAP:
+            validate.fail("t", f"a time at most {validate.plain(MAX_GAP)} s after the previous "
+                          f"call's t = {validate.plain(self._t)} s (a call each simulation step, times in s; "
+                          "reset() or an earlier t starts a new flight)", t)
         if self._t is not None and t < self._t:
             self.reset()                        # a new flight with the same controller
         with np.errstate(all="ignore"):         # an unstable law is caught just below
@@ -192,8 +202,22 @@ def aqb_controller_factory(peer_factory: Any = None, on_nonfinite: str = "raise"
     -------
     callable
         The factory.
+
+    Raises
+    ------
+    quadcog.InputError
+        ``on_nonfinite`` not one of its values, or a ``peer_factory`` that is not callable
+        (here, before any flight); the factory raises it for a ``controller_type`` that is
+        not a name, or an unknown name.
     """
+    on_nonfinite = validate.choice(on_nonfinite, "on_nonfinite", ("raise", "cut"))
+    if peer_factory is not None and not callable(peer_factory):
+        validate.fail("peer_factory", "a callable (controller_type, quad_params) or None",
+                      peer_factory)
+
     def factory(controller_type: str, quad_params: Mapping[str, Any]) -> Any:
+        if not isinstance(controller_type, str):
+            validate.fail("controller", "a controller name (a string)", controller_type)
         if controller_type.startswith(AQB_PREFIX):
             validate.choice(controller_type, "controller", tuple(AQB_NAMES))
             return QuadcogAQBController(quad_params, AQB_NAMES[controller_type],

@@ -11,6 +11,7 @@ same spin signs. Only the true state (x, v, q, w) is read, never ``ext_force``,
 ``ext_torque`` or ``payload_mass``.
 """
 from collections.abc import Mapping
+import numbers
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,17 @@ STATE_KEYS = {"x": 3, "v": 3, "q": 4, "w": 3}
 FLAT_KEYS = {"x": 3, "x_dot": 3, "x_ddot": 3, "yaw": 1}
 _PARAM_KEYS = ("mass", "Ixx", "Iyy", "Izz", "num_rotors", "rotor_pos", "rotor_directions",
                "k_eta", "k_m", "k_d", "k_z", "tau_m", "rotor_speed_min", "rotor_speed_max")
+# each number of quad_params the Vehicle is made of: its check (a real number, not a string,
+# a bool or an array) and unit; a negative rotor speed would square into a positive thrust
+_PARAM_CHECKS = (("mass", validate.positive, "kg"), ("Ixx", validate.positive, "kg m^2"),
+                 ("Iyy", validate.positive, "kg m^2"), ("Izz", validate.positive, "kg m^2"),
+                 ("k_eta", validate.positive, "N/(rad/s)^2"),
+                 ("k_m", validate.positive, "N m/(rad/s)^2"),
+                 ("k_d", validate.nonnegative, "N/(m/s)/(rad/s)"),
+                 ("k_z", validate.nonnegative, "N/(m/s)/(rad/s)"),
+                 ("tau_m", validate.nonnegative, "s"),
+                 ("rotor_speed_min", validate.nonnegative, "rad/s"),
+                 ("rotor_speed_max", validate.positive, "rad/s"))
 
 
 def _param(params, key):
@@ -76,35 +88,41 @@ def vehicle_from_quad_params(params: Mapping[str, Any], name: str = "aqb") -> Ve
     if not isinstance(params, Mapping):
         validate.fail("quad_params", "a RotorPy quad_params dictionary", params)
     n = _param(params, "num_rotors")
-    if n != N_ROTORS:
-        validate.fail("quad_params['num_rotors']", f"{N_ROTORS} rotors", n)
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, numbers.Integral) or n != N_ROTORS:
+        validate.fail("quad_params['num_rotors']", f"{N_ROTORS} rotors (an integer)", n)
     for key in ("Ixy", "Ixz", "Iyz"):
-        if float(params.get(key, 0.0)) != 0.0:
+        if validate.real(params.get(key, 0.0), f"quad_params[{key!r}]", unit="kg m^2") != 0.0:
             validate.fail(f"quad_params[{key!r}]", "0 (quadcog's model has a diagonal inertia)",
                           params[key])
+    rotor_pos = _param(params, "rotor_pos")
+    if not isinstance(rotor_pos, Mapping):
+        validate.fail("quad_params['rotor_pos']",
+                      "a dictionary of each rotor's position (3,) (m)", rotor_pos)
     pos = np.array([validate.array(r, f"quad_params['rotor_pos'][{k!r}]", (3,))
-                    for k, r in dict(_param(params, "rotor_pos")).items()])
+                    for k, r in rotor_pos.items()])
     if pos.shape != (N_ROTORS, 3) or np.abs(pos[:, 2]).max() > 0.0:
         validate.fail("quad_params['rotor_pos']", f"{N_ROTORS} rotors in the plane z = 0 (m)",
                       pos.tolist())
-    m = float(_param(params, "mass"))
-    k_eta = validate.positive(_param(params, "k_eta"), "quad_params['k_eta']", "N/(rad/s)^2")
+    dirs = validate.array(_param(params, "rotor_directions"), "quad_params['rotor_directions']",
+                          (N_ROTORS,))
+    if not np.isin(dirs, (-1.0, 1.0)).all():
+        validate.fail("quad_params['rotor_directions']", f"{N_ROTORS} spin signs, each 1 or -1",
+                      dirs.tolist())
+    number = {key: check(_param(params, key), f"quad_params[{key!r}]", unit)
+              for key, check, unit in _PARAM_CHECKS}
+    m, k_eta = number["mass"], number["k_eta"]
     omega_h = np.sqrt(m * ROTORPY_GRAVITY / (N_ROTORS * k_eta))
-    w_min = float(_param(params, "rotor_speed_min"))
-    w_max = float(_param(params, "rotor_speed_max"))
     com = validate.array(params.get("com", np.zeros(3)), "quad_params['com']", (3,))
     return Vehicle(
-        m=m, g=ROTORPY_GRAVITY, Ixx=float(_param(params, "Ixx")),
-        Iyy=float(_param(params, "Iyy")), Izz=float(_param(params, "Izz")),
-        c_x=N_ROTORS * float(_param(params, "k_d")) * omega_h,
-        c_y=N_ROTORS * float(_param(params, "k_d")) * omega_h,
-        c_z=N_ROTORS * float(_param(params, "k_z")) * omega_h,
-        c_phi=0.0, c_theta=0.0, c_psi=0.0,
+        m=m, g=ROTORPY_GRAVITY, Ixx=number["Ixx"], Iyy=number["Iyy"], Izz=number["Izz"],
+        c_x=N_ROTORS * number["k_d"] * omega_h, c_y=N_ROTORS * number["k_d"] * omega_h,
+        c_z=N_ROTORS * number["k_z"] * omega_h, c_phi=0.0, c_theta=0.0, c_psi=0.0,
         rotor_positions=tuple((float(x), float(y)) for x, y, _ in pos),
-        rotor_directions=tuple(int(d) for d in np.asarray(_param(params, "rotor_directions"))),
-        thrust_constant=k_eta, moment_constant=float(_param(params, "k_m")) / k_eta,
-        max_rotor_thrust=k_eta * w_max ** 2, min_rotor_thrust=k_eta * w_min ** 2,
-        motor_time_constant=float(_param(params, "tau_m")),
+        rotor_directions=tuple(int(d) for d in dirs),
+        thrust_constant=k_eta, moment_constant=number["k_m"] / k_eta,
+        max_rotor_thrust=k_eta * number["rotor_speed_max"] ** 2,
+        min_rotor_thrust=k_eta * number["rotor_speed_min"] ** 2,
+        motor_time_constant=number["tau_m"],
         x_G=float(com[0]), y_G=float(com[1]), z_G=float(com[2]), name=name)
 
 

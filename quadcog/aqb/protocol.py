@@ -22,6 +22,7 @@ carries the payload as a rigid body (its ten inertial parameters added to the ai
 ``MotionPrimitive`` trajectory and its ``payload_events`` are ordinary ``quadcog.simulate``
 arguments.
 """
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,6 +32,7 @@ import numpy.typing as npt
 from quadcog import validate
 from quadcog.aqb.convert import vehicle_from_quad_params
 from quadcog.controllers.registry import make_controller
+from quadcog.errors import SizeError
 from quadcog.sim.flight import simulate
 from quadcog.sim.plant import TruthOptions
 from quadcog.sim.result import SimulationResult
@@ -40,7 +42,7 @@ from quadcog.trajectories.analytic import Trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["AQB_QUAD_PARAMS", "GOAL_RANGE", "MASS_RATIO_RANGE", "OFFSET_RATIO_RANGE",
-           "FLIGHT_TIME", "MIN_TOGGLE_INTERVAL", "SUCCESS_RMSE", "MotionPrimitive",
+           "FLIGHT_TIME", "MIN_TOGGLE_INTERVAL", "SUCCESS_RMSE", "MAX_DRAWS", "MotionPrimitive",
            "PayloadTrial", "payload_trials", "aqb_vehicle", "rmse", "fly"]
 
 # AdaptiveQuadBench's vehicle (aqb/quad_param/quadrotor.py): what the conversion needs of it;
@@ -63,6 +65,8 @@ FLIGHT_TIME = 5.0
 MIN_TOGGLE_INTERVAL = 0.5
 # AdaptiveQuadBench counts a flight a success when its position RMSE is below 5 m
 SUCCESS_RMSE = 5.0
+# the most trial draws payload_trials makes (n trials, times intensity + 1 when2fail steps)
+MAX_DRAWS = 1_000_000
 
 
 @dataclass
@@ -218,23 +222,38 @@ def payload_trials(n: int, seed: int = 42, intensity: float | None = None,
     Raises
     ------
     quadcog.InputError
-        n < 1, or an intensity that is not a whole number >= 0.
+        n < 1, a seed that is not an integer in [0, 2^32 - 1] (numpy's RandomState), an
+        intensity that is not a whole number >= 0, or quad_params without a positive
+        ``mass`` and ``arm_length``.
+    quadcog.errors.SizeError
+        More than ``MAX_DRAWS`` draws (n times the when2fail steps), before any.
     """
     n = validate.integer(n, "n", lo=1)
+    seed = validate.integer(seed, "seed", lo=0, hi=2**32 - 1)
     params = AQB_QUAD_PARAMS if quad_params is None else quad_params
+    if not isinstance(params, Mapping):
+        validate.fail("quad_params", "a RotorPy quad_params dictionary", params)
+    scale = {key: validate.positive(params.get(key), f"quad_params[{key!r}]", "m" if
+                                    key == "arm_length" else "kg")
+             for key in ("mass", "arm_length")}
     if intensity is not None:
         intensity = validate.real(intensity, "intensity", lo=0.0)
         if intensity != int(intensity):
             validate.fail("intensity", "a whole number of when2fail steps (step 1)", intensity)
+    draws = n * (1 if intensity is None else int(intensity) + 1)
+    if draws > MAX_DRAWS:
+        steps = "" if intensity is None else f" x {int(intensity) + 1} when2fail steps"
+        raise SizeError(f"n = {n} trials{steps} take {draws:,} draws of a trial; expected at "
+                        f"most {MAX_DRAWS:,} (n or intensity too large)")
     rng = np.random.RandomState(seed)
     goals = [tuple(tuple(float(v) for v in rng.uniform(*GOAL_RANGE, size=3)) for _ in range(3))
              for _ in range(n)]
     steps = [None] if intensity is None else [float(k) for k in range(int(intensity) + 1)]
     for step in steps:
         ratio = MASS_RATIO_RANGE if step is None else (min(2.0, step),) * 2
-        payloads = [(float(rng.uniform(*ratio) * params["mass"]),
+        payloads = [(float(rng.uniform(*ratio) * scale["mass"]),
                      tuple(float(v) for v in rng.uniform(*OFFSET_RATIO_RANGE, size=3)
-                           * params["arm_length"])) for _ in range(n)]
+                           * scale["arm_length"])) for _ in range(n)]
         toggles = [_toggle_times(rng) for _ in range(n)]
     return [PayloadTrial(index=i, goal_position=goals[i][0], goal_velocity=goals[i][1],
                          goal_acceleration=goals[i][2], payload_mass=payloads[i][0],

@@ -19,7 +19,7 @@ from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import check_parameters
 from quadcog.model.shared_docs import shared_parameters
 from quadcog.paths import generated_dir
-from quadcog.validate import nonnegative, plain, positive, vector
+from quadcog.validate import array, nonnegative, positive, vector
 
 __all__ = ["Linearization", "Model", "load"]
 
@@ -43,12 +43,9 @@ def _as_vector(name: str, value: ArrayLike, n: int) -> np.ndarray:
 
 
 def _as_vector_or_matrix(value: ArrayLike) -> np.ndarray:
-    """``value`` as a float array for reshaping, or InputError naming R."""
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"R: expected a finite (3, 3) rotation matrix, got "
-                         f"{plain(value)}") from None
+    """``value`` as a float array of real numbers for reshaping, or InputError naming R
+    (``validate.array``: bools, complex numbers, strings and ragged lists refused, not cast)."""
+    return array(value, "R", finite=False, what="a finite (3, 3) rotation matrix")
 
 
 def _key(value: object) -> bytes | None:
@@ -196,8 +193,8 @@ class Model:
             elif arg_name == "pi":
                 self._check_pi(value)
             if arg_name == "R":          # a (3, 3) rotation, or its 9 entries row by row
-                value = check_rotation(np.reshape(_as_vector_or_matrix(value), (3, 3))
-                                       if np.size(value) == 9 else value, "R").ravel()
+                R = _as_vector_or_matrix(value)
+                value = check_rotation(R.reshape(3, 3) if R.size == 9 else R, "R").ravel()
             buf[:] = _as_vector(arg_name, value, n)
             if arg_name == "xq":         # the state on SE(3): its attitude a unit quaternion
                 check_unit_quaternion(buf[QUATERNION], "xq[3:7] (the quaternion)")

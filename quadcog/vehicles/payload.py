@@ -150,9 +150,13 @@ class Payload:
         -------
         Payload
             The moved payload (validated).
+
+        Raises
+        ------
+        quadcog.InputError
+            A position that is not 3 real numbers (bools and complex numbers are not cast).
         """
-        return Payload(self.mass, tuple(np.asarray(position, dtype=float).tolist()),
-                       self.size, self.name)
+        return Payload(self.mass, position, self.size, self.name)   # checked as a new one
 
     def as_dict(self) -> dict[str, Any]:
         """Its fields as plain Python values (for JSON and scenario files).
