@@ -242,8 +242,8 @@ def payload_trials(n: int, seed: int = 42, intensity: float | None = None,
             validate.fail("intensity", "a whole number of when2fail steps (step 1)", intensity)
     draws = n * (1 if intensity is None else int(intensity) + 1)
     if draws > MAX_DRAWS:
-        steps = "" if intensity is None else f" x {int(intensity) + 1} when2fail steps"
-        raise SizeError(f"n = {n} trials{steps} take {draws:,} draws of a trial; expected at "
+        per = "" if intensity is None else f" x {int(intensity) + 1} when2fail steps"
+        raise SizeError(f"n = {n} trials{per} take {draws:,} draws of a trial; expected at "
                         f"most {MAX_DRAWS:,} (n or intensity too large)")
     rng = np.random.RandomState(seed)
     goals = [tuple(tuple(float(v) for v in rng.uniform(*GOAL_RANGE, size=3)) for _ in range(3))

@@ -7,7 +7,7 @@ are integrals over the body, a vehicle carrying payloads has the sum of their pi
 (``Vehicle.with_payload``), and the truth model flies that sum.
 """
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -156,7 +156,9 @@ class Payload:
         quadcog.InputError
             A position that is not 3 real numbers (bools and complex numbers are not cast).
         """
-        return Payload(self.mass, position, self.size, self.name)   # checked as a new one
+        # checked and made a tuple of floats by __post_init__, as for a new payload
+        return Payload(self.mass, cast(tuple[float, float, float], position), self.size,
+                       self.name)
 
     def as_dict(self) -> dict[str, Any]:
         """Its fields as plain Python values (for JSON and scenario files).
