@@ -11,7 +11,6 @@ same spin signs. Only the true state (x, v, q, w) is read, never ``ext_force``,
 ``ext_torque`` or ``payload_mass``.
 """
 from collections.abc import Mapping
-import numbers
 from typing import Any
 
 import numpy as np
@@ -87,9 +86,9 @@ def vehicle_from_quad_params(params: Mapping[str, Any], name: str = "aqb") -> Ve
     """
     if not isinstance(params, Mapping):
         validate.fail("quad_params", "a RotorPy quad_params dictionary", params)
-    n = _param(params, "num_rotors")
-    if isinstance(n, (bool, np.bool_)) or not isinstance(n, numbers.Integral) or n != N_ROTORS:
-        validate.fail("quad_params['num_rotors']", f"{N_ROTORS} rotors (an integer)", n)
+    n = validate.integer(_param(params, "num_rotors"), "quad_params['num_rotors']")
+    if n != N_ROTORS:
+        validate.fail("quad_params['num_rotors']", f"{N_ROTORS} rotors", n)
     for key in ("Ixy", "Ixz", "Iyz"):
         if validate.real(params.get(key, 0.0), f"quad_params[{key!r}]", unit="kg m^2") != 0.0:
             validate.fail(f"quad_params[{key!r}]", "0 (quadcog's model has a diagonal inertia)",
