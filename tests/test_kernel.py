@@ -5,10 +5,13 @@ import shutil
 import subprocess
 import threading
 
+import casadi as ca
 import numpy as np
 import pytest
 
 import quadcog
+from quadcog.codegen import hoisting
+import quadcog.codegen.vector_kernel as qk
 from quadcog.codegen.vector_kernel import emit_c, vector_flags
 import quadcog.sim.batch as batch_module
 from quadcog.sim.batch import batch_kernel, slow_row_entries
@@ -96,9 +99,10 @@ def test_casadi_fallback_agrees(monkeypatch):
 @pytest.mark.parametrize("isa", ["avx2", "avx512"])
 def test_gcc_vectorizes_the_step_with_libmvec(tmp_path, isa):
     """Every loop of the kernel (once per call, on a change of the CoG, each step) is vector
-    code for either ISA, whatever this CPU runs (compiled only), with libmvec's sin of that
-    ISA; and the step loop keeps few divisions (hoisted, or through reciprocals: 170
-    without)."""
+    code for either ISA, whatever this CPU runs (compiled only), with libmvec's atan2 of that
+    ISA and the sines and cosines inline (no vector call of libmvec's sin or cos: those spill
+    every register); and the step loop keeps few divisions (hoisted, or through reciprocals:
+    170 without)."""
     ctl = quadcog.FeedbackLinearization()           # sin, cos, tan, atan2 like the others
     actuation = Actuation.of(ctl.vehicle)
     text = emit_c(packed(monitored_step(ctl, actuation, Limits())), slow=slow_row_entries())
@@ -113,7 +117,9 @@ def test_gcc_vectorizes_the_step_with_libmvec(tmp_path, isa):
     assert "not vectorized: control flow" not in r.stderr, r.stderr[-2000:]
     nm = subprocess.run(["nm", str(tmp_path / "k.o")], capture_output=True, text=True).stdout
     abi = {"avx2": "_ZGVd", "avx512": "_ZGVe"}[isa]
-    assert any(s.startswith(abi) and s.endswith("_sin") for s in nm.split()), nm
+    assert any(s.startswith(abi) and s.endswith("_atan2") for s in nm.split()), nm
+    assert not any(s.startswith(abi) and s.endswith(("_sin", "_cos")) for s in nm.split()), nm
+    assert text.count("qc_sin(") >= 3 and text.count("qc_cos(") >= 3
     step_loop = text[text.rindex("#pragma omp simd"):]
     assert step_loop.count(" / ") <= 20
 
@@ -176,3 +182,33 @@ def test_hoisting_changes_no_bit(monkeypatch):
     a, b = hoisted(Z, Q, rows), plain(Z, Q, rows)
     assert np.all(np.isfinite(a)) and a.tobytes() == b.tobytes()
     assert not np.array_equal(a, plain(Z, Q, schedule.rows(0, schedule.n_steps, 0 * shapes)))
+
+
+def test_fused_products_take_a_single_use_product_in_its_own_loop_only():
+    """hoisting.fused_products: a product used once, in the same loop, by a sum that no math
+    function takes; not one used twice, one computed in a hoisted loop, nor a sum that is a
+    sine's argument."""
+    Z, Q = ca.SX.sym("Z", 3), ca.SX.sym("Q", 2)
+    once = Z[0] * Z[1] + Z[2]                 # fused
+    twice_p = Z[0] * Z[2]
+    twice = twice_p + Z[1]                    # not: its product is also an output
+    hoisted = Q[0] * Q[1] + Z[0]              # not: the product runs once per call
+    in_sin = ca.sin(Z[1] * Z[2] + Q[0])       # not: a math function takes the sum
+    sub = Z[2] - Z[1] * Q[0]                  # fused, as the second operand
+    f = ca.Function("f", [Z, Q], [ca.vertcat(once, twice, twice_p, hoisted, in_sin, sub)])
+    lv = hoisting.levels(f, lambda i, nz: hoisting.CONSTANT if i == 1 else hoisting.STEP)
+    fused = hoisting.fused_products(f, lv)
+    kinds = {}
+    for add, (mul, which) in fused.items():
+        assert f.instruction_id(mul) == ca.OP_MUL and lv[mul] == lv[add] == hoisting.STEP
+        kinds[f.instruction_id(add)] = which
+    assert len(fused) == 2 and kinds == {ca.OP_ADD: 0, ca.OP_SUB: 1}, fused
+    # and the kernel computes the fused forms to one rounding of the exact value
+    if qk.detect_isa() in qk.FMA_ISAS and shutil.which("cc"):
+        Zv = np.array([[0.1, 0.7, 0.3], [1e8 + 1, 1e8 - 1, -1e16]])
+        got = qk.VectorKernel(ca.Function("g", [Z, Q, ca.SX.sym("r")], [ca.vertcat(once, sub, Z[2])]))(
+            Zv, np.full((2, 2), 0.25), np.zeros((1, 1)))
+        from fractions import Fraction as F
+        for i, (x0, x1, x2) in enumerate(Zv):
+            assert got[i, 0] == float(F(x0) * F(x1) + F(x2))
+            assert got[i, 1] == float(F(x2) - F(x1) * F(0.25))

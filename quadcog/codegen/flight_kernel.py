@@ -16,11 +16,12 @@ before) in what it computes once:
   that are the same for long runs of steps: for a flight, the CoG profile) run again only at
   steps whose slow inputs differ, bit for bit, from those of the last run of them.
 
-Every operation is rounded as in CasADi's code (no FMA contraction, ``-ffp-contract=off``; the
-same libm calls), so the trajectory is bit for bit the one of CasADi's code of the same step.
-The loop is compiled with the instruction set of ``quadcog.codegen.vector_kernel.kernel_isa``
-(its flags, ``-O3`` and without the vector kernel's ``-fno-builtin-sin``: here gcc may merge a
-sin and a cos of one angle into one sincos call).
+Every operation is rounded as in CasADi's code (no FMA contraction, ``-ffp-contract=off``).
+The sines, cosines and tangents are inline (``quadcog.codegen.trig_c``, the vector kernel's
+too), within 2 ulp of libm's; with ``trig="libm"`` and without reciprocals the trajectory is
+bit for bit the one of CasADi's code of the same step (tests/test_flight_kernel.py). The loop
+is compiled with the instruction set of ``quadcog.codegen.vector_kernel.kernel_isa`` (its
+flags and ``-O3``).
 """
 from collections.abc import Callable, Sequence
 import ctypes
@@ -29,13 +30,13 @@ import hashlib
 import casadi as ca
 import numpy as np
 
-from quadcog.codegen import hoisting
+from quadcog.codegen import hoisting, trig_c
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.hoisting import CONSTANT as _CONSTANT
 from quadcog.codegen.hoisting import SLOW as _SLOW
 from quadcog.codegen.hoisting import STEP as _STEP
-from quadcog.codegen.vector_kernel import ISA_FLAGS, TARGETS, kernel_isa
+from quadcog.codegen.vector_kernel import INLINE_TRIG, ISA_FLAGS, TARGETS, TRIGS, kernel_isa
 from quadcog.errors import CompileError, KernelError
 
 __all__ = ["flight_flags", "emit_flight_c", "FlightKernel"]
@@ -59,7 +60,7 @@ def flight_flags(isa: str | None = None) -> tuple[str, ...]:
 
 def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
                   slow: Sequence[int] = (), name: str = "qc_flight",
-                  reciprocals: bool = True) -> str:
+                  reciprocals: bool = True, trig: str = "inline") -> str:
     """C source of the single-flight loop of the SX Function ``step``.
 
     Parameters
@@ -77,6 +78,11 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
         division (once, or on a change of the slow inputs) through its reciprocal: ``a / d``
         becomes ``a * (1 / d)``, with ``1 / d`` computed once where ``d`` is. It saves most
         divisions of a step and changes a result by at most an ulp per such division.
+    trig : {"inline", "libm"}
+        sin, cos and tan inline (``quadcog.codegen.trig_c``: one reduction for the sine and
+        cosine of an angle, the same bits as the vector kernel's) or libm's calls (CasADi's
+        own code calls libm: with "libm" and no reciprocals the loop is CasADi's step bit for
+        bit).
     name : str
         The C function: ``long name(long start, long stop, double *X, const double *const
         *in, double *const *out)``. ``in[i]`` is input i (i >= 1): the constant ones one
@@ -95,6 +101,8 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
     KernelError
         ``step`` is not an SX Function of that form, or has an operation without a C form.
     """
+    if trig not in TRIGS:
+        raise KernelError(f"trig must be one of {', '.join(map(repr, TRIGS))}, got {trig!r}")
     if not step.is_a("SXFunction"):
         raise KernelError(f"{step.name()}: expected an SX Function")
     n_in, n_out = step.n_in(), step.n_out()
@@ -118,6 +126,7 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
     uses = hoisting.divisor_uses(step) if reciprocals else {}
     made_by: dict[int, int] = {}          # work slot -> the instruction of its value
     inverted: set[int] = set()            # instructions whose reciprocal r<k> is declared
+    inlined = False                       # an inline sin, cos or tan is used
 
     def read(i: int, nz: int) -> str:
         if i == 0:
@@ -151,6 +160,9 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
                 blocks[levels[d]].append(
                     f"{'double ' if levels[d] == _STEP else ''}r{d} = {one} / v{d};")
             rhs = f"{name_of[ins[0]]} * r{d}"
+        elif trig == "inline" and op in INLINE_TRIG:
+            rhs = f"qc_{INLINE_TRIG[op]}({name_of[ins[0]]})"
+            inlined = True
         else:
             form = sxc.template(op, target)
             if form is None:
@@ -180,7 +192,7 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
     declared = (f"  double {', '.join(persistent)};\n" if persistent else "")
     return f"""/* quadcog single-flight kernel for {step.name()}: generated, do not edit. */
 #include <string.h>
-{decls}long {name}(long start, long stop, double *X, const double *const *in,
+{decls}{trig_c.scalar_c() if inlined else ""}long {name}(long start, long stop, double *X, const double *const *in,
           double *const *out) {{
 {inputs}{outputs}{declared}  long last = -1;
   (void) last;

@@ -15,7 +15,8 @@ from collections.abc import Callable
 
 import casadi as ca
 
-__all__ = ["CONSTANT", "SLOW", "STEP", "levels", "divisor_uses", "through_reciprocal"]
+__all__ = ["CONSTANT", "SLOW", "STEP", "levels", "divisor_uses", "fused_products",
+           "through_reciprocal"]
 
 CONSTANT, SLOW, STEP = 0, 1, 2      # when an instruction runs: once, on a change, each step
 
@@ -101,3 +102,60 @@ def through_reciprocal(d: int, level: int, levels_: list[int], uses: dict[int, i
         ``a / d`` then becomes ``a * (1 / d)``: one rounding more, at most an ulp.
     """
     return d in uses and (uses[d] > 1 or levels_[d] < level)
+
+
+def fused_products(step: ca.Function, levels_: list[int]) -> dict[int, tuple[int, int]]:
+    """The additions that take in a product as one fused multiply-add (one rounding).
+
+    An addition or subtraction takes in a multiplication when the product is used there only,
+    is computed in the same loop (level), and the sum is not the argument of a math function
+    (sin, floor, ...): such an argument is rounded as CasADi rounds it, because a function can
+    magnify an ulp (the sensing noise's ``fract(sin(a t + b) * 43758.5453)`` turns the rounding
+    an FMA saves into 1e-7 of the noise).
+
+    Parameters
+    ----------
+    step : casadi.Function
+        An SX Function.
+    levels_ : list of int
+        Every instruction's level (``levels``).
+
+    Returns
+    -------
+    dict of int to (int, int)
+        {addition: (multiplication, which operand of the addition it is, 0 or 1)}.
+    """
+    made_by: dict[int, int] = {}
+    n_uses: dict[int, int] = {}
+    argument: set[int] = set()        # instructions whose result a math function takes
+    arithmetic = {ca.OP_ADD, ca.OP_SUB, ca.OP_MUL, ca.OP_DIV, ca.OP_NEG, ca.OP_SQ, ca.OP_TWICE,
+                  ca.OP_INV, ca.OP_LT, ca.OP_LE, ca.OP_EQ, ca.OP_NE, ca.OP_NOT, ca.OP_AND,
+                  ca.OP_OR, ca.OP_IF_ELSE_ZERO, ca.OP_FMIN, ca.OP_FMAX, ca.OP_FABS,
+                  ca.OP_OUTPUT, ca.OP_ASSIGN}
+    candidates = []
+    for k in range(step.n_instructions()):
+        op, ins, outs = step.instruction_id(k), step.instruction_input(k), step.instruction_output(k)
+        if op not in (ca.OP_INPUT, ca.OP_CONST):
+            for i in ins:
+                if i >= 0:
+                    d = made_by[i]
+                    n_uses[d] = n_uses.get(d, 0) + 1
+                    if op not in arithmetic:
+                        argument.add(d)
+        if op in (ca.OP_ADD, ca.OP_SUB):
+            candidates.append((k, [made_by[i] for i in ins]))
+        if op != ca.OP_OUTPUT:
+            made_by[outs[0]] = k
+    fused: dict[int, tuple[int, int]] = {}
+    taken: set[int] = set()
+    for k, operands in candidates:
+        if k in argument:
+            continue
+        for which, m in enumerate(operands):
+            if (step.instruction_id(m) == ca.OP_MUL and n_uses.get(m) == 1
+                    and levels_[m] == levels_[k] and m not in taken
+                    and operands[0] != operands[1]):
+                fused[k] = (m, which)
+                taken.add(m)
+                break
+    return fused

@@ -39,20 +39,22 @@ import hashlib
 import math
 import os
 import platform
+import re
 import threading
 import warnings
 
 import casadi as ca
 import numpy as np
 
-from quadcog.codegen import hoisting
+from quadcog.codegen import hoisting, trig_c
 from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.errors import CompileError, InputError, KernelError, QuadcogWarning
 
-__all__ = ["ISAS", "ISA_FLAGS", "LANES", "PRECISIONS", "SCHEDULE_FLAGS", "TARGETS", "VECTOR_BITS", "VECTORS_PER_BLOCK",
-           "ISA_ENV", "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c",
-           "kernel_for", "kernel_isa", "lanes_for", "vector_flags"]
+__all__ = ["FMA_ISAS", "INLINE_TRIG", "ISAS", "ISA_FLAGS", "LANES", "PRECISIONS",
+           "SCHEDULE_FLAGS", "TARGETS", "TRIGS", "VECTOR_BITS", "VECTORS_PER_BLOCK", "ISA_ENV",
+           "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c", "kernel_for",
+           "kernel_isa", "lanes_for", "pressure_order", "vector_flags"]
 
 PRECISIONS = ("float64", "float32")
 # instruction sets, widest first: "portable" is the compiler's default target (SSE2 on x86-64)
@@ -83,6 +85,12 @@ LANES = VECTORS_PER_BLOCK * VECTOR_BITS["avx2"] // 64   # 16: the AVX2 block of 
 # functions libmvec provides in vector form (glibc >= 2.35 for tan, atan2, erf, hypot, ...)
 _VECTOR_MATH = ("sin", "cos", "tan", "exp", "log", "pow", "atan2", "atan", "asin", "acos",
                 "tanh", "sinh", "cosh", "erf", "hypot")
+# the instruction sets whose kernels fuse a product into its sum (emit_c's fma)
+FMA_ISAS = ("avx512", "avx2")
+# the kernels' choices for sin, cos and tan (inline: quadcog.codegen.trig_c), and the operations
+# that are inlined
+TRIGS = ("inline", "libm")
+INLINE_TRIG = {ca.OP_SIN: "sin", ca.OP_COS: "cos", ca.OP_TAN: "tan"}
 
 
 def _literal(v):
@@ -234,8 +242,8 @@ def vector_flags(isa: str | None = None, precision: str = "float64") -> tuple[st
 
 
 def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
-           precision: str = "float64", slow: Sequence[int] = (), reciprocals: bool = True
-           ) -> str:
+           precision: str = "float64", slow: Sequence[int] = (), reciprocals: bool = True,
+           trig: str = "inline", fma: bool = False) -> str:
     """C source of the kernel of the SX Function ``step(Z, Q, row) -> Z_next``.
 
     What a flight computes less often than every step is hoisted out of the step
@@ -247,10 +255,13 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     a per-block array of lanes. A divisor shared by several divisions or computed less often
     is inverted once (``reciprocals``).
 
-    The sine and cosine of one angle stay two libmvec calls: gcc 12 does not if-convert a
-    loop that calls libmvec's vector ``sincos`` (it writes through pointers), so such a loop
-    is not vectorized, and an inline sincos (fdlibm's kernels) measured no faster than the
-    two calls (docs/performance.md).
+    The sines, cosines and tangents of the step are inline (``quadcog.codegen.trig_c``): a
+    call to libmvec clobbers every vector register, so the step spilled its live values around
+    each of its 13 angles. The inline reduction is exact only for ``|x| < trig_c.LARGE``; each
+    lane keeps the largest |argument| of its step, and a step of a block where one reached it is run
+    again, lanes one by one, with libm's sin, cos and tan (``qc_exact_step``, cold and compiled
+    at -O1: it runs only for angles beyond 1.6e6 rad, such as a noise hash's of a large seed).
+    What runs once or seldom (the hoisted loops) calls libmvec as before.
 
     Parameters
     ----------
@@ -268,6 +279,13 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     reciprocals : bool
         Divide through reciprocals (``quadcog.codegen.hoisting.through_reciprocal``: one
         rounding more, at most an ulp, per such division).
+    trig : {"inline", "libm"}
+        The step's sin, cos and tan: inline (float64; float32 always calls libmvec's) or
+        libmvec's calls.
+    fma : bool
+        Take a product into the sum that is its only use as one fused multiply-add
+        (``quadcog.codegen.hoisting.fused_products``: one rounding less, never in an argument
+        of a math function); for ISAs with FMA units (``FMA_ISAS``).
 
     Returns
     -------
@@ -285,12 +303,19 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     if not slow_set <= set(range(nR)):
         raise KernelError(f"{step.name()}: slow row entries {sorted(slow_set)} outside 0 .. "
                           f"{nR - 1}")
+    if trig not in TRIGS:
+        raise KernelError(f"trig must be one of {', '.join(map(repr, TRIGS))}, got {trig!r}")
+    inline = trig == "inline" and precision == "float64"
     target = TARGETS[precision]
     real, sfx = C_TYPE[precision], target.suffix
     one, zero = target.literal(1.0), target.literal(0.0)
     levels = hoisting.levels(step, lambda i, nz: (
         hoisting.CONSTANT if i == 1 else hoisting.SLOW if i == 2 and nz in slow_set
         else hoisting.STEP))
+    checked: set[str] = set()             # the step's arguments of inline sin, cos, tan
+    fused = hoisting.fused_products(step, levels) if fma else {}
+    absorbed = {m for m, _ in fused.values()}
+    product: dict[int, tuple[str, str]] = {}   # absorbed multiplication -> its factors
     uses = hoisting.divisor_uses(step) if reciprocals else {}
     blocks: dict[int, list[str]] = {hoisting.CONSTANT: [], hoisting.SLOW: [], hoisting.STEP: []}
     level_of: dict[str, int] = {}         # variable -> the loop that computes it
@@ -351,6 +376,24 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
             if r not in level_of:          # once, where the divisor is computed
                 define(r, f"{one} / {use(name_of[ins[1]], levels[d])}", levels[d])
             define(var, f"{use(name_of[ins[0]], level)} * {use(r, level)}", level)
+        elif k in absorbed:                  # written by the addition that takes it in
+            product[k] = (use(name_of[ins[0]], level), use(name_of[ins[1]], level))
+        elif k in fused:
+            m, which = fused[k]
+            a, b = product[m]
+            other = f"({use(name_of[ins[1 - which]], level)})"
+            if op == ca.OP_SUB:                  # a*b - o, or o - a*b
+                a, other = (a, f"-{other}") if which == 0 else (f"-({a})", other)
+            calls["fma"] = 3
+            define(var, f"fma{sfx}({a}, {b}, {other})", level)
+        elif inline and level == hoisting.STEP and op in INLINE_TRIG:
+            x = use(name_of[ins[0]], level)
+            calls[INLINE_TRIG[op]] = 1           # declared for qc_exact_step
+            define(var, f"qc_{INLINE_TRIG[op]}({x})", level)
+            if x not in checked:
+                checked.add(x)
+                # the largest |x| of the step (a NaN is skipped: it gives NaN either way)
+                blocks[level].append(f"qc_large = (fabs({x}) > qc_large) ? fabs({x}) : qc_large;")
         else:
             form = sxc.template(op, target)
             if form is None:
@@ -373,8 +416,30 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     runs = _runs(sorted(slow_set))
     changed = " || ".join(f"memcmp(row + {lo}, rows + last * NR + {lo}, {n} * sizeof(real))"
                           for lo, n in runs)
+    blocks[hoisting.STEP] = pressure_order(blocks[hoisting.STEP])
     body = {lv: "\n        ".join(b) for lv, b in blocks.items()}
     simd = "#pragma omp simd\n"
+    exact = ""
+    if checked:      # the step again, lane by lane with libm, for a block with a large angle
+        step_body = body[hoisting.STEP]
+        exact_body = "\n".join(line for line in step_body.split("\n")
+                               if not line.lstrip().startswith("qc_large"))
+        for f in INLINE_TRIG.values():
+            exact_body = exact_body.replace(f"qc_{f}(", f"{f}(")
+        body[hoisting.STEP] = ("double qc_large = 0.0;\n        " + step_body
+                               + "\n        large[j] = qc_large;")
+        exact = f"""__attribute__((noinline, cold, optimize("O1")))
+static void qc_exact_step(const real *row, const real *z, const real *q, const real *h,
+                          real *zn) {{
+  (void) row; (void) q; (void) h;
+  for (long j = 0; j < LANES; ++j) {{
+        {exact_body}
+  }}
+}}
+"""
+    rerun = ("      {\n        int any = 0;\n        for (long j = 0; j < LANES; ++j) any |= "
+             f"large[j] >= {trig_c.LARGE!r};\n        if (any) qc_exact_step(row, z, q, h, zn);"
+             "\n      }\n" if checked else "")
     constant_loop = (f"    {simd}    for (long j = 0; j < LANES; ++j) {{\n        "
                      f"{body[hoisting.CONSTANT]}\n    }}\n" if blocks[hoisting.CONSTANT] else "")
     slow_loop = (f"      if (last < 0 || {changed or '0'}) {{\n        last = k;\n"
@@ -383,28 +448,83 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     return f"""/* quadcog vector kernel for {step.name()} ({precision}): generated, do not edit. */
 #include <string.h>
 typedef {real} real;
-{decls}#define LANES {lanes}
+{decls}{trig_c.scalar_c(fallback=False) if checked else ""}#define LANES {lanes}
 #define NZ {nZ}
 #define NQ {nQ}
 #define NR {nR}
-void {name}(long n_steps, const real *rows, real *Z, const real *Q, long n_blocks) {{
+{exact}void {name}(long n_steps, const real *rows, real *Z, const real *Q, long n_blocks) {{
   for (long b = 0; b < n_blocks; ++b) {{
     real *z = Z + b * NZ * LANES;
     const real *q = Q + b * NQ * LANES;
     real zn[NZ * LANES] __attribute__((aligned(64)));
     real h[{max(1, len(hoisted)) * lanes}] __attribute__((aligned(64)));
+    real large[LANES];
     long last = -1;
-    (void) last; (void) h; (void) q;
+    (void) last; (void) h; (void) q; (void) large;
 {constant_loop}    for (long k = 0; k < n_steps; ++k) {{
       const real *row = rows + k * NR;
 {slow_loop}      {simd}      for (long j = 0; j < LANES; ++j) {{
         {body[hoisting.STEP]}
       }}
-      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];
+{rerun}      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];
     }}
   }}
 }}
 """
+
+
+_DEFINES = re.compile(r"^\w+ (\w+) = ")
+_NAMES = re.compile(r"\b[vlr]\d+\b")
+
+
+def pressure_order(statements: list[str]) -> list[str]:
+    """The statements of one loop body in an order that keeps fewer values alive at once.
+
+    The step has far more live values than a CPU has vector registers (16 with AVX2), and
+    what does not fit goes to the stack and back: on a Zen 3 those loads and stores, not
+    the arithmetic, bound the step (llvm-mca: the load/store pipes). CasADi's order computes
+    many values long before their use. This is list scheduling: of the statements whose
+    operands are ready, take the one that ends the most live ranges and starts the fewest
+    (ties: the earlier one). Only the order changes, never an operation, so the bits do not.
+
+    Parameters
+    ----------
+    statements : list of str
+        C statements, each ``T name = expression;`` (defines name) or one that only reads
+        (a store); names are ``v``, ``l`` or ``r`` and digits.
+
+    Returns
+    -------
+    list of str
+        The same statements, reordered.
+    """
+    n = len(statements)
+    defined = [(m.group(1) if (m := _DEFINES.match(text)) else None) for text in statements]
+    where = {name: i for i, name in enumerate(defined) if name}
+    operands = []
+    for i, text in enumerate(statements):
+        names = set(_NAMES.findall(text)) - {defined[i]}
+        operands.append({where[x] for x in names if x in where})
+    users: list[list[int]] = [[] for _ in range(n)]
+    for i, ops in enumerate(operands):
+        for j in ops:
+            users[j].append(i)
+    left = [len(u) for u in users]           # uses of each value not yet scheduled
+    waiting = [len(ops) for ops in operands]  # operands of each statement not yet scheduled
+    ready = {i for i in range(n) if not waiting[i]}
+    order = []
+    while ready:
+        best = min(ready, key=lambda i: ((1 if users[i] else 0)
+                                         - sum(1 for j in operands[i] if left[j] == 1), i))
+        ready.remove(best)
+        order.append(best)
+        for j in operands[best]:
+            left[j] -= 1
+        for u in users[best]:
+            waiting[u] -= 1
+            if not waiting[u]:
+                ready.add(u)
+    return [statements[i] for i in order]
 
 
 def _runs(entries: list[int]) -> list[tuple[int, int]]:
@@ -475,7 +595,8 @@ class VectorKernel:
         self.isa = isa
         self.lanes = lanes_for(isa, self.precision) if lanes is None else int(lanes)
         self.flags = vector_flags(isa, self.precision) + ("-Wl,--no-as-needed", "-lmvec")
-        source = emit_c(step, "qc_kernel", self.lanes, self.precision, self.slow).encode()
+        source = emit_c(step, "qc_kernel", self.lanes, self.precision, self.slow,
+                        fma=isa in FMA_ISAS).encode()
         # the ISA in the name too: the flags are in the cache key already
         stem = f"vector_kernel_{isa}_" + hashlib.sha256(source).hexdigest()[:12]
         self.library = compile_library(source, stem, cc, flags=self.flags)
