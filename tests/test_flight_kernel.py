@@ -1,5 +1,5 @@
 """The single-flight kernel (quadcog.codegen.flight_kernel) against CasADi's own code of the same
-step: bit for bit without reciprocals and with libm's sin and cos, within an ulp per division
+step: bit for bit without reciprocals, FMA or inline sines, within an ulp per division
 with them, also while the slow inputs (CoG ramp, payloads) change every step; the stop at the
 first diverged sample; and the controller designs kept per process never stand in for another
 design."""
@@ -63,7 +63,8 @@ def test_exact_kernel_is_casadis_step_bit_for_bit(cog, monkeypatch):
     step = closed_loop_step(setup.controller, setup.actuation, setup.limits)
     real_emit = emit_flight_c
     monkeypatch.setattr("quadcog.codegen.flight_kernel.emit_flight_c",
-                        lambda *a, **k: real_emit(*a, **k, reciprocals=False, trig="libm"))
+                        lambda *a, **k: real_emit(*a, **{**k, "reciprocals": False,
+                                                        "trig": "libm", "fma": False}))
     exact = FlightKernel(step, constant=(1,), slow=SLOW)
     X, _, _, stop = _fly(exact, setup)
     oracle, n = _casadi(setup)

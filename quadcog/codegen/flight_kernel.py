@@ -36,7 +36,7 @@ from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.codegen.hoisting import CONSTANT as _CONSTANT
 from quadcog.codegen.hoisting import SLOW as _SLOW
 from quadcog.codegen.hoisting import STEP as _STEP
-from quadcog.codegen.vector_kernel import INLINE_TRIG, ISA_FLAGS, TARGETS, TRIGS, kernel_isa
+from quadcog.codegen.vector_kernel import FMA_ISAS, INLINE_TRIG, ISA_FLAGS, TARGETS, TRIGS, kernel_isa, pressure_order
 from quadcog.errors import CompileError, KernelError
 
 __all__ = ["flight_flags", "emit_flight_c", "FlightKernel"]
@@ -60,7 +60,7 @@ def flight_flags(isa: str | None = None) -> tuple[str, ...]:
 
 def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
                   slow: Sequence[int] = (), name: str = "qc_flight",
-                  reciprocals: bool = True, trig: str = "inline") -> str:
+                  reciprocals: bool = True, trig: str = "inline", fma: bool = False) -> str:
     """C source of the single-flight loop of the SX Function ``step``.
 
     Parameters
@@ -83,6 +83,10 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
         cosine of an angle, the same bits as the vector kernel's) or libm's calls (CasADi's
         own code calls libm: with "libm" and no reciprocals the loop is CasADi's step bit for
         bit).
+    fma : bool
+        Take a product into the sum that is its only use as one fused multiply-add, as the
+        vector kernel does (``quadcog.codegen.hoisting.fused_products``); ``FlightKernel``
+        turns it on for the ISAs of ``quadcog.codegen.vector_kernel.FMA_ISAS``.
     name : str
         The C function: ``long name(long start, long stop, double *X, const double *const
         *in, double *const *out)``. ``in[i]`` is input i (i >= 1): the constant ones one
@@ -127,6 +131,9 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
     made_by: dict[int, int] = {}          # work slot -> the instruction of its value
     inverted: set[int] = set()            # instructions whose reciprocal r<k> is declared
     inlined = False                       # an inline sin, cos or tan is used
+    fused = hoisting.fused_products(step, levels) if fma else {}
+    absorbed = {m for m, _ in fused.values()}
+    product: dict[int, tuple[str, str]] = {}   # absorbed multiplication -> its factors
 
     def read(i: int, nz: int) -> str:
         if i == 0:
@@ -160,6 +167,19 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
                 blocks[levels[d]].append(
                     f"{'double ' if levels[d] == _STEP else ''}r{d} = {one} / v{d};")
             rhs = f"{name_of[ins[0]]} * r{d}"
+        elif k in absorbed:                  # written by the addition that takes it in
+            product[k] = (name_of[ins[0]], name_of[ins[1]])
+            name_of[outs[0]] = var
+            made_by[outs[0]] = k
+            continue
+        elif k in fused:
+            m, which = fused[k]
+            a, b = product[m]
+            other = f"({name_of[ins[1 - which]]})"
+            if op == ca.OP_SUB:                  # a*b - o, or o - a*b
+                a, other = (a, f"-{other}") if which == 0 else (f"-({a})", other)
+            calls["fma"] = 3
+            rhs = f"fma({a}, {b}, {other})"
         elif trig == "inline" and op in INLINE_TRIG:
             rhs = f"qc_{INLINE_TRIG[op]}({name_of[ins[0]]})"
             inlined = True
@@ -179,7 +199,8 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
     if code_var is None:
         code_var = zero
     persistent = [f"v{k}" for k, lv in enumerate(levels)
-                  if lv != _STEP and step.instruction_id(k) != ca.OP_OUTPUT]
+                  if lv != _STEP and step.instruction_id(k) != ca.OP_OUTPUT and k not in absorbed]
+    blocks[_STEP] = pressure_order(blocks[_STEP])
     persistent += [f"r{k}" for k in sorted(inverted) if levels[k] != _STEP]
     decls = "".join(f"double {f}({', '.join(['double'] * n)});\n" for f, n in sorted(calls.items()))
     inputs = "".join(f"  const double *in{i} = in[{i}];\n" for i in range(1, n_in))
@@ -244,7 +265,8 @@ class FlightKernel:
         self.constant = frozenset(constant)
         self.rows_in = [step.nnz_in(i) for i in range(self.n_in)]
         self.rows_out = [step.nnz_out(j) for j in range(self.n_out)]
-        source = emit_flight_c(step, constant, slow).encode()
+        source = emit_flight_c(step, constant, slow,
+                               fma=(kernel_isa() if isa is None else isa) in FMA_ISAS).encode()
         self.flags = flight_flags(isa)
         stem = "flight_kernel_" + hashlib.sha256(source).hexdigest()[:12]
         try:

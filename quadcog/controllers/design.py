@@ -25,6 +25,7 @@ scales:
   dimensionless values (what the reference fixes) mean the same on every vehicle.
 """
 from dataclasses import dataclass
+import functools
 import math
 
 from quadcog.vehicles.vehicle import HUMMINGBIRD, N_ROTORS, Vehicle
@@ -330,6 +331,7 @@ class Design:
     integral_limit: float
 
 
+@functools.lru_cache(maxsize=256)    # a Design is frozen; a new controller of a known vehicle
 def design(vehicle: Vehicle) -> Design:
     """Every default setting for a vehicle (see the module docstring for the rules).
 

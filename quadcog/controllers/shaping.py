@@ -1,6 +1,7 @@
 """Pieces shared by the controllers: gains from poles, yaw-frame errors, desired tilt,
 and the exact output derivative y_dot = H(eta) nu taken from the generated dynamics."""
 from collections.abc import Sequence
+import functools
 
 import casadi as ca
 import numpy as np
@@ -36,8 +37,17 @@ def second_order_gains(poles: Sequence[complex], what: str) -> tuple[float, floa
     InputError
         When ``poles`` are not 2 stable poles.
     """
+    if isinstance(poles, tuple) and all(type(p) in (float, int, complex) for p in poles):
+        return _gains_of(poles, what)       # the designs' tuples: once per process
+    return _gains_of_poles(poles, what)
+
+
+def _gains_of_poles(poles, what):
     coeffs = np.poly(validate.poles(poles, what, 2))
     return float(coeffs.real[2]), float(coeffs.real[1])
+
+
+_gains_of = functools.lru_cache(maxsize=256)(_gains_of_poles)
 
 
 def tilt_limit(max_tilt: float, what: str = "max_tilt") -> float:
