@@ -14,9 +14,11 @@ import struct
 import numpy as np
 import pytest
 
-from quadcog.errors import LogFormatError
+from quadcog.errors import InputError, LogFormatError
 from quadcog.logs import read_log
 from quadcog.logs.ulog import ULOG_MAGIC
+from quadcog.sim.timeline import PayloadEvent, PayloadProfile
+from quadcog.vehicles.payload import Payload
 
 
 # -- ULog: what the reader needs of a topic, checked ----------------------------------------
@@ -99,3 +101,56 @@ def test_ulog_rotor_parameters_that_are_not_numbers_leave_the_order_unknown(tmp_
                                                  "actuator_outputs": outputs},
                          [("PWM_MAIN_FUNC1", float("nan"))]))
     assert np.allclose(log.signal("motor_pwm"), 0.5)
+
+
+# -- payload profiles: every argument checked ------------------------------------------------
+ATTACH = dict(t=1.0, action="attach", name="box", mass=0.005, position=[0.01, 0.0, 0.0])
+NOT_A_TIME = [None, "abc", b"1", 1j, 10 ** 400, float("nan"), float("inf"), True, [[1.0]],
+              {"t": 1}]
+
+
+@pytest.mark.parametrize("t", NOT_A_TIME, ids=repr)
+def test_payload_times_that_are_not_times_are_refused(t):
+    """on_board(None) and sample('abc') were raw TypeError or ValueError; sample(None) and
+    sample(nan) answered with the box on board, on_board(nan) with nothing."""
+    profile = PayloadProfile([ATTACH])
+    with pytest.raises(InputError, match=r"^t"):
+        profile.on_board(t)
+    if not isinstance(t, list):
+        with pytest.raises(InputError, match=r"^t"):
+            profile.sample(t)
+    with pytest.raises(InputError, match=r"^t\[1\]"):
+        profile.sample([0.0, float("nan"), 2.0])
+
+
+@pytest.mark.parametrize("carried", [None, 5, "box", {"a": 1}, [None], [1.5], ["box"],
+                                     [object()]], ids=repr)
+def test_payloads_carried_that_are_not_payloads_are_refused(carried):
+    """Were raw TypeError (not iterable) or AttributeError (no .name)."""
+    with pytest.raises(InputError, match=r"^carried"):
+        PayloadProfile([ATTACH], carried=carried)
+
+
+def test_payloads_carried_are_taken_as_payloads_of_different_names():
+    box = Payload(0.01, (0.0, 0.0, 0.0), name="box")
+    profile = PayloadProfile([], carried=[{"mass": 0.01, "position": [0, 0, 0], "name": "b"}])
+    assert profile.carried == (Payload(0.01, (0.0, 0.0, 0.0), name="b"),)
+    with pytest.raises(InputError, match="different names"):
+        PayloadProfile([], carried=[box, box])
+
+
+@pytest.mark.parametrize("name", [None, [], ["box"], 5, ""], ids=repr)
+@pytest.mark.parametrize("action", ["move", "drop"])
+def test_a_move_or_drop_names_its_payload_with_a_string(name, action):
+    """A list as the name of a move or drop was a raw 'unhashable type' TypeError."""
+    event = dict(t=2.0, action=action, name=name)
+    if action == "move":
+        event["position"] = [0.0, 0.0, 0.0]
+    with pytest.raises(InputError, match="name: expected a non-empty string"):
+        PayloadProfile([ATTACH, event])
+
+
+def test_a_move_whose_ramp_ends_past_the_float_range_is_refused():
+    """t + ramp overflowed to inf: times() held inf."""
+    with pytest.raises(InputError, match="ramp"):
+        PayloadEvent(t=1e308, action="move", name="box", position=(0, 0, 0), ramp=1e308)
