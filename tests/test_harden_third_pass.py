@@ -13,9 +13,11 @@ import struct
 
 import numpy as np
 import pytest
+from test_harden_identify import hover_log
 
-from quadcog.errors import InputError, LogFormatError
-from quadcog.logs import read_log
+from quadcog.errors import IdentificationError, InputError, LogFormatError
+from quadcog.identification import identify
+from quadcog.logs import FlightLog, read_log
 from quadcog.logs.ulog import ULOG_MAGIC
 from quadcog.sim.timeline import PayloadEvent, PayloadProfile
 from quadcog.vehicles.payload import Payload
@@ -154,3 +156,43 @@ def test_a_move_whose_ramp_ends_past_the_float_range_is_refused():
     """t + ramp overflowed to inf: times() held inf."""
     with pytest.raises(InputError, match="ramp"):
         PayloadEvent(t=1e308, action="move", name="box", position=(0, 0, 0), ramp=1e308)
+
+
+# -- identification: moment commands and yaw -------------------------------------------------
+def _commanded(moment, yaw=None):
+    """The hover log with thrust_command and moment_command instead of motor outputs."""
+    full = hover_log(full=True)
+    n = full.n_samples
+    s = {k: np.array(v) for k, v in full.signals.items() if k != "motor_command"}
+    s["thrust_command"] = full.signal("motor_command").mean(axis=1)
+    s["moment_command"] = np.tile(np.asarray(moment, float), (n, 1))
+    if yaw is not None:
+        s["yaw"] = np.full(n, yaw)
+    return FlightLog("hover.csv", "csv", full.t, s, {}, {})
+
+
+@pytest.mark.parametrize("method", ["static", "regression"])
+@pytest.mark.parametrize("moment, message", [
+    ([1e200, 0.0, 0.0], r"'moment_command_x' is 1e\+200.*beyond full scale of a motor"),
+    ([0.0, -3.0, 0.0], r"'moment_command_y' is -3.*beyond full scale"),
+    ([0.9, 0.0, 0.0], r"the command of rotor \d that thrust_command and moment_command give "
+                      r"through the mixer is at full scale"),
+])
+def test_moment_commands_beyond_the_motors_are_refused(method, moment, message):
+    """A moment command of 1e200 gave y_G = 32.5 mm 'determined', exit 0: the mixer clipped
+    two rotors to full and two to off, and nothing looked at the commands it made."""
+    with pytest.raises(IdentificationError, match=message):
+        identify(_commanded(moment), method=method)
+
+
+def test_moment_commands_within_the_motors_are_identified():
+    res = identify(_commanded([0.0, 0.0, 0.0]), method="static")
+    assert res.mass == pytest.approx(0.027, rel=1e-6)
+
+
+@pytest.mark.parametrize("yaw", [1e200, -1e9])
+def test_a_yaw_no_flight_turns_is_refused(yaw):
+    """A yaw of 1e200 rad was accepted (only cos and sin of it are used)."""
+    with pytest.raises(IdentificationError, match=r"'yaw_rad' is .* rad.*gyroscope"):
+        identify(_commanded([0.0, 0.0, 0.0], yaw=yaw))
+    identify(_commanded([0.0, 0.0, 0.0], yaw=50.0))      # unwrapped over a few turns: fine
