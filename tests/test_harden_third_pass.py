@@ -196,3 +196,17 @@ def test_a_yaw_no_flight_turns_is_refused(yaw):
     with pytest.raises(IdentificationError, match=r"'yaw_rad' is .* rad.*gyroscope"):
         identify(_commanded([0.0, 0.0, 0.0], yaw=yaw))
     identify(_commanded([0.0, 0.0, 0.0], yaw=50.0))      # unwrapped over a few turns: fine
+
+
+# -- CSV: a byte-order mark -------------------------------------------------------------------
+def test_a_csv_log_with_a_byte_order_mark_is_read(tmp_path):
+    """A spreadsheet's "CSV UTF-8" starts with a byte-order mark: it was read as the start of
+    the first name, and the log refused with "no time column 't_s'; columns are \\ufefft_s"."""
+    text = "t_s,position_x_m,position_y_m,position_z_m\n0,0,0,0\n0.01,0,0,0.5\n"
+    p = tmp_path / "bom.csv"
+    p.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    log = read_log(p)
+    assert np.array_equal(log.t, [0.0, 0.01]) and log.signal("position")[1, 2] == 0.5
+    p.write_bytes(b"\xef\xbb\xbf" + (text + "0.02,0,0,x\n").encode())    # the cell by cell path
+    with pytest.raises(LogFormatError, match=r"line 4, column 'position_z_m': 'x' is not"):
+        read_log(p)
