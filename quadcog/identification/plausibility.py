@@ -6,13 +6,15 @@ the log and the column, instead of giving a number that means nothing.
   log at most ``MAX_SPAN`` long. A time column in milliseconds or microseconds fails here, and
   the message says which unit it looks like;
 - values: each signal within what a quadrotor and its sensors can give (``LIMITS``: speed,
-  acceleration, the full scale of a flight controller's gyroscope, angles in radians, motor
-  outputs 0..1, a battery voltage);
+  acceleration, the full scale of a flight controller's gyroscope, angles in radians, an
+  unwrapped yaw no day at that full scale exceeds, motor outputs 0..1, moment commands
+  within +-1, a battery voltage);
 - the hover (``hover_physics``): over the window the estimators use, the logged vertical
   acceleration must average near 0 (a vehicle holding its height; gravity is not part of the
   kinematic acceleration), the rotors must carry the vehicle's weight within
   ``WEIGHT_RATIO`` (motors off, a vehicle standing or carried by hand, or a rotor model of
-  another vehicle fail here), and the angular
+  another vehicle fail here), no motor output (or command of the mixer) at full scale over
+  most of the hover, and the angular
   acceleration of the logged rates must be one the airframe's rotors can give
   (``RATE_MARGIN``) and the rates integrated over ``AGREE_SECONDS`` must turn the logged
   roll and pitch as far as they turn (ZYX kinematics, to ``AGREE_TOLERANCE``): deg/s read as
@@ -25,7 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from quadcog.errors import IdentificationError
-from quadcog.identification.segments import MAX_GAP
+from quadcog.identification.segments import MAX_GAP, commands_from_mixer
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.vehicles.vehicle import Vehicle
@@ -59,12 +61,17 @@ LIMITS = {
     "velocity": (-150.0, 150.0, "m/s", "faster than any quadrotor flies (150 m/s)"),
     "acceleration": (-200.0, 200.0, "m/s^2", "beyond 20 g"),
     "roll": (-np.pi, np.pi, "rad", "beyond +-pi rad: degrees?"),
+    # unwrapped, yaw turns at most a gyroscope's full scale for the longest log
+    "yaw": (-MAX_BODY_RATE * MAX_SPAN, MAX_BODY_RATE * MAX_SPAN, "rad",
+            "more than a day at a gyroscope's full scale turns"),
     "pitch": (-np.pi / 2, np.pi / 2, "rad", "beyond +-pi/2 rad (ZYX pitch): degrees?"),
     "body_rates": (-MAX_BODY_RATE, MAX_BODY_RATE, "rad/s",
                    "beyond a gyroscope's full scale (4000 deg/s): deg/s?"),
     "motor_command": (0.0, 1.0, "1", "outside 0..1 of full scale"),
     "motor_pwm": (0.0, 1.0, "1", "outside 0..1 of full scale"),
     "thrust_command": (0.0, 1.0, "1", "outside 0..1 of full scale"),
+    # a moment command of more than full scale turns a rotor from off to full and beyond
+    "moment_command": (-1.0, 1.0, "1", "beyond full scale of a motor"),
     "battery_voltage": (0.5, 100.0, "V", "not a flight battery's voltage (0.5..100 V)"),
 }
 
@@ -194,7 +201,7 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
     g, weight = vehicle.g, vehicle.m * vehicle.g
     h = float(np.median(log.signal("position")[mask, 2]))
     cos_tilt = _hover_tilt(log, mask, h)
-    _saturation(log, mask, h)
+    _saturation(log, vehicle, mask, h)
     _yaw_balance(log, vehicle, mask, thrusts, h)
     if log.has("velocity"):
         _velocity_agrees_with_position(log, mask)
@@ -249,18 +256,23 @@ def _hover_tilt(log, mask, h):
     return cos_tilt
 
 
-def _saturation(log, mask, h):
+def _saturation(log, vehicle, mask, h):
     """A motor output at full scale over most of the hover: the thrust beyond the limit is
-    unknown, so no balance holds (and a vehicle at full thrust is not hovering)."""
-    for name in ("motor_pwm", "motor_command"):
-        if not log.has(name):
-            continue
-        u = log.signal(name)[mask]
+    unknown, so no balance holds (and a vehicle at full thrust is not hovering). Without
+    motor outputs, the commands the firmware's mixer makes of thrust_command and
+    moment_command (``segments.commands_from_mixer``) are checked."""
+    outputs = [(log.signal(name)[mask], lambda j, name=name: column_name(log, name, j))
+               for name in ("motor_pwm", "motor_command") if log.has(name)]
+    if not outputs and log.has("thrust_command") and log.has("moment_command"):
+        outputs = [(commands_from_mixer(log, vehicle)[mask], lambda j: (
+            f"the command of rotor {j + 1} that thrust_command and moment_command give "
+            "through the mixer"))]
+    for u, name_of in outputs:
         at_top = (u >= SATURATED).mean(axis=0)
         j = int(np.argmax(at_top))
         if at_top[j] > SATURATED_FRACTION:
             raise IdentificationError(
-                f"{log.source}: {column_name(log, name, j)} is at full scale (>= "
+                f"{log.source}: {name_of(j)} is at full scale (>= "
                 f"{SATURATED:g}) over {100 * float(at_top[j]):.3g} % of the hover at {h:.2f} m: "
                 "the motor is saturated, so its thrust is not known and the vehicle is not "
                 "hovering on it; expected outputs below full scale (a log of a flight that "

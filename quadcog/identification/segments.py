@@ -23,7 +23,7 @@ from quadcog.vehicles.vehicle import Vehicle
 __all__ = ["check_arguments", "MAX_GAP", "HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "MIN_BLOCKS", "HoverWindow",
            "hover_window", "rotor_thrusts", "vertical_acceleration", "block_means",
            "block_mean_ci95", "ar1_inflation", "speed_corrected", "body_velocity",
-           "SPEED_SPREAD", "t_quantile"]
+           "SPEED_SPREAD", "t_quantile", "commands_from_mixer"]
 
 HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
 HOVER_TRIM = 1.5         # s cut at both ends of the plateau (the climb and descent settle)
@@ -195,9 +195,22 @@ def hover_window(log: FlightLog, band: float = HOVER_BAND, trim: float = HOVER_T
     return window
 
 
-def _commands_from_mixer(log: FlightLog, vehicle: Vehicle) -> npt.NDArray[np.float64]:
-    """Rotor commands (N, 4) from thrust_command and moment_command, by the mixer the signals
-    are defined with (quadcog.logs.SIGNALS['moment_command'])."""
+def commands_from_mixer(log: FlightLog, vehicle: Vehicle) -> npt.NDArray[np.float64]:
+    """Rotor commands from thrust_command and moment_command, by the mixer the signals are
+    defined with (quadcog.logs.SIGNALS['moment_command']).
+
+    Parameters
+    ----------
+    log : quadcog.logs.FlightLog
+        With the signals thrust_command and moment_command.
+    vehicle : quadcog.Vehicle
+        Its rotor positions and spin directions.
+
+    Returns
+    -------
+    numpy.ndarray of shape (N, 4)
+        The commands 0..1 of full scale (clipped), rotors in quadcog's order.
+    """
     pos = np.asarray(vehicle.rotor_positions)
     d = np.asarray(vehicle.rotor_directions, float)
     T = log.signal("thrust_command")[:, None]
@@ -257,7 +270,7 @@ def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | st
                 f"{fallback.name} from motor_command (the log has no {', '.join(missing)})",
                 fallback)
     if fallback is not None and log.has("thrust_command") and log.has("moment_command"):
-        u = _commands_from_mixer(log, vehicle)
+        u = commands_from_mixer(log, vehicle)
         return (fallback.thrust(u), f"{fallback.name} from thrust_command and moment_command "
                 "through the firmware's mixer (the log has no motor outputs)", fallback)
     raise IdentificationError(

@@ -6,7 +6,8 @@ The columns are ``t_s`` (s) and, for each standard signal, its columns
 its columns are there; every column (signal or not) is also kept under its name in ``raw``.
 Time is taken as written, shifted to start at 0 (``meta["time_offset_s"]`` is the first
 ``t_s``); rows are not resampled. An empty cell, ``nan``, text, or time that does not increase
-is refused with the row and column named.
+is refused with the row and column named. A CSV file is UTF-8 text; a byte-order mark
+in front of it is dropped.
 """
 from collections import Counter
 import csv
@@ -80,6 +81,10 @@ def _from_columns(path, fmt, columns, meta):
     return FlightLog(str(path), fmt, t_abs - t_abs[0], signals, raw, meta)
 
 
+# UTF-8; a byte-order mark in front (spreadsheets' "CSV UTF-8") is dropped, not read as the
+# start of the first column's name
+READ_ENCODING = "utf-8-sig"
+
 # The longest cell read: a float64 written with every digit takes 24 characters; anything
 # much longer is not a number (Python's csv module stops at 131,072 with its own error).
 MAX_CELL = 1000
@@ -90,7 +95,7 @@ def _read_csv(path):
     the file: one float64 per cell); a file it cannot parse is read again cell by cell to
     name the first bad cell."""
     try:
-        with open(path, newline="", encoding="utf-8") as f:
+        with open(path, newline="", encoding=READ_ENCODING) as f:
             header, lines_before = _header(path, f)
             try:
                 with warnings.catch_warnings():      # a header without rows: said below
@@ -142,7 +147,7 @@ def _header(path, f):
 def _cells(path, header, skip):
     """The data rows as floats, cell by cell: the first bad cell raises with its place."""
     rows = []
-    with open(path, newline="", encoding="utf-8") as f:
+    with open(path, newline="", encoding=READ_ENCODING) as f:
         for _ in range(skip):
             next(f)
         reader = csv.reader(f)

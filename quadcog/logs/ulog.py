@@ -76,6 +76,7 @@ BASE_TOPICS = ("vehicle_local_position", "vehicle_attitude", "vehicle_angular_ve
 QUADX_ORDER = (0, 3, 1, 2)
 _FLIP = np.array([1.0, -1.0, -1.0])           # T = diag(1, -1, -1): NED <-> NWU, FRD <-> FLU
 _PARAMS = ("THR_MDL_FAC", "MPC_THR_HOVER", "SYS_AUTOSTART", "CA_AIRFRAME", "CA_ROTOR_COUNT")
+_STAMP_MAX = 2 ** 63 - 1        # us: the largest time stamp the reader's int64 steps hold
 _INFO = ("sys_name", "ver_hw", "ver_sw", "ver_sw_release", "sys_os_name", "sys_uuid")
 
 
@@ -179,12 +180,39 @@ def _load(path):
     return u
 
 
+def _check_stamps(path, name, data):
+    """A topic the reader uses must have ``timestamp`` as the format defines it: integers
+    (us) that fit an int64, the type the reader computes its steps in."""
+    stamps = data.get("timestamp")
+    if stamps is None or stamps.dtype.kind not in "iu":
+        what = "no field 'timestamp'" if stamps is None else \
+            f"a 'timestamp' of type {stamps.dtype}"
+        raise LogFormatError(f"{path}: topic {name} has {what}; expected the ULog time stamp "
+                             "'uint64_t timestamp' (us)")
+    if stamps.size and int(stamps.max()) > _STAMP_MAX:
+        raise LogFormatError(f"{path}: topic {name}: time stamp {int(stamps.max())} us is "
+                             f"beyond {_STAMP_MAX} us (292,000 years after boot); a damaged "
+                             "log")
+
+
+def _required(path, topic, data, names):
+    """Refuse a topic that lacks fields the reader needs from it (a damaged format)."""
+    missing = [n for n in names if n not in data]
+    if missing:
+        raise LogFormatError(f"{path}: topic {topic} lacks the field(s) {', '.join(missing)}; "
+                             f"expected {', '.join(names)} (PX4's message definition)")
+
+
 def _rotor_map(params):
     """(PX4 motor index of quadcog's rotors 1..4, positions FLU (4, 2), directions, note)."""
     keys = [(f"CA_ROTOR{i}_PX", f"CA_ROTOR{i}_PY", f"CA_ROTOR{i}_KM") for i in range(4)]
     if params.get("CA_ROTOR_COUNT") != 4 or not all(k in params for ks in keys for k in ks):
         return QUADX_ORDER, None, None, "assumed PX4 quad X (no CA_ROTOR parameters of 4 rotors)"
-    flu = np.array([[params[px], -params[py]] for px, py, _ in keys])
+    flu = np.array([[params[px], -params[py]] for px, py, _ in keys], dtype=float)
+    km = np.array([params[k] for _, _, k in keys], dtype=float)
+    if not (np.isfinite(flu).all() and np.isfinite(km).all()):
+        return None, None, None, (f"CA_ROTOR parameters not finite (positions {flu.tolist()}, "
+                                  f"KM {km.tolist()}): rotor order unknown")
     slot = {(1, -1): 0, (-1, -1): 1, (-1, 1): 2, (1, 1): 3}   # quadcog rotors 1..4
     order = [None] * 4
     for i, (x, y) in enumerate(flu):
@@ -193,14 +221,15 @@ def _rotor_map(params):
             return None, flu, None, (f"not a quad X: CA_ROTOR positions (FLU) {flu.tolist()} "
                                      "do not put one rotor in each quadrant")
         order[s] = i
-    km = np.array([params[k] for _, _, k in keys])
     return tuple(order), flu[order], -np.sign(km[order]), "from CA_ROTOR{i}_PX/PY"
 
 
 def _motor_pwm(d, t_us, order, params):
     """actuator_outputs as 0..1 per quadcog rotor (unclipped), and where its range came from."""
+    # a function that is not a whole number (a damaged float parameter) assigns no motor
     funcs = {int(params[f"PWM_MAIN_FUNC{n}"]): n for n in range(1, 17)
-             if f"PWM_MAIN_FUNC{n}" in params}
+             if f"PWM_MAIN_FUNC{n}" in params
+             and float(params[f"PWM_MAIN_FUNC{n}"]).is_integer()}
     ts = d["timestamp"].astype(np.float64)
     cols, defaults = [], False
     for i in order:
@@ -255,8 +284,10 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     u = _load(path)
     topics = {}
     for d in u.data_list:
-        if d.multi_id == 0 and d.name in TOPICS and d.data["timestamp"].size >= 2:
-            topics[d.name] = d.data
+        if d.multi_id == 0 and d.name in TOPICS:
+            _check_stamps(path, d.name, d.data)
+            if d.data["timestamp"].size >= 2:
+                topics[d.name] = d.data
     base = next((n for n in BASE_TOPICS if n in topics), None)
     if base is None:
         raise LogSignalError(f"{path}: the ULog has none of the topics {BASE_TOPICS} that "
@@ -306,6 +337,7 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
             signals[signal] = v * _FLIP
     if "vehicle_attitude" in topics:
         d = topics["vehicle_attitude"]
+        _required(path, "vehicle_attitude", d, TOPICS["vehicle_attitude"])
         q = np.column_stack([d[f"q[{i}]"].astype(np.float64) for i in range(4)])
         # q and -q are one rotation: keep the sign continuous before interpolating
         flips = np.cumprod(np.where(np.einsum("ij,ij->i", q[1:], q[:-1]) < 0, -1.0, 1.0))
@@ -338,6 +370,7 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
         meta["rotor_directions"] = " ".join(str(int(d)) for d in directions)
     if order is not None and "actuator_motors" in topics:
         d = topics["actuator_motors"]
+        _required(path, "actuator_motors", d, [f"control[{i}]" for i in sorted(order)])
         ts = d["timestamp"].astype(np.float64)
         cols = []
         nan = 0

@@ -11,7 +11,8 @@ from quadcog import validate
 from quadcog.errors import InputError
 from quadcog.model.inertial_parameters import N_PI
 from quadcog.model.parameters import LARGEST
-from quadcog.vehicles.payload import Payload
+from quadcog.trajectories.analytic import sample_times
+from quadcog.vehicles.payload import Payload, as_payload
 
 __all__ = ["CogChange", "CogProfile", "Disturbance", "wrench_table", "as_disturbances",
            "PAYLOAD_ACTIONS", "PayloadEvent", "PayloadProfile"]
@@ -266,7 +267,8 @@ class PayloadEvent:
     Raises
     ------
     quadcog.InputError
-        A field missing, not allowed for the action, or of the wrong type.
+        A field missing, not allowed for the action, or of the wrong type; a name that is not
+        a non-empty string; a move whose ramp ends past the float range.
     """
     t: float
     action: str
@@ -277,10 +279,16 @@ class PayloadEvent:
     ramp: float = 0.0
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            validate.fail("payload event: name", "a non-empty string (the payload's name)",
+                          self.name)
         where = f"payload event {self.name!r}"
         object.__setattr__(self, "t", validate.nonnegative(self.t, f"{where}: t", "s"))
         validate.choice(self.action, f"{where}: action", PAYLOAD_ACTIONS)
         object.__setattr__(self, "ramp", validate.nonnegative(self.ramp, f"{where}: ramp", "s"))
+        if not np.isfinite(self.t + self.ramp):
+            validate.fail(f"{where}: ramp", f"a ramp that ends at a finite time (t = "
+                          f"{self.t:g} s)", self.ramp)
         needs = {"attach": ("mass", "position"), "move": ("position",), "drop": ()}[self.action]
         allowed = {"attach": ("mass", "position", "size"), "move": ("position",),
                    "drop": ()}[self.action]
@@ -349,13 +357,15 @@ class PayloadProfile:
     events : sequence of PayloadEvent
         In time order; dicts of the fields are accepted.
     carried : sequence of Payload
-        Payloads on board at t = 0 (a vehicle's own, ``Vehicle.payloads``).
+        Payloads on board at t = 0 (a vehicle's own, ``Vehicle.payloads``); tables of their
+        fields are accepted (``quadcog.vehicles.payload.as_payload``).
 
     Raises
     ------
     quadcog.InputError
-        An event out of time order, an attach of a name already on board, a move or drop of a
-        name not on board, or an event that starts inside another's ramp of the same payload.
+        ``carried`` not a list of payloads of different names, an event out of time order,
+        an attach of a name already on board, a move or drop of a name not on board, or an
+        event that starts inside another's ramp of the same payload.
     """
     events: list = field(default_factory=list)
     carried: tuple = ()
@@ -363,7 +373,13 @@ class PayloadProfile:
     def __post_init__(self) -> None:
         if isinstance(self.events, (str, bytes, dict)) or not hasattr(self.events, "__iter__"):
             validate.fail("payload", "a list of payload events (attach, move, drop)", self.events)
+        if not isinstance(self.carried, (list, tuple)):
+            validate.fail("carried", "a list of the Payloads on board at t = 0", self.carried)
+        self.carried = tuple(as_payload(p, f"carried[{i}]") for i, p in enumerate(self.carried))
         on_board = {p.name for p in self.carried}
+        if len(on_board) < len(self.carried):
+            names = [p.name for p in self.carried]
+            validate.fail("carried", "payloads of different names", names)
         clean: list[PayloadEvent] = []
         last, busy = -np.inf, dict[str, float]()
         for i, e in enumerate(self.events):
@@ -389,7 +405,6 @@ class PayloadProfile:
             last = e.t
             clean.append(e)
         self.events = clean
-        self.carried = tuple(self.carried)
 
     def __bool__(self) -> bool:
         return bool(self.events or self.carried)
@@ -406,8 +421,14 @@ class PayloadProfile:
         -------
         list of Payload
             In the order they came on board.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``t`` is not a finite real number.
         """
-        return [p.moved(r[0]) for p, r, on in self._tracks(np.array([float(t)])) if on[0]]
+        when = validate.real(t, "t", unit="s")
+        return [p.moved(r[0]) for p, r, on in self._tracks(np.array([when])) if on[0]]
 
     def _tracks(self, t: np.ndarray) -> list[tuple[Payload, np.ndarray, np.ndarray]]:
         """(payload, its centre at each t (N, 3), on board at each t (N,)) per payload life."""
@@ -453,8 +474,13 @@ class PayloadProfile:
         (N, 10) numpy.ndarray
             pi about O (``quadcog.model.inertial_parameters.PI_NAMES`` order; kg, kg m,
             kg m^2); zeros where nothing is on board.
+
+        Raises
+        ------
+        quadcog.InputError
+            A time that is not a finite real number (``sample_times``).
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = sample_times(t)
         if t.size > 1 and not (np.diff(t) >= 0).all():
             return self._sampled_by_tracks(t)
         # one pass over the events: each adds the change of pi from its first sample on (a
