@@ -33,25 +33,37 @@ MCA_MODELS = {"avx2": "znver3", "avx512": "skylake-avx512"}
 _DIVISION = re.compile(r"^v?div[ps]d$")
 
 
-VARIANTS = {"previous": "the previous kernel (not hoisted, no pressure scheduling)",
-            "unhoisted": "not hoisted (pressure scheduling)",
-            "built": "as built (hoisted, reciprocals, pressure scheduling)"}
+VARIANTS = {"unhoisted": "not hoisted, libmvec's sin, cos, tan, no FMA",
+            "previous": "hoisted, reciprocals; libmvec's sin, cos, tan, no FMA (the previous "
+                        "kernel)",
+            "built": "as built (hoisted, reciprocals, inline sin, cos, tan, FMA, statements "
+                     "ordered)"}
 
 
 def _flags(isa, variant):
-    return [f for f in qk.vector_flags(isa) if f not in ("-shared", "-fPIC")
-            and (variant != "previous" or f not in qk.SCHEDULE_FLAGS)]
+    return [f for f in qk.vector_flags(isa) if f not in ("-shared", "-fPIC")]
 
 
-def _marked(isa, hoisted, controller, begin, end):
+def _emit_options(isa, variant):
+    """emit_c's options of a variant: the previous kernels called libmvec for the sines,
+    fused nothing and kept CasADi's order of the statements."""
+    if variant == "built":
+        return dict(slow=slow_row_entries(), fma=isa in qk.FMA_ISAS)
+    old = dict(trig="libm", order=False)
+    return dict(old, slow=slow_row_entries()) if variant == "previous" else dict(
+        old, reciprocals=False)
+
+
+def _marked(isa, variant, controller, begin, end):
     """The kernel's C with ``begin`` and ``end`` (asm text) around its step loop."""
     ctl = controller or quadcog.AdaptiveFeedbackLinearization()
     step = packed(monitored_step(ctl, Actuation.of(ctl.vehicle), Limits()))
-    kw = dict(slow=slow_row_entries()) if hoisted else dict(reciprocals=False)
-    src = qk.emit_c(step, lanes=qk.lanes_for(isa), **kw)
+    src = qk.emit_c(step, lanes=qk.lanes_for(isa), **_emit_options(isa, variant))
     i = src.rindex("#pragma omp simd")          # the step loop is the last simd loop
     src = src[:i] + f'__asm__ volatile("{begin}");\n      ' + src[i:]
-    j = src.index("      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];")
+    # after the step loop: before the rerun of a step with large angles, if any
+    j = src.find("      {\n        int any = 0;")
+    j = j if j >= 0 else src.index("      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];")
     return src[:j] + f'      __asm__ volatile("{end}");\n' + src[j:]
 
 
@@ -82,8 +94,7 @@ def mca_cycles(isa, variant="built", controller=None, iterations=10):
     exe = shutil.which("llvm-mca") or shutil.which("llvm-mca-14")
     if exe is None:
         return None
-    src = _marked(isa, variant == "built", controller, "# LLVM-MCA-BEGIN step",
-                  "# LLVM-MCA-END step")
+    src = _marked(isa, variant, controller, "# LLVM-MCA-BEGIN step", "# LLVM-MCA-END step")
     flags = _flags(isa, variant)
     with tempfile.TemporaryDirectory() as tmp:
         c, asm = Path(tmp) / "k.c", Path(tmp) / "k.s"
@@ -106,8 +117,8 @@ def step_loop_counts(isa, variant="built", controller=None):
     isa : str
         One of ``quadcog.codegen.vector_kernel.ISAS`` (compiled only: this CPU need not run it).
     variant : str
-        One of ``VARIANTS``: the kernel as built, the same step without hoisting and
-        reciprocals, or that without the pressure scheduling flags (the previous kernel).
+        One of ``VARIANTS``: the kernel as built, the previous kernel (libmvec's sines, no
+        FMA, CasADi's statement order), or that without hoisting and reciprocals.
     controller : Controller, optional
         Default: the adaptive feedback linearization.
 
@@ -117,7 +128,7 @@ def step_loop_counts(isa, variant="built", controller=None):
         instructions (of the loop's code), divisions (vector and scalar div), calls ({name:
         count}, e.g. {"_ZGVdN4v_sin": 13}), lanes (flights per pass of the code: one vector).
     """
-    src = _marked(isa, variant == "built", controller, "qc_step_begin:", "qc_step_end:")
+    src = _marked(isa, variant, controller, "qc_step_begin:", "qc_step_end:")
     flags = _flags(isa, variant)
     with tempfile.TemporaryDirectory() as tmp:
         c, o = Path(tmp) / "k.c", Path(tmp) / "k.o"

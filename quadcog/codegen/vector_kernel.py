@@ -243,7 +243,7 @@ def vector_flags(isa: str | None = None, precision: str = "float64") -> tuple[st
 
 def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
            precision: str = "float64", slow: Sequence[int] = (), reciprocals: bool = True,
-           trig: str = "inline", fma: bool = False) -> str:
+           trig: str = "inline", fma: bool = False, order: bool = True) -> str:
     """C source of the kernel of the SX Function ``step(Z, Q, row) -> Z_next``.
 
     What a flight computes less often than every step is hoisted out of the step
@@ -286,6 +286,8 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
         Take a product into the sum that is its only use as one fused multiply-add
         (``quadcog.codegen.hoisting.fused_products``: one rounding less, never in an argument
         of a math function); for ISAs with FMA units (``FMA_ISAS``).
+    order : bool
+        Order the step's statements for register pressure (``pressure_order``; the same bits).
 
     Returns
     -------
@@ -416,7 +418,8 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     runs = _runs(sorted(slow_set))
     changed = " || ".join(f"memcmp(row + {lo}, rows + last * NR + {lo}, {n} * sizeof(real))"
                           for lo, n in runs)
-    blocks[hoisting.STEP] = pressure_order(blocks[hoisting.STEP])
+    if order:
+        blocks[hoisting.STEP] = pressure_order(blocks[hoisting.STEP])
     body = {lv: "\n        ".join(b) for lv, b in blocks.items()}
     simd = "#pragma omp simd\n"
     exact = ""
