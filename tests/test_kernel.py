@@ -96,16 +96,19 @@ def test_casadi_fallback_agrees(monkeypatch):
 
 @pytest.mark.skipif(platform.machine() != "x86_64" or shutil.which("cc") is None,
                     reason="checks gcc's x86-64 vectorizer")
-@pytest.mark.parametrize("isa", ["avx2", "avx512"])
+@pytest.mark.parametrize("isa", ["sse2", "avx2", "avx512"])
 def test_gcc_vectorizes_the_step_with_libmvec(tmp_path, isa):
     """Every loop of the kernel (once per call, on a change of the CoG, each step) is vector
-    code for either ISA, whatever this CPU runs (compiled only), with libmvec's atan2 of that
-    ISA and the sines and cosines inline (no vector call of libmvec's sin or cos: those spill
-    every register); and the step loop keeps few divisions (hoisted, or through reciprocals:
-    170 without)."""
+    code for each x86 ISA, whatever this CPU runs (compiled only), as VectorKernel emits it:
+    with libmvec's atan2 of that ISA, and on AVX2 and AVX-512 the sines and cosines inline
+    (no vector call of libmvec's sin or cos: those spill every register; on SSE2 the inline
+    ones would leave the loop scalar); and the step loop keeps few divisions (hoisted, or
+    through reciprocals: 170 without)."""
     ctl = quadcog.FeedbackLinearization()           # sin, cos, tan, atan2 like the others
     actuation = Actuation.of(ctl.vehicle)
-    text = emit_c(packed(monitored_step(ctl, actuation, Limits())), slow=slow_row_entries())
+    inline = isa in qk.INLINE_TRIG_ISAS
+    text = emit_c(packed(monitored_step(ctl, actuation, Limits())), slow=slow_row_entries(),
+                  trig="inline" if inline else "libm", fma=isa in qk.FMA_ISAS)
     src = tmp_path / "k.c"
     src.write_text(text)
     flags = [f for f in vector_flags(isa) if f not in ("-shared", "-fPIC")]
@@ -116,10 +119,11 @@ def test_gcc_vectorizes_the_step_with_libmvec(tmp_path, isa):
     assert text.count("#pragma omp simd") == 3 and vectorized >= 3, r.stderr[-2000:]
     assert "not vectorized: control flow" not in r.stderr, r.stderr[-2000:]
     nm = subprocess.run(["nm", str(tmp_path / "k.o")], capture_output=True, text=True).stdout
-    abi = {"avx2": "_ZGVd", "avx512": "_ZGVe"}[isa]
+    abi = {"sse2": "_ZGVb", "avx2": "_ZGVd", "avx512": "_ZGVe"}[isa]
     assert any(s.startswith(abi) and s.endswith("_atan2") for s in nm.split()), nm
-    assert not any(s.startswith(abi) and s.endswith(("_sin", "_cos")) for s in nm.split()), nm
-    assert text.count("qc_sin(") >= 3 and text.count("qc_cos(") >= 3
+    libmvec_sines = any(s.startswith(abi) and s.endswith(("_sin", "_cos")) for s in nm.split())
+    assert libmvec_sines != inline, nm
+    assert (text.count("qc_sin(") >= 3 and text.count("qc_cos(") >= 3) == inline
     step_loop = text[text.rindex("#pragma omp simd"):]
     assert step_loop.count(" / ") <= 20
 

@@ -51,7 +51,7 @@ from quadcog.codegen import sx_to_c as sxc
 from quadcog.codegen.compiler import compile_library, find_compiler
 from quadcog.errors import CompileError, InputError, KernelError, QuadcogWarning
 
-__all__ = ["FMA_ISAS", "INLINE_TRIG", "ISAS", "ISA_FLAGS", "LANES", "PRECISIONS",
+__all__ = ["FMA_ISAS", "INLINE_TRIG", "INLINE_TRIG_ISAS", "ISAS", "ISA_FLAGS", "LANES", "PRECISIONS",
            "SCHEDULE_FLAGS", "TARGETS", "TRIGS", "VECTOR_BITS", "VECTORS_PER_BLOCK", "ISA_ENV",
            "KernelError", "VectorKernel", "cpu_features", "detect_isa", "emit_c", "kernel_for",
            "kernel_isa", "lanes_for", "pressure_order", "vector_flags"]
@@ -87,6 +87,10 @@ _VECTOR_MATH = ("sin", "cos", "tan", "exp", "log", "pow", "atan2", "atan", "asin
                 "tanh", "sinh", "cosh", "erf", "hypot")
 # the instruction sets whose kernels fuse a product into its sum (emit_c's fma)
 FMA_ISAS = ("avx512", "avx2")
+# the instruction sets whose kernels inline the sines (emit_c's trig="inline"): SSE2 has no
+# 64-bit integer comparison, so gcc would leave the step loop scalar (4x slower); the others
+# call libmvec
+INLINE_TRIG_ISAS = ("avx512", "avx2")
 # the kernels' choices for sin, cos and tan (inline: quadcog.codegen.trig_c), and the operations
 # that are inlined
 TRIGS = ("inline", "libm")
@@ -599,6 +603,7 @@ class VectorKernel:
         self.lanes = lanes_for(isa, self.precision) if lanes is None else int(lanes)
         self.flags = vector_flags(isa, self.precision) + ("-Wl,--no-as-needed", "-lmvec")
         source = emit_c(step, "qc_kernel", self.lanes, self.precision, self.slow,
+                        trig="inline" if isa in INLINE_TRIG_ISAS else "libm",
                         fma=isa in FMA_ISAS).encode()
         # the ISA in the name too: the flags are in the cache key already
         stem = f"vector_kernel_{isa}_" + hashlib.sha256(source).hexdigest()[:12]
