@@ -1,6 +1,6 @@
 """The batch kernel at the CPU's vector width (quadcog.codegen.vector_kernel): the instruction set chosen from
 the CPU's flags, the block of lanes matched to it, the portable rebuild when the compiler
-refuses the flags, bits independent of threads and batch on every build, no FMA contraction
+refuses the flags, bits independent of threads and batch on every build, FMA only where no function takes the sum
 (a sensed flight equals ``simulate``), and a float32 variant that really computes in float."""
 from fractions import Fraction
 import platform

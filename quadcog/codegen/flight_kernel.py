@@ -16,7 +16,8 @@ before) in what it computes once:
   that are the same for long runs of steps: for a flight, the CoG profile) run again only at
   steps whose slow inputs differ, bit for bit, from those of the last run of them.
 
-Every operation is rounded as in CasADi's code (no FMA contraction, ``-ffp-contract=off``).
+gcc contracts no multiply-add (``-ffp-contract=off``); on the ISAs of ``FMA_ISAS`` the loop
+writes its own fused products where no math function takes the sum, as the vector kernel does.
 The sines, cosines and tangents are inline (``quadcog.codegen.trig_c``, the vector kernel's
 too), within 2 ulp of libm's; with ``trig="libm"`` and without reciprocals the trajectory is
 bit for bit the one of CasADi's code of the same step (tests/test_flight_kernel.py). The loop
@@ -52,7 +53,7 @@ def flight_flags(isa: str | None = None) -> tuple[str, ...]:
     Returns
     -------
     tuple of str
-        ``-O3``, the ISA's flags, no FMA contraction, no errno, ``-shared -fPIC``.
+        ``-O3``, the ISA's flags, no FMA contraction by gcc, no errno, ``-shared -fPIC``.
     """
     isa = kernel_isa() if isa is None else isa
     return ("-O3", *ISA_FLAGS[isa], "-ffp-contract=off", "-fno-math-errno", "-shared", "-fPIC")

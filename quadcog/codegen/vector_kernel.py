@@ -6,7 +6,7 @@ table (shared by all flights). This module emits C from the step's SX instructio
 operations and the walk are quadcog.codegen.sx_to_c's, shared with the embedded export) with the flight
 index as the innermost loop of every operation: flights go in blocks of ``lanes``, the
 whole step is one ``#pragma omp simd`` loop over a block, and gcc turns every operation into a
-vector instruction, with glibc's libmvec for sin, cos, tan and atan2. A block's state stays in
+vector instruction (glibc's libmvec for atan2 and the other math functions). A block's state stays in
 the L1 cache for all its steps, so memory traffic is a few hundred bytes per flight.
 
 Instruction set. The kernel is compiled on the user's machine for the widest vector unit its
@@ -15,12 +15,17 @@ elsewhere), with the flags of ``ISA_FLAGS`` and a block of ``VECTORS_PER_BLOCK``
 (``lanes_for``: 16 doubles with AVX2, 32 with AVX-512, twice that in float32). The ISA is part
 of the library's name and its flags are part of the compile-cache key. Where the compiler
 refuses the ISA's flags, the kernel is built once more with the portable flags (one
-QuadcogWarning). Contraction of ``a*b + c`` into an FMA is off (``-ffp-contract=off``): the
-kernel then rounds every operation as CasADi and the compiled single-flight path do, which the
-sensing noise needs (its hash ``fract(sin(a t + b) * 43758.5453)`` turns the one rounding an
-FMA saves into a difference of 1e-7 in the noise). What still differs between instruction sets
-and from the single-flight path is libmvec's sin/cos/tan/atan2 (within 4 ulp of glibc's, and
-its SSE, AVX2 and AVX-512 variants are different code).
+QuadcogWarning).
+
+Rounding. gcc contracts nothing (``-ffp-contract=off``); on the ISAs with FMA units
+(``FMA_ISAS``) the kernel itself writes ``fma(a, b, c)`` where a product's only use is a sum that
+no math function takes (``quadcog.codegen.hoisting.fused_products``): one rounding less, and
+never in such an argument, because a function can magnify it (the sensing noise's hash
+``fract(sin(a t + b) * 43758.5453)`` turns the rounding an FMA saves into 1e-7 of the noise).
+On AVX2 and AVX-512 (``INLINE_TRIG_ISAS``) the step's sin, cos and tan are inline
+(``quadcog.codegen.trig_c``, within 2 ulp of glibc's); atan2 and the rest are libmvec's, whose
+SSE, AVX2 and AVX-512 variants are different code (within 4 ulp of glibc's). So the bits of a
+flight differ between instruction sets and, in the last places, from the single-flight path.
 
 Precision. ``precision="float32"`` emits the same step in float (sinf, float literals), with
 twice the lanes per vector; the state, parameters and step table are rounded to float32 on
@@ -223,7 +228,8 @@ def vector_flags(isa: str | None = None, precision: str = "float64") -> tuple[st
     """Compiler flags of the kernel for an instruction set.
 
     No -ffast-math: IEEE arithmetic, only errno and traps are given up (which lets sqrt and
-    the libmvec calls vectorize), and no FMA contraction (the module docstring says why).
+    the libmvec calls vectorize), and no FMA contraction by gcc (the kernel writes its own
+    fused products: the module docstring says where and why).
 
     Parameters
     ----------
