@@ -175,12 +175,8 @@ def emit_flight_c(step: ca.Function, constant: Sequence[int] = (1,),
             continue
         elif k in fused:
             m, which = fused[k]
-            a, b = product[m]
-            other = f"({name_of[ins[1 - which]]})"
-            if op == ca.OP_SUB:                  # a*b - o, or o - a*b
-                a, other = (a, f"-{other}") if which == 0 else (f"-({a})", other)
             calls["fma"] = 3
-            rhs = f"fma({a}, {b}, {other})"
+            rhs = hoisting.fused_form(op, which, *product[m], name_of[ins[1 - which]])
         elif trig == "inline" and op in INLINE_TRIG:
             rhs = f"qc_{INLINE_TRIG[op]}({name_of[ins[0]]})"
             inlined = True

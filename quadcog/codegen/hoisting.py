@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 import casadi as ca
 
-__all__ = ["CONSTANT", "SLOW", "STEP", "levels", "divisor_uses", "fused_products",
+__all__ = ["CONSTANT", "SLOW", "STEP", "levels", "divisor_uses", "fused_form", "fused_products",
            "through_reciprocal"]
 
 CONSTANT, SLOW, STEP = 0, 1, 2      # when an instruction runs: once, on a change, each step
@@ -159,3 +159,33 @@ def fused_products(step: ca.Function, levels_: list[int]) -> dict[int, tuple[int
                 taken.add(m)
                 break
     return fused
+
+
+def fused_form(op: int, which: int, a: str, b: str, other: str, suffix: str = "") -> str:
+    """The C of an addition or subtraction that takes in the product ``a * b``.
+
+    Parameters
+    ----------
+    op : int
+        ``casadi.OP_ADD`` or ``casadi.OP_SUB``.
+    which : int
+        Which operand of ``op`` the product is (0 or 1), as ``fused_products`` gives it.
+    a : str
+        The C of the product's first factor.
+    b : str
+        The C of its second factor.
+    other : str
+        The C of the other operand.
+    suffix : str
+        The math functions' suffix (``"f"`` in float32).
+
+    Returns
+    -------
+    str
+        ``fma(a, b, other)``; for a subtraction ``fma(a, b, -(other))`` (product first) or
+        ``fma(-(a), b, other)``: negation is exact, so one rounding as for the sum.
+    """
+    other = f"({other})"
+    if op == ca.OP_SUB:
+        a, other = (a, f"-{other}") if which == 0 else (f"-({a})", other)
+    return f"fma{suffix}({a}, {b}, {other})"

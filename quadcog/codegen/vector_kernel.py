@@ -41,6 +41,7 @@ from collections.abc import Callable, Hashable, Sequence
 import ctypes
 import functools
 import hashlib
+import heapq
 import math
 import os
 import platform
@@ -268,18 +269,21 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
     The sines, cosines and tangents of the step are inline (``quadcog.codegen.trig_c``): a
     call to libmvec clobbers every vector register, so the step spilled its live values around
     each of its 13 angles. The inline reduction is exact only for ``|x| < trig_c.LARGE``; each
-    lane keeps the largest |argument| of its step, and a step of a block where one reached it is run
-    again, lanes one by one, with libm's sin, cos and tan (``qc_exact_step``, cold and compiled
-    at -O1: it runs only for angles beyond 1.6e6 rad, such as a noise hash's of a large seed).
-    What runs once or seldom (the hoisted loops) calls libmvec as before.
+    lane keeps the largest |argument| of its step, and a block where one reached it stops
+    before that step: ``VectorKernel`` flies it on from there with the same step calling
+    libmvec (built only then: such angles are beyond 1.6e6 rad, a noise hash's of a large
+    seed). What runs once or seldom (the hoisted loops) calls libmvec.
 
     Parameters
     ----------
     step : casadi.Function
         An SX Function of three inputs (Z, Q, row) and one output of Z's size.
     name : str
-        Name of the C function: ``void name(long n_steps, const real *rows, real *Z,
-        const real *Q, long n_blocks)``, real the C type of ``precision``.
+        Name of the C function: ``long name(long n_steps, const real *rows, real *Z,
+        const real *Q, long n_blocks, long *stopped)``, real the C type of ``precision``. It
+        returns -1 when every block ran every step, else the first block that stopped before a
+        step with an angle of ``trig_c.LARGE`` or more (its Z holds the state there, the
+        blocks before it are done, those after it untouched) with that step in ``*stopped``.
     lanes : int
         Flights per block.
     precision : str
@@ -392,15 +396,11 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
             product[k] = (use(name_of[ins[0]], level), use(name_of[ins[1]], level))
         elif k in fused:
             m, which = fused[k]
-            a, b = product[m]
-            other = f"({use(name_of[ins[1 - which]], level)})"
-            if op == ca.OP_SUB:                  # a*b - o, or o - a*b
-                a, other = (a, f"-{other}") if which == 0 else (f"-({a})", other)
             calls["fma"] = 3
-            define(var, f"fma{sfx}({a}, {b}, {other})", level)
+            define(var, hoisting.fused_form(op, which, *product[m],
+                                            use(name_of[ins[1 - which]], level), sfx), level)
         elif inline and level == hoisting.STEP and op in INLINE_TRIG:
             x = use(name_of[ins[0]], level)
-            calls[INLINE_TRIG[op]] = 1           # declared for qc_exact_step
             define(var, f"qc_{INLINE_TRIG[op]}({x})", level)
             if x not in checked:
                 checked.add(x)
@@ -432,27 +432,13 @@ def emit_c(step: ca.Function, name: str = "qc_kernel", lanes: int = LANES,
         blocks[hoisting.STEP] = pressure_order(blocks[hoisting.STEP])
     body = {lv: "\n        ".join(b) for lv, b in blocks.items()}
     simd = "#pragma omp simd\n"
-    exact = ""
-    if checked:      # the step again, lane by lane with libm, for a block with a large angle
-        step_body = body[hoisting.STEP]
-        exact_body = "\n".join(line for line in step_body.split("\n")
-                               if not line.lstrip().startswith("qc_large"))
-        for f in INLINE_TRIG.values():
-            exact_body = exact_body.replace(f"qc_{f}(", f"{f}(")
-        body[hoisting.STEP] = ("double qc_large = 0.0;\n        " + step_body
+    if checked:      # each lane's largest argument of the step's inline sines
+        body[hoisting.STEP] = ("double qc_large = 0.0;\n        " + body[hoisting.STEP]
                                + "\n        large[j] = qc_large;")
-        exact = f"""__attribute__((noinline, cold, optimize("O1")))
-static void qc_exact_step(const real *row, const real *z, const real *q, const real *h,
-                          real *zn) {{
-  (void) row; (void) q; (void) h;
-  for (long j = 0; j < LANES; ++j) {{
-        {exact_body}
-  }}
-}}
-"""
-    rerun = ("      {\n        int any = 0;\n        for (long j = 0; j < LANES; ++j) any |= "
-             f"large[j] >= {trig_c.LARGE!r};\n        if (any) qc_exact_step(row, z, q, h, zn);"
-             "\n      }\n" if checked else "")
+    # a block whose step has a large angle stops before it (z still holds the state there)
+    stop = ("      {\n        int any = 0;\n        for (long j = 0; j < LANES; ++j) any |= "
+            f"large[j] >= {trig_c.LARGE!r};\n        if (any) {{ *stopped = k; return b; }}"
+            "\n      }\n" if checked else "")
     constant_loop = (f"    {simd}    for (long j = 0; j < LANES; ++j) {{\n        "
                      f"{body[hoisting.CONSTANT]}\n    }}\n" if blocks[hoisting.CONSTANT] else "")
     slow_loop = (f"      if (last < 0 || {changed or '0'}) {{\n        last = k;\n"
@@ -465,7 +451,8 @@ typedef {real} real;
 #define NZ {nZ}
 #define NQ {nQ}
 #define NR {nR}
-{exact}void {name}(long n_steps, const real *rows, real *Z, const real *Q, long n_blocks) {{
+long {name}(long n_steps, const real *rows, real *Z, const real *Q, long n_blocks,
+          long *stopped) {{
   for (long b = 0; b < n_blocks; ++b) {{
     real *z = Z + b * NZ * LANES;
     const real *q = Q + b * NQ * LANES;
@@ -479,9 +466,11 @@ typedef {real} real;
 {slow_loop}      {simd}      for (long j = 0; j < LANES; ++j) {{
         {body[hoisting.STEP]}
       }}
-{rerun}      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];
+{stop}      for (long i = 0; i < NZ * LANES; ++i) z[i] = zn[i];
     }}
   }}
+  (void) stopped;
+  return -1;
 }}
 """
 
@@ -524,19 +513,32 @@ def pressure_order(statements: list[str]) -> list[str]:
             users[j].append(i)
     left = [len(u) for u in users]           # uses of each value not yet scheduled
     waiting = [len(ops) for ops in operands]  # operands of each statement not yet scheduled
-    ready = {i for i in range(n) if not waiting[i]}
+    done = [False] * n
+
+    def score(i):
+        return (1 if users[i] else 0) - sum(1 for j in operands[i] if left[j] == 1)
+
+    # a heap of (score, statement); a score only falls (an operand's last use comes nearer),
+    # so a statement whose score fell is pushed again and its older entries are skipped
+    heap = [(score(i), i) for i in range(n) if not waiting[i]]
+    heapq.heapify(heap)
     order = []
-    while ready:
-        best = min(ready, key=lambda i: ((1 if users[i] else 0)
-                                         - sum(1 for j in operands[i] if left[j] == 1), i))
-        ready.remove(best)
+    while heap:
+        key, best = heapq.heappop(heap)
+        if done[best] or key != score(best):
+            continue
+        done[best] = True
         order.append(best)
         for j in operands[best]:
             left[j] -= 1
+            if left[j] == 1:              # its last user, if ready, now ends it
+                for u in users[j]:
+                    if not done[u] and not waiting[u]:
+                        heapq.heappush(heap, (score(u), u))
         for u in users[best]:
             waiting[u] -= 1
             if not waiting[u]:
-                ready.add(u)
+                heapq.heappush(heap, (score(u), u))
     return [statements[i] for i in order]
 
 
@@ -569,6 +571,10 @@ class VectorKernel:
         "float64" or "float32".
     slow : sequence of int
         The nonzeros of the row that change seldom (``emit_c``).
+    trig : {"inline", "libm"}, optional
+        ``emit_c``'s trig (default: inline on ``INLINE_TRIG_ISAS``, libm elsewhere). A block
+        that meets an angle beyond the inline sines' range is flown on from that step by the
+        same kernel with libm's (built on first need).
 
     Attributes
     ----------
@@ -578,7 +584,8 @@ class VectorKernel:
     """
 
     def __init__(self, step: ca.Function, lanes: int | None = None, isa: str | None = None,
-                 precision: str = "float64", slow: Sequence[int] = ()) -> None:
+                 precision: str = "float64", slow: Sequence[int] = (),
+                 trig: str | None = None) -> None:
         cc = find_compiler()
         if cc is None:
             raise KernelError("no C compiler")
@@ -590,6 +597,8 @@ class VectorKernel:
                               "/proc/cpuinfo); its instructions would stop the process")
         self.nZ, self.nQ, self.nR = (step.nnz_in(i) for i in range(3))
         self.slow = tuple(slow)
+        self._step, self._trig, self._libm = step, trig, None
+        self._lock = threading.Lock()
         try:
             self._build(step, cc, isa, lanes)
         except CompileError as e:
@@ -600,17 +609,17 @@ class VectorKernel:
                           stacklevel=2)
             self._build(step, cc, "portable", lanes)
         self._fn = ctypes.CDLL(str(self.library)).qc_kernel
-        self._fn.restype = None
+        self._fn.restype = ctypes.c_long
         self._fn.argtypes = [ctypes.c_long, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
-                             ctypes.c_long]
+                             ctypes.c_long, ctypes.POINTER(ctypes.c_long)]
 
     def _build(self, step, cc, isa, lanes):
         self.isa = isa
         self.lanes = lanes_for(isa, self.precision) if lanes is None else int(lanes)
         self.flags = vector_flags(isa, self.precision) + ("-Wl,--no-as-needed", "-lmvec")
+        trig = self._trig or ("inline" if isa in INLINE_TRIG_ISAS else "libm")
         source = emit_c(step, "qc_kernel", self.lanes, self.precision, self.slow,
-                        trig="inline" if isa in INLINE_TRIG_ISAS else "libm",
-                        fma=isa in FMA_ISAS).encode()
+                        trig=trig, fma=isa in FMA_ISAS).encode()
         # the ISA in the name too: the flags are in the cache key already
         stem = f"vector_kernel_{isa}_" + hashlib.sha256(source).hexdigest()[:12]
         self.library = compile_library(source, stem, cc, flags=self.flags)
@@ -651,9 +660,16 @@ class VectorKernel:
 
         def work(t):
             lo, hi = bounds[t], bounds[t + 1]
-            if hi > lo:
-                self._fn(n, rows.ctypes.data, Zb[lo:hi].ctypes.data, Qb[lo:hi].ctypes.data,
-                         hi - lo)
+            stopped = ctypes.c_long(0)
+            while hi > lo:
+                b = self._fn(n, rows.ctypes.data, Zb[lo:hi].ctypes.data, Qb[lo:hi].ctypes.data,
+                             hi - lo, ctypes.byref(stopped))
+                if b < 0:
+                    break
+                lo += b          # this block met a large angle: on from there with libm's
+                k = stopped.value
+                Zb[lo] = self._libm_kernel().blocks(Zb[lo:lo + 1], Qb[lo:lo + 1], rows[k:])[0]
+                lo += 1
         if threads == 1:
             work(0)
         else:            # exactly `threads` threads (a pool may reuse one for short shares)
@@ -664,6 +680,42 @@ class VectorKernel:
                 th.join()
         out = Zb.transpose(0, 2, 1).reshape(n_blocks * L, self.nZ)[:B]
         return out.astype(np.float64)
+
+    def _libm_kernel(self) -> "VectorKernel":
+        """The same kernel with libmvec's sines (no stop), built on first need."""
+        with self._lock:
+            if self._libm is None:
+                self._libm = VectorKernel(self._step, self.lanes, self.isa, self.precision,
+                                          self.slow, trig="libm")
+            return self._libm
+
+    def blocks(self, Zb: np.ndarray, Qb: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """Whole blocks (the kernel's layout, ``(n_blocks, nZ, lanes)``) after the steps of
+        ``rows``, one thread; a kernel built with trig="libm" never stops early.
+
+        Parameters
+        ----------
+        Zb : (n_blocks, nZ, lanes) array
+            The blocks' states, in the kernel's precision, C order.
+        Qb : (n_blocks, nQ, lanes) array
+            Their parameters.
+        rows : (n, n_row) array
+            The step table, C order.
+
+        Returns
+        -------
+        (n_blocks, nZ, lanes) array
+            The states after the steps.
+        """
+        Zb = np.array(Zb, order="C")
+        Qb, rows = np.ascontiguousarray(Qb), np.ascontiguousarray(rows)
+        stopped = ctypes.c_long(0)
+        b = self._fn(rows.shape[0], rows.ctypes.data, Zb.ctypes.data, Qb.ctypes.data,
+                     Zb.shape[0], ctypes.byref(stopped))
+        if b >= 0:
+            raise KernelError(f"block {b} stopped at step {stopped.value} in a kernel with "
+                              "libm's sines")
+        return Zb
 
 
 _kernels: dict = {}
