@@ -597,7 +597,8 @@ class VectorKernel:
                               "/proc/cpuinfo); its instructions would stop the process")
         self.nZ, self.nQ, self.nR = (step.nnz_in(i) for i in range(3))
         self.slow = tuple(slow)
-        self._step, self._trig, self._libm = step, trig, None
+        self._step, self._trig = step, trig
+        self._libm: VectorKernel | None = None     # the libmvec-sine twin, on first need
         self._lock = threading.Lock()
         try:
             self._build(step, cc, isa, lanes)
@@ -687,7 +688,8 @@ class VectorKernel:
             if self._libm is None:
                 self._libm = VectorKernel(self._step, self.lanes, self.isa, self.precision,
                                           self.slow, trig="libm")
-            return self._libm
+            libm: VectorKernel = self._libm
+        return libm
 
     def blocks(self, Zb: np.ndarray, Qb: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """Whole blocks (the kernel's layout, ``(n_blocks, nZ, lanes)``) after the steps of

@@ -40,19 +40,25 @@ def inertia_about_cog(p: npt.ArrayLike) -> npt.NDArray[np.float64]:
 
     Parameters
     ----------
-    p : (14,) array_like
-        Parameter vector (SI units, order ``PARAM_NAMES``).
+    p : (14,) or (..., 14) array_like
+        Parameter vector (SI units, order ``PARAM_NAMES``), or a stack of them.
 
     Returns
     -------
-    (3, 3) numpy.ndarray
+    (3, 3) or (..., 3, 3) numpy.ndarray
         I_G in kg m^2, body axes.
     """
     p = np.asarray(p, dtype=float)
-    r = p[R_G]
+    r = p[..., R_G]
     with np.errstate(over="ignore", invalid="ignore"):
-        return (np.diag(p[IDX["Ixx"]:IDX["Izz"] + 1])
-                - p[IDX["m"]] * (r @ r * np.eye(3) - np.outer(r, r)))
+        if p.ndim == 1:
+            return (np.diag(p[IDX["Ixx"]:IDX["Izz"] + 1])
+                    - p[IDX["m"]] * (r @ r * np.eye(3) - np.outer(r, r)))
+        # a stack (a plot's fine grid): the same formula, broadcast
+        inertia = p[..., IDX["Ixx"]:IDX["Izz"] + 1, None] * np.eye(3)
+        rr = np.sum(r * r, axis=-1)[..., None, None]
+        return inertia - p[..., IDX["m"], None, None] * (rr * np.eye(3)
+                                                         - r[..., :, None] * r[..., None, :])
 
 
 def inertia_ratio(p: npt.ArrayLike) -> float:

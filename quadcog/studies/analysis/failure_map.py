@@ -13,7 +13,7 @@ from quadcog.controllers import AdaptiveFeedbackLinearization, CascadePD, Feedba
 from quadcog.controllers.adaptive import admissible_estimate_radius
 from quadcog.controllers.base import Controller
 from quadcog.errors import ParameterError
-from quadcog.model.conventions import N_STATE
+from quadcog.model.conventions import N_STATE, R_G
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
 from quadcog.sim.flight import RK4_LIMIT
 from quadcog.trajectories.analytic import Hover
@@ -287,8 +287,10 @@ def plot_failure_map(fm: dict[str, Any], path: str | os.PathLike[str]) -> None:
     # fine grid for the admissible boundary (min eigenvalue of I_G = 0)
     fx = np.linspace(xs[0], xs[-1], 301) / 100
     base = default_parameters()
-    lam = np.array([[np.linalg.eigvalsh(inertia_about_cog(with_cog(base, (a, b, 0))))[0]
-                     for a in fx] for b in fx])
+    grid = np.broadcast_to(np.asarray(base, dtype=float), (fx.size, fx.size, base.size)).copy()
+    grid[..., R_G.start], grid[..., R_G.start + 1], grid[..., R_G.start + 2] = fx[None, :], \
+        fx[:, None], 0.0                  # row b, column a: r_G = (a, b, 0)
+    lam = np.linalg.eigvalsh(inertia_about_cog(grid))[..., 0]
     mesh = None
     for ax, (name, c) in zip(axes[0], ctls.items()):
         tail = c["tail_rms"]
