@@ -512,12 +512,12 @@ def add_identify(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "quadcog identify sample:crazypad/motor_data/"
                                    "add_weight_W1_near_M4 --baseline sample:crazypad/"
                                    "motor_data/normal_flight")
-    p.add_argument("logs", nargs="+", type=Path, metavar="LOG",
+    p.add_argument("logs", nargs="+", metavar="LOG",
                    help="flight log file(s); sample:NAME for a log shipped with quadcog, or "
                         "a folder of them (python -m quadcog.logs.samples lists the names; "
                         "e.g. sample:crazypad/motor_data/normal_flight)")
     p.add_argument("--vehicle", default="crazyflie", help="vehicle preset (default crazyflie)")
-    p.add_argument("--baseline", nargs="+", type=Path, default=None, metavar="LOG",
+    p.add_argument("--baseline", nargs="+", default=None, metavar="LOG",
                    help="flights of the same vehicle without the payload (files or "
                         "sample:NAME): report the shift relative to them")
     p.add_argument("--method", default="auto", help="auto (default), static or regression")

@@ -143,7 +143,9 @@ def test_written_ulog_is_read_by_pyulog_in_px4_frames(sample, tmp_path):
     from pyulog import ULog
     path = write_log(sample, tmp_path / "out.ulg", "ulog")
     u = ULog(str(path))
-    assert not u.file_corruption and u.msg_info_dict["sys_name"] == "quadcog"
+    # the info names the log's vehicle (the sample's, read from its ULog), and quadcog's writer
+    assert not u.file_corruption and u.msg_info_dict["sys_name"] == sample.meta["vehicle"]
+    assert u.msg_info_dict["ver_hw"] == "quadcog.logs.write_log"
     topics = {d.name: d.data for d in u.data_list}
     assert set(topics) == {"vehicle_local_position", "vehicle_attitude",
                            "vehicle_angular_velocity", "actuator_motors", "actuator_outputs",

@@ -47,7 +47,8 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
     from quadcog.identification.core import Identification
     if isinstance(source, Identification):
         return np.array(source.r_G, dtype=float)
-    if isinstance(source, bytes) or not isinstance(source, (str, os.PathLike)):
+    if isinstance(source, bytes) or not isinstance(source, (str, os.PathLike)) or not str(source):
+        # "" too: Path("") is the current folder, which would be named '.'
         fail("identified_cog", "an Identification or the path of the JSON of `quadcog "
              "identify --json`", source, IdentificationError)
     path = Path(source)

@@ -30,6 +30,7 @@ from quadcog.errors import IdentificationError
 from quadcog.identification.segments import MAX_GAP, commands_from_mixer
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
+from quadcog.logs.ulog import WRITER_HW, WRITER_NAME
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_BODY_RATE",
@@ -412,7 +413,7 @@ def _rates_agree_with_angles(log, mask):
 def vehicle_type(log: FlightLog) -> str | None:
     """The vehicle type a log names: ``"crazyflie"`` for a Crazyflie uSD log, the first word
     of ``meta["vehicle"]``, a PX4 ULog's hardware (``"px4 " + ver_hw``); None when it names
-    none.
+    none (also a ULog that quadcog wrote from a log naming no vehicle).
 
     Parameters
     ----------
@@ -426,6 +427,9 @@ def vehicle_type(log: FlightLog) -> str | None:
     """
     if log.format == "crazyflie-usd":
         return "crazyflie"
+    if (log.format == "ulog" and log.meta.get("ver_hw") == WRITER_HW
+            and log.meta.get("vehicle") == WRITER_NAME):
+        return None          # written by quadcog from a log that named no vehicle
     name = log.meta.get("vehicle", "").strip().lower()
     if name:
         return name.split()[0]

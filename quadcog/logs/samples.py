@@ -111,9 +111,12 @@ def resolve_log_argument(argument: str | Path) -> list[Path]:
     Raises
     ------
     LogError
-        ``sample:NAME`` with a NAME that names no sample.
+        ``sample:NAME`` with a NAME that names no sample, or an empty argument (which
+        ``Path`` would read as the current folder).
     """
     text = str(argument)
+    if not text:
+        raise LogError("log: expected a log file's path or sample:NAME, got ''")
     if text.startswith(SAMPLE_PREFIX):
         return sample_logs(text[len(SAMPLE_PREFIX):])
     return [Path(argument)]

@@ -58,7 +58,13 @@ def _from_columns(path, fmt, columns, meta):
     t_abs = columns[TIME_COLUMN]
     if t_abs.size < 2:
         raise LogFormatError(f"{path}: {t_abs.size} data rows; a flight log needs at least 2")
-    steps = np.diff(t_abs)
+    with np.errstate(over="ignore", invalid="ignore"):     # checked below, in the log's terms
+        steps = np.diff(t_abs)
+        t_rel = t_abs - t_abs[0]
+    if not np.isfinite(t_rel).all():
+        raise LogFormatError(f"{path}: column {TIME_COLUMN!r} runs from {float(t_abs[0])!r} s "
+                             f"to {float(t_abs[-1])!r} s, a span beyond the range of a float; "
+                             "expected the times of one flight (s)")
     if not (steps > 0).all():
         i = int(np.argmax(steps <= 0))
         raise LogFormatError(f"{path}: column {TIME_COLUMN!r} is not strictly increasing: data "
@@ -78,7 +84,7 @@ def _from_columns(path, fmt, columns, meta):
         signals[name] = a[:, 0] if not SIGNALS[name].shape else a
     raw = {k: v for k, v in columns.items() if k != TIME_COLUMN}
     meta = dict(meta, time_offset_s=repr(float(t_abs[0])))
-    return FlightLog(str(path), fmt, t_abs - t_abs[0], signals, raw, meta)
+    return FlightLog(str(path), fmt, t_rel, signals, raw, meta)
 
 
 # UTF-8; a byte-order mark in front (spreadsheets' "CSV UTF-8") is dropped, not read as the

@@ -432,11 +432,24 @@ def _nominal_positions(log):
     return np.array(x_layout(0.25))
 
 
+# what write_ulog puts in the info messages: the vehicle of the log's meta when it names one,
+# else the placeholder WRITER_NAME, which names no vehicle type (the identification's
+# vehicle-type check skips it)
+WRITER_NAME, WRITER_HW = "quadcog", "quadcog.logs.write_log"
+
+
+def _writer_name(log):
+    name = str(log.meta.get("vehicle", "")).strip()
+    ok = 0 < len(name) <= 64 and name.isascii() and name.isprintable()
+    return name if ok else WRITER_NAME
+
+
 def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
     """Write a log's signals as a minimal valid ULog (version 1) that PX4's tools and
     ``read_ulog`` read.
 
-    It holds the header, the flag-bits message, info (``sys_name`` = "quadcog"), the rotor
+    It holds the header, the flag-bits message, info (``sys_name``: the log's
+    ``meta["vehicle"]``, else ``WRITER_NAME``; ``ver_hw`` = ``WRITER_HW``), the rotor
     parameters (``CA_ROTOR_COUNT``, ``CA_ROTOR{i}_PX/PY/KM``: PX4's quad X numbering, the
     log's rotor positions or a nominal X; with ``motor_pwm`` the channels' ``PWM_MAIN_FUNC``,
     ``PWM_MAIN_MIN`` = 1000 and ``PWM_MAIN_MAX`` = 2000), one format and subscription per topic
@@ -515,7 +528,7 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
                              available=tuple(s))
     out = bytearray(ULOG_MAGIC + bytes([1]) + struct.pack("<Q", _START_US))
     out += _message("B", bytes(40))                   # no compat/incompat flags, no appends
-    for key, value in (("sys_name", "quadcog"), ("ver_hw", "quadcog.logs.write_log")):
+    for key, value in (("sys_name", _writer_name(log)), ("ver_hw", WRITER_HW)):
         out += _message("I", _key_value(f"char[{len(value)}]", key, value.encode()))
     params = {"CA_ROTOR_COUNT": ("int32_t", struct.pack("<i", 4))}
     directions = (-1, 1, -1, 1)            # quadcog order: the quad X's spins (KM > 0: CCW)

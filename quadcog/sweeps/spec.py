@@ -285,15 +285,15 @@ def _check_values(source, key, values):
     kinds = [kind(v) for v in values]
     for v, k in zip(values, kinds):
         if k is None:
-            raise _err(source, key, f"values: {v!r} is not a number, a string, a boolean or "
+            raise _err(source, key, f"values: {plain(v)} is not a number, a string, a boolean or "
                        f"a vector of finite numbers")
         if k != kinds[0]:
-            raise _err(source, key, f"values: {v!r} is a {k}, the first value "
-                       f"{values[0]!r} a {kinds[0]}: all values of a dimension must be of one "
+            raise _err(source, key, f"values: {plain(v)} is a {k}, the first value "
+                       f"{plain(values[0])} a {kinds[0]}: all values of a dimension must be of one "
                        f"kind")
     if kinds[0] == "number" and not all(_number(v) for v in values):
         bad = next(v for v in values if not _number(v))
-        raise _err(source, key, f"values: {bad!r} is not a finite number")
+        raise _err(source, key, f"values: {plain(bad)} is not a finite number")
 
 
 def _range_values(spec, where, source):

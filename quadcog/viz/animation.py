@@ -6,6 +6,7 @@ reference (dashed) with its current point, and the time. The vehicle is magnifie
 factor, stated in the title, so that it is visible on the scale of the path; the CoG offset is
 drawn with the same factor, so it is to scale with the body.
 """
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -180,10 +181,22 @@ def read_run(run_dir: "str | Path") -> tuple:
         if unknown:
             raise InputError(f"{vehicle_path}: unknown vehicle field(s) {unknown} (expected "
                              f"some of {FIELD_NAMES})")
+        required = [f.name for f in dataclasses.fields(Vehicle)
+                    if f.default is dataclasses.MISSING
+                    and f.default_factory is dataclasses.MISSING]
+        missing = [k for k in required if k not in data]
+        if missing:
+            raise InputError(f"{vehicle_path}: missing vehicle field(s) {missing}; a run's "
+                             "vehicle.json has every field of quadcog.Vehicle")
+        fields: dict[str, Any] = {}
+        for k, v in data.items():
+            try:
+                fields[k] = (tuple(map(tuple, v)) if k == "rotor_positions" else
+                             tuple(v) if isinstance(v, list) else v)
+            except TypeError:
+                raise InputError(f"{vehicle_path}: key {k!r}: expected a list of [x, y] "
+                                 f"rotor positions (m), got {v!r:.80}") from None
         try:
-            fields: dict[str, Any] = {k: (tuple(map(tuple, v)) if k == "rotor_positions" else
-                                          tuple(v) if isinstance(v, list) else v)
-                                      for k, v in data.items()}
             vehicle = Vehicle(**fields)
         except (TypeError, ValueError) as e:
             raise InputError(f"{vehicle_path}: not a valid vehicle: {e}") from None
