@@ -1,8 +1,8 @@
 """The inline sine, cosine and tangent of the compiled loops (quadcog.codegen.trig_c) against
-glibc's (numpy's): within 2 ulp at random angles, at every kind of multiple of pi/2 where the
-reduction cancels, at the edge of its range and beyond (libm takes over), and at +-0, inf,
-NaN and subnormals; in scalar code (the single-flight kernel), in a vectorized loop, and in the
-vector kernel, whose large-angle steps run again with libm."""
+glibc's (numpy's): sin and cos within 2 ulp, tan within 4, at random angles, at every kind of
+multiple of pi/2 where the reduction cancels, at the edge of its range and beyond (libm takes
+over), and at +-0, inf, NaN and subnormals; in scalar code (the single-flight kernel), in a vectorized loop, and in the
+vector kernel, whose blocks fly on with libmvec's sines from a large angle."""
 import ctypes
 import math
 import platform

@@ -19,7 +19,7 @@ before) in what it computes once:
 gcc contracts no multiply-add (``-ffp-contract=off``); on the ISAs of ``FMA_ISAS`` the loop
 writes its own fused products where no math function takes the sum, as the vector kernel does.
 The sines, cosines and tangents are inline (``quadcog.codegen.trig_c``, the vector kernel's
-too), within 2 ulp of libm's; with ``trig="libm"`` and without reciprocals the trajectory is
+too), sin and cos within 2 ulp of libm's; with ``trig="libm"`` and without reciprocals the trajectory is
 bit for bit the one of CasADi's code of the same step (tests/test_flight_kernel.py). The loop
 is compiled with the instruction set of ``quadcog.codegen.vector_kernel.kernel_isa`` (its
 flags and ``-O3``).

@@ -10,6 +10,9 @@ often than every step, read from a step's SX instructions.
   less often than the division, goes through the divisor's reciprocal, computed once where
   the divisor is: a division costs several multiplications' time, and the divisions of a
   step share few divisors (the inverse mass matrix's, the Euler angles' cosines).
+- **Fused products.** On an ISA with FMA units, a product used only by one sum of its own
+  loop goes into that sum as one ``fma`` (one rounding less), unless a math function takes
+  the sum (``fused_products``, ``fused_form``).
 """
 from collections.abc import Callable
 
@@ -147,16 +150,13 @@ def fused_products(step: ca.Function, levels_: list[int]) -> dict[int, tuple[int
         if op != ca.OP_OUTPUT:
             made_by[outs[0]] = k
     fused: dict[int, tuple[int, int]] = {}
-    taken: set[int] = set()
     for k, operands in candidates:
         if k in argument:
             continue
-        for which, m in enumerate(operands):
+        for which, m in enumerate(operands):     # used once: no other sum can take it
             if (step.instruction_id(m) == ca.OP_MUL and n_uses.get(m) == 1
-                    and levels_[m] == levels_[k] and m not in taken
-                    and operands[0] != operands[1]):
+                    and levels_[m] == levels_[k]):
                 fused[k] = (m, which)
-                taken.add(m)
                 break
     return fused
 

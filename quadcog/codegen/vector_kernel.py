@@ -23,7 +23,7 @@ no math function takes (``quadcog.codegen.hoisting.fused_products``): one roundi
 never in such an argument, because a function can magnify it (the sensing noise's hash
 ``fract(sin(a t + b) * 43758.5453)`` turns the rounding an FMA saves into 1e-7 of the noise).
 On AVX2 and AVX-512 (``INLINE_TRIG_ISAS``) the step's sin, cos and tan are inline
-(``quadcog.codegen.trig_c``, within 2 ulp of glibc's); atan2 and the rest are libmvec's, whose
+(``quadcog.codegen.trig_c``: sin, cos within 2 ulp of glibc's); atan2 and the rest are libmvec's, whose
 SSE, AVX2 and AVX-512 variants are different code (within 4 ulp of glibc's). So the bits of a
 flight differ between instruction sets and, in the last places, from the single-flight path.
 
