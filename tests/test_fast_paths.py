@@ -1,13 +1,16 @@
 """The shortcuts of the single flight's set-up and results against the general forms they
 stand for: each would be wrong in a way these catch (a sparse output read as dense, a hover
-check that misses a bad row, CoG rows of unsorted times, a position error off in its bits)."""
+check that misses a bad row, CoG rows of unsorted times, a position error off in its bits, a
+row fill that skips or repeats wrong rows, output arrays that overlap)."""
 import casadi as ca
 import numpy as np
 import pytest
 
 import quadcog
 from quadcog.codegen.fastcall import evaluate
-from quadcog.numerics import row_distances, row_norms
+from quadcog.numerics import fill_rows, repeated_row, row_distances, row_norms
+from quadcog.sim.flight import _outputs
+from quadcog.sim.schedule import Schedule
 from quadcog.sim.timeline import CogProfile
 from quadcog.trajectories.feasibility import check_reference
 
@@ -97,3 +100,60 @@ def test_fastcall_refuses_a_sparse_matrix_output_by_name():
     call = FastCall(ca.Function("g", [x], [ca.densify(ca.diag(x))]))
     call.inputs[0][:] = [1.0, 2.0]
     assert np.array_equal(call()[0], np.diag([1.0, 2.0]))
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 5, 8, 1000, 20001])
+def test_filled_rows_equal_numpys_broadcast_for_every_length(n):
+    rng = np.random.default_rng(n)
+    for k in (1, 3, 14):
+        row = rng.normal(size=k) * np.array([1e300, -0.0, 5e-324, 1.0] * 4)[:k]
+        want = np.empty((n, k))
+        want[:] = row
+        assert repeated_row(row, n).tobytes() == want.tobytes()
+        out = np.full((n + 4, k), np.nan)
+        fill_rows(out[2:n + 2], row)         # a view: the rows around it untouched
+        assert np.isnan(out[:2]).all() and np.isnan(out[n + 2:]).all()
+        assert out[2:n + 2].tobytes() == want.tobytes()
+
+
+def test_the_schedules_cog_rows_equal_the_broadcast_sum():
+    cog = CogProfile([(0.5, (0.02, -0.01, 0.0), 0.0), (1.0, (0.0, 0.03, 0.01), 0.4)])
+    s = Schedule.build(quadcog.Hover(), 2.0, 1e-3, cog)
+    r = np.array([0.01, -0.0, -0.02])
+    assert s.r_G(r).tobytes() == (r[None, :] + s.cog).tobytes()
+    assert s.r_G(r) is not s.r_G(r)         # a new array each time: _result adds to it in place
+
+
+def test_a_flights_outputs_are_disjoint_views_of_the_right_shapes():
+    X, U, e, codes = _outputs(7, 15)
+    assert X.shape == (8, 15) and U.shape == (8, 4) and e.shape == (8,) and codes.shape == (7,)
+    for i, a in enumerate((X, U, e, codes)):
+        a[...] = i
+        assert a.flags.c_contiguous and a.dtype == np.float64
+    assert (X == 0).all() and (U == 1).all() and (e == 2).all() and (codes == 3).all()
+
+
+class _Parts(quadcog.trajectories.analytic.Trajectory):
+    """A constant position (a broadcast view, the row shortcut) and a velocity that varies."""
+
+    def __init__(self, position, speed_at):
+        self.position, self.speed_at = position, speed_at
+
+    def _pvaj(self, t):
+        p = np.broadcast_to(np.asarray(self.position, float), (t.size, 3))
+        v = np.zeros((t.size, 3))
+        v[:, 1] = [self.speed_at(x) for x in t]
+        zero = np.broadcast_to(np.zeros(3), (t.size, 3))
+        return p, v, zero, zero
+
+
+@pytest.mark.parametrize("position, speed_at, where", [
+    ((0.0, 2e300, 1.0), lambda t: 1.0, "y at t = 0.0 s is 2e+300"),
+    ((0.0, 0.0, 1.0), lambda t: np.nan if t >= 0.3 else t, "vy at t = 0.3 s is nan"),
+    ((0.0, 0.0, 1.0), lambda t: -1e13 if t >= 0.5 else t, "vy at t = 0.5 s is -10000000000000.0")])
+def test_a_bad_entry_in_the_constant_row_or_a_varying_column_is_refused(position, speed_at,
+                                                                      where):
+    with pytest.raises(quadcog.InputError, match=where.replace("+", r"\+")):
+        _Parts(position, speed_at).sample(np.arange(10) / 10)
+    good = _Parts((0.0, 0.0, 1.0), lambda t: t).sample(np.arange(10) / 10)
+    assert good[7, 4] == pytest.approx(0.7) and (good[:, 1] == 0.0).all()

@@ -172,10 +172,7 @@ def _run_compiled(setup, progress):
     if kernel is None:
         return _run_chunks(setup, progress)
     schedule, X0, n_steps = setup.schedule, setup.X0, setup.schedule.n_steps
-    X = np.empty((n_steps + 1, X0.size))
-    U = np.empty((n_steps + 1, 4))
-    e = np.empty(n_steps + 1)           # the last sample's is _result's
-    codes = np.empty(n_steps)
+    X, U, e, codes = _outputs(n_steps, X0.size)
     X[0] = X0
     run = kernel.bind(X, [np.ascontiguousarray(setup.P, dtype=float)]
                       + [getattr(schedule, name) for name, _ in STEP_INPUTS], [U, e, codes])
@@ -192,6 +189,18 @@ def _run_compiled(setup, progress):
             progress(k / n_steps)
     U[n_steps] = U[n_steps - 1]
     return X, U, _last_error(e, X, schedule), 0
+
+
+def _outputs(n_steps, n_x):
+    """X (n_steps + 1, n_x), U (n_steps + 1, 4), e (n_steps + 1,) and codes (n_steps,): views
+    of one block. One allocation, not four: glibc maps each large block afresh, and the
+    kernel then pays a page fault per 4 KiB it first writes (about 700, a millisecond, for a
+    20 s flight); one block is mostly served again from what the last flight freed."""
+    n = n_steps + 1
+    sizes = np.cumsum([0, n * n_x, n * 4, n, n_steps])
+    block = np.empty(int(sizes[-1]))
+    X, U, e, codes = (block[a:b] for a, b in zip(sizes[:-1], sizes[1:]))
+    return X.reshape(n, n_x), U.reshape(n, 4), e, codes
 
 
 def _last_error(e, X, schedule):
@@ -323,13 +332,14 @@ def _result(setup, X, U, e, code, elapsed):
     t, ref = schedule.t[:n], schedule.ref[:n]
     # the whole body's mass and CoG: the airframe at its CoG profile with the payloads
     load = schedule.payload[:n]
-    if load.any():
+    if load[:, PI_INDEX["m"]].any():     # a payload's mass is > 0: its column alone says
         mass, r_G = body_mass_and_cog(P[IDX["m"]], schedule.r_G(P[R_G])[:n],
                                       load[:, PI_INDEX["m"], None],
                                       load[:, [PI_INDEX[f"m{a}_G"] for a in "xyz"]])
         mass = mass[:, 0]
     else:       # nothing on board: what body_mass_and_cog gives then (m + 0, r + 0)
-        mass, r_G = np.full(n, P[IDX["m"]] + 0.0), schedule.r_G(P[R_G])[:n] + 0.0
+        mass, r_G = np.full(n, P[IDX["m"]] + 0.0), schedule.r_G(P[R_G])[:n]
+        r_G += 0.0          # in place: r_G gives a new array
     if code:
         idx, cause = n - 1, DivergenceCause(code)
     else:
@@ -357,8 +367,11 @@ def _result(setup, X, U, e, code, elapsed):
         metrics.r_G_final = r_G[last].tolist()
     name = getattr(controller, "name", getattr(controller, "__name__", "user controller"))
     inverse = setup.actuation.mixer_inverse().T
-    thrust = (X[:keep, N_STATE:N_STATE + nf].copy() if nf else
-              np.clip(U[:keep] @ inverse, setup.actuation.lower, setup.actuation.upper))
+    if nf:
+        thrust = X[:keep, N_STATE:N_STATE + nf].copy()
+    else:               # in place: no second (n, 4) array
+        thrust = U[:keep] @ inverse
+        np.clip(thrust, setup.actuation.lower, setup.actuation.upper, out=thrust)
     Xk, tk, refk, Uk = X[:keep], t[:keep], ref[:keep], U[:keep]
     command = lambda: _commanded(controller, tk, Xk, refk, nf, Uk) @ inverse   # on first use
     return SimulationResult(t[:keep], x, U[:keep], ref[:keep], r_hat, r_G[:keep], metrics,

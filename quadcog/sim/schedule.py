@@ -18,6 +18,7 @@ import numpy.typing as npt
 from quadcog import config
 from quadcog.model.conventions import R_G
 from quadcog.model.inertial_parameters import N_PI
+from quadcog.numerics import repeated_row
 from quadcog.sim.timeline import CogProfile, PayloadProfile, wrench_table
 from quadcog.trajectories.analytic import REF_SIZE, Trajectory
 
@@ -191,10 +192,12 @@ class Schedule:
         (N, 3) numpy.ndarray
             r_G (m) at every sample.
         """
-        r = np.asarray(r_vehicle, float)[None, :]
+        r = np.asarray(r_vehicle, float)
         if (self.cog_scale == 1.0).all():     # a single flight's: 1 * r is r, one pass fewer
-            return r + self.cog
-        return cog_at(r, self.cog_scale[:, None], self.cog)
+            out = repeated_row(r, self.cog.shape[0])    # r + cog, without numpy's per-row loop
+            out += self.cog
+            return out
+        return cog_at(r[None, :], self.cog_scale[:, None], self.cog)
 
     def padded(self, multiple: int) -> "Schedule":
         """A schedule whose step count is a multiple of ``multiple``.

@@ -11,6 +11,7 @@ from quadcog import validate
 from quadcog.errors import InputError
 from quadcog.model.inertial_parameters import N_PI
 from quadcog.model.parameters import LARGEST
+from quadcog.numerics import fill_rows
 from quadcog.trajectories.analytic import sample_times
 from quadcog.vehicles.payload import Payload, as_payload
 
@@ -119,7 +120,9 @@ class CogProfile:
             if c.ramp > 0:
                 s = np.clip((t[active] - c.t) / c.ramp, 0.0, 1.0)
                 r[active] = prev + s[:, None] * (target - prev)
-            else:       # s = 1 on every active row: one row, the same bits
+            elif isinstance(active, slice):     # s = 1 on every active row: one row, the same bits
+                fill_rows(r[active], prev + 1.0 * (target - prev))
+            else:
                 r[active] = prev + 1.0 * (target - prev)
             prev = target
         return r

@@ -17,6 +17,7 @@ from quadcog import validate
 from quadcog.errors import InputError, QuadcogError
 from quadcog.kinds import Number, Vec3
 from quadcog.model.parameters import LARGEST
+from quadcog.numerics import fill_rows
 
 # position, velocity, acceleration, jerk: each (N, 3), ground axes (m, m/s, m/s^2, m/s^3)
 _PVAJ = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64],
@@ -71,11 +72,14 @@ def _describe(trajectory):
     return repr(trajectory)
 
 
-def _checked_reference(ref, t, trajectory):
+def _checked_reference(ref, t, trajectory, pieces=None):
     """``ref`` (N, 14) if every entry is finite and within +-REFERENCE_LIMIT, else InputError
-    naming the trajectory, the first bad time and entry."""
+    naming the trajectory, the first bad time and entry. ``pieces``, arrays that hold every
+    entry of ``ref`` between them (the row constant in time and the varying columns), are
+    checked in its place when given: a hover's 20,000 equal rows are one row to check."""
     # the common case without a temporary array: NaN fails both comparisons
-    if ref.size == 0 or (ref.max() <= REFERENCE_LIMIT and ref.min() >= -REFERENCE_LIMIT):
+    if ref.size == 0 or all(a.max() <= REFERENCE_LIMIT and a.min() >= -REFERENCE_LIMIT
+                            for a in ([ref] if pieces is None else pieces)):
         return ref
     with np.errstate(invalid="ignore"):
         bad = ~(np.abs(ref) <= REFERENCE_LIMIT)
@@ -163,11 +167,10 @@ class Trajectory:
                     row[cols] = part[0]
                 else:
                     varying.append((cols, part))
-            ref = np.empty((t.size, REF_SIZE))
-            ref[:] = row
+            ref = fill_rows(np.empty((t.size, REF_SIZE)), row)
             for cols, part in varying:
                 ref[:, cols] = part
-        return _checked_reference(ref, t, self)
+        return _checked_reference(ref, t, self, [row] + [ref[:, cols] for cols, _ in varying])
 
     def __call__(self, t: float) -> npt.NDArray[np.float64]:
         """The reference row at one time.
