@@ -14,12 +14,12 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
+from quadcog.controllers.decoupling import decoupled_input, linearizing_terms
 from quadcog.controllers.design import admissible_estimate_radius, design
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
-from quadcog.controllers.shaping import kinematics
 from quadcog.errors import InputError
 from quadcog.kinds import NumberOrNone, NumberOrVec3
-from quadcog.model.conventions import B_U, NU
+from quadcog.model.conventions import B_U
 from quadcog.model.functions import Model
 from quadcog.model.parameters import LARGEST
 from quadcog.numerics import exact_lyapunov
@@ -132,18 +132,14 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
             [0; H M_hat^{-1}] (8x6).
         """
         p_hat = self.nominal_with_cog(r_hat)
-        f = self.model.casadi_function
         e, e_dot, y_ddot_d = self.output_errors(x, ref, p_hat)
         v = self.commanded_acceleration(e, e_dot, y_ddot_d)
-        U = ca.solve(f("decoupling")(x, p_hat), v - f("drift")(x, p_hat))
-        nu = x[NU]
-        M_inv = f("inverse_mass_matrix")(p_hat)
-        n_hat = f("coriolis")(x, p_hat) @ nu + f("damping")(p_hat) @ nu + f("gravity")(x, p_hat)
-        nu_dot_star = M_inv @ (ca.DM(B_U) @ U - n_hat)
-        Phi = f("regressor")(x, nu_dot_star, p_hat)
-        _, y_dot = kinematics(self.model, x, p_hat)
-        H = ca.jacobian(y_dot, x)[:, NU]
-        B = ca.vertcat(ca.SX.zeros(4, 6), H @ M_inv)
+        # alpha_hat and b_hat from M_hat^-1, n_hat and H M_hat^-1, which the update needs too
+        lin = linearizing_terms(self.model, x, p_hat)
+        U = decoupled_input(lin.alpha, v - lin.b)
+        nu_dot_star = lin.M_inv @ (ca.DM(B_U) @ U - lin.n)
+        Phi = self.model.casadi_function("regressor")(x, nu_dot_star, p_hat)
+        B = ca.vertcat(ca.SX.zeros(4, 6), lin.HM)
         return U, ca.vertcat(e, e_dot), Phi, B
 
     def expression(self, t: ca.SX, x: ca.SX, ref: ca.SX, c: ca.SX) -> tuple[ca.SX, ca.SX]:

@@ -6,6 +6,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.controllers.base import Controller
+from quadcog.controllers.decoupling import decoupled_input
 from quadcog.controllers.design import design
 from quadcog.controllers.shaping import (
     desired_tilt,
@@ -176,4 +177,4 @@ class FeedbackLinearization(Controller):
         v = self.commanded_acceleration(e, e_dot, y_ddot_d)
         alpha = self.model.casadi_function("decoupling")(x, p)
         b = self.model.casadi_function("drift")(x, p)
-        return ca.solve(alpha, v - b), ca.SX(0, 1)
+        return decoupled_input(alpha, v - b), ca.SX(0, 1)

@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
+from quadcog.controllers.decoupling import decoupled_input
 from quadcog.controllers.design import design
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.kinds import Number
@@ -100,7 +101,7 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
         v = v - ca.vertcat(0, ca.DM(self.ki) * c)
         alpha = self.model.casadi_function("decoupling")(x, p)
         b = self.model.casadi_function("drift")(x, p)
-        return ca.solve(alpha, v - b), e[ATTITUDE_ROWS]
+        return decoupled_input(alpha, v - b), e[ATTITUDE_ROWS]
 
     def project(self, c: ca.SX) -> ca.SX:
         """Clip the integrators to +-integral_limit.

@@ -118,9 +118,9 @@ import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.controllers.composite import believed_input
+from quadcog.controllers.decoupling import decoupled_input, linearizing_terms
 from quadcog.controllers.design import mass_bounds_of
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
-from quadcog.controllers.shaping import kinematics
 from quadcog.errors import PhysicalConsistencyError
 from quadcog.kinds import Flag, Number, Vector
 from quadcog.model.conventions import B_U, IDX, NU
@@ -360,18 +360,14 @@ class PayloadAdaptive(FeedbackLinearization):
             [0; H M_hat^-1] (8x6).
         """
         p_hat = self.estimated_parameters(m_hat, r_hat)
-        f = self.model.casadi_function
         e, e_dot, y_ddot_d = self.output_errors(x, ref, p_hat)
         v = self.commanded_acceleration(e, e_dot, y_ddot_d)
-        U = ca.solve(f("decoupling")(x, p_hat), v - f("drift")(x, p_hat))
-        nu = x[NU]
-        M_inv = f("inverse_mass_matrix")(p_hat)
-        n_hat = f("coriolis")(x, p_hat) @ nu + f("damping")(p_hat) @ nu + f("gravity")(x, p_hat)
-        nu_dot_star = M_inv @ (ca.DM(B_U) @ U - n_hat)
-        Phi = f("inertial_regressor")(x, nu_dot_star, self.nominal[IDX["g"]])[:, :N_THETA]
-        _, y_dot = kinematics(self.model, x, p_hat)
-        H = ca.jacobian(y_dot, x)[:, NU]
-        return U, ca.vertcat(e, e_dot), Phi, ca.vertcat(ca.SX.zeros(4, 6), H @ M_inv)
+        lin = linearizing_terms(self.model, x, p_hat)
+        U = decoupled_input(lin.alpha, v - lin.b)
+        nu_dot_star = lin.M_inv @ (ca.DM(B_U) @ U - lin.n)
+        Phi = self.model.casadi_function("inertial_regressor")(
+            x, nu_dot_star, self.nominal[IDX["g"]])[:, :N_THETA]
+        return U, ca.vertcat(e, e_dot), Phi, ca.vertcat(ca.SX.zeros(4, 6), lin.HM)
 
     def filtered_regression(self, x: ca.SX, U_a: ca.SX, zeta: ca.SX,
                             Psi: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:

@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
 from quadcog.codegen.fastcall import evaluate
+from quadcog.controllers.decoupling import decoupled_input
 from quadcog.errors import QuadcogError
 from quadcog.model.conventions import IDX, N_PARAM, N_STATE, NU, OUTPUT_ROWS, R_G
 from quadcog.model.functions import Model, load
@@ -76,7 +77,7 @@ def zero_dynamics_function(model: Model | None = None) -> tuple[ca.Function, ca.
     a_w = ca.substitute(z_dot, w, ca.SX(0))
     w_star = -a_w / b_w
     x = ca.substitute(x_w, w, w_star)
-    U = ca.solve(alpha(x, p), -drift(x, p))
+    U = decoupled_input(alpha(x, p), -drift(x, p))     # as the laws solve it
     xdot = f(x, U, p)
     zeta_dot = xdot[ZETA_ROWS]
     w_rate = ca.jtimes(w_star, zeta, zeta_dot)
@@ -232,8 +233,8 @@ def _output_tracking_law(model, kp, kd):
     yd, ydd, yddd = ca.SX.sym("yd", 4), ca.SX.sym("ydd", 4), ca.SX.sym("yddd", 4)
     y_dot = f(x, ca.SX.zeros(4), p)[list(OUTPUT_ROWS)]
     v = yddd - ca.DM(kp) * (x[list(OUTPUT_ROWS)] - yd) - ca.DM(kd) * (y_dot - ydd)
-    U = ca.solve(model.casadi_function("decoupling")(x, p),
-                 v - model.casadi_function("drift")(x, p))
+    U = decoupled_input(model.casadi_function("decoupling")(x, p),
+                        v - model.casadi_function("drift")(x, p))
     return ca.Function("fl_true", [x, p, yd, ydd, yddd], [f(x, U, p)])
 
 
