@@ -406,15 +406,15 @@ def bench_isa(n_flights, duration=20.0):
         pinned_to(isa, lambda: simulate_batch(ctl, vehicles[:2], **dict(kw, duration=0.01)))
     # the least CPU time of ISA_REPEATS calls per build, the builds taken in turn: this
     # machine's speed drifts within minutes, and a call that another job slowed is not the
-    # kernel's cost; the median and the spread go into the note
-    times, out = {isa: [] for isa in isas}, {}
+    # kernel's cost; every call's time goes into the note
+    times, results = {isa: [] for isa in isas}, {}
     for _ in range(ISA_REPEATS):
         for isa in isas:
             c0 = os.times()
-            r = pinned_to(isa, lambda: simulate_batch(ctl, vehicles, **kw))
+            results[isa] = pinned_to(isa, lambda: simulate_batch(ctl, vehicles, **kw))
             c1 = os.times()
             times[isa].append((c1.user - c0.user) + (c1.system - c0.system))
-            out[isa] = (r, min(times[isa]))
+    out = {isa: (results[isa], min(times[isa])) for isa in isas}
     steps = n_flights * int(round(duration / 1e-3))
     rb, cb = out[built]
     for isa in isas:

@@ -8,8 +8,8 @@ import numpy.typing as npt
 
 from quadcog.errors import ParameterError
 
-__all__ = ["row_norms", "row_distances", "fill_rows", "repeated_row", "exact_inverse", "exact_solve", "exact_lyapunov",
-           "exact_place"]
+__all__ = ["row_norms", "row_distances", "fill_rows", "repeated_row", "exact_inverse",
+           "exact_solve", "exact_lyapunov", "exact_place"]
 
 
 def row_norms(v: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
