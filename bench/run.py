@@ -377,7 +377,7 @@ def bench_object_code(isa):
            f"kernel); calls: {calls(new) or 'none'} (previous kernel: {calls(old)})")
 
 
-ISA_REPEATS = 3     # calls per build in bench_isa
+ISA_REPEATS = 5     # calls per build in bench_isa
 
 
 def bench_isa(n_flights, duration=20.0):

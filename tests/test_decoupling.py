@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 import quadcog
-from quadcog.controllers.decoupling import decoupled_input, linearizing_terms
+from quadcog.controllers.decoupling import decoupled_input, inverse_mass_matrix, linearizing_terms
 from quadcog.controllers.design import admissible_estimate_radius
+from quadcog.model.parameters import inertia_ratio
 
 RNG = np.random.default_rng(33)
 
@@ -50,6 +51,50 @@ def test_alpha_and_b_factored_equal_the_generated_decoupling_and_drift():
         worst = max(worst, np.abs(alpha - alpha_gen).max() / scale_a,
                     np.abs(b - b_gen).max() / scale_b)
     assert worst < 1e-12
+
+
+def _parameters(n):
+    """Random parameter vectors: masses, CoG offsets up to 8 cm, inertias about O (the nominal
+    vehicle's, scaled), kept where I_G is well inside positive definite."""
+    p = np.tile(np.asarray(quadcog.HUMMINGBIRD.parameters(), dtype=float), (4 * n, 1))
+    p[:, 0] *= RNG.uniform(0.3, 3.0, 4 * n)
+    p[:, 2:5] *= RNG.uniform(0.5, 2.0, (4 * n, 3))
+    p[:, 11:14] = RNG.uniform(-0.08, 0.08, (4 * n, 3))
+    kept = [row for row in p if inertia_ratio(row) > 0.05][:n]
+    assert len(kept) == n
+    return kept
+
+
+def test_the_block_inverse_mass_matrix_inverts_the_generated_mass_matrix():
+    """Against LAPACK's inverse of the generated M and the generated M^-1 (SymPy's block
+    elimination): a wrong sign in a block, a transposed S G or a wrong cofactor shows."""
+    model = quadcog.load()
+    p = ca.SX.sym("p", 14)
+    f = ca.Function("f", [p], [inverse_mass_matrix(p)])
+    for pv in _parameters(200):
+        M_inv = np.array(f(pv))
+        lapack = np.linalg.inv(model.mass_matrix(pv))
+        scale = np.abs(lapack).max()
+        assert np.abs(M_inv - lapack).max() <= 1e-13 * scale, pv
+        assert np.abs(M_inv - model.inverse_mass_matrix(pv)).max() <= 1e-13 * scale, pv
+        # G and the off-diagonal blocks are symmetric by construction, to the bit
+        assert (M_inv[3:, 3:] == M_inv[3:, 3:].T).all() and (M_inv[:3, 3:] == M_inv[3:, :3].T).all()
+
+
+def test_the_block_inverse_takes_less_than_half_the_generated_ones_operations():
+    """Every step of an adaptive law forms M_hat^-1 at its new r_hat: the reason for the
+    blocks. Counted as the CasADi instructions of each at a symbolic CoG and mass."""
+    model = quadcog.load()
+    r, m = ca.SX.sym("r", 3), ca.SX.sym("m")
+    p = ca.vertcat(m, ca.DM(quadcog.HUMMINGBIRD.parameters()[1:11]), r)
+
+    def operations(expression):
+        f = ca.Function("f", [r, m], [ca.cse(expression)])
+        return sum(f.instruction_id(k) not in (ca.OP_CONST, ca.OP_INPUT, ca.OP_OUTPUT)
+                   for k in range(f.n_instructions()))
+    blocks = operations(inverse_mass_matrix(p))
+    generated = operations(model.casadi_function("inverse_mass_matrix")(p))
+    assert blocks < generated / 2, (blocks, generated)
 
 
 def test_the_elimination_equals_lapacks_solve_over_the_working_range():
