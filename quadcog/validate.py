@@ -11,7 +11,7 @@ not 1 s), strings, complex values (whose imaginary part numpy would drop), ``Non
 integers beyond the float range are refused; ``numpy`` integer and float scalars
 (``np.int64(1)``, ``np.float32(0.5)``) are accepted.
 """
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 import math
 import numbers
 import operator
@@ -21,10 +21,11 @@ from typing import Any, NoReturn
 import numpy as np
 import numpy.typing as npt
 
-from quadcog.errors import InputError
+from quadcog.errors import InputError, QuadcogError
 
 __all__ = ["plain", "fail", "real", "positive", "nonnegative", "integer", "flag", "choice",
-           "array", "vector", "poles", "step_count", "BYTES_PER_STEP", "require_extra", "import_extra"]
+           "array", "vector", "poles", "step_count", "BYTES_PER_STEP", "require_extra", "import_extra",
+           "user_function"]
 
 _MAX_ITEMS_SHOWN = 8
 
@@ -620,3 +621,33 @@ def import_extra(extra: str, module: str) -> ModuleType:
     except ImportError:             # found but not importable (a broken install)
         raise MissingDependencyError(_missing_text(extra, [top])) from None
     return sys.modules[module]
+
+
+def user_function(f: Callable[..., Any], name: str) -> Callable[..., Any]:
+    """``f`` (a function the user passed) wrapped so that what it raises is an InputError.
+
+    The wrapper calls ``f`` with its arguments; a quadcog error passes through, any other
+    exception becomes ``InputError("{name}({arguments}) raised {type}: {message}")`` with
+    the exception as its cause (KeyboardInterrupt and SystemExit are not exceptions here).
+
+    Parameters
+    ----------
+    f : callable
+        The user's function (a progress callback, a CoG shape, a trajectory).
+    name : str
+        What to call it in messages, e.g. ``"progress"``.
+
+    Returns
+    -------
+    callable
+        ``f`` with its failures named.
+    """
+    def call(*args: Any) -> Any:
+        try:
+            return f(*args)
+        except QuadcogError:
+            raise
+        except Exception as e:         # the user's code failed: say where, keep the cause
+            shown = ", ".join(plain(a) for a in args)
+            raise InputError(f"{name}({shown}) raised {type(e).__name__}: {e}") from e
+    return call

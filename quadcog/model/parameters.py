@@ -15,6 +15,8 @@ generated dynamics return NaN. Each parameter must also lie within a sane scale 
 LARGEST below), so that the model's products and inverses stay finite. Every runtime check of
 parameters uses this module.
 """
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 
@@ -61,27 +63,30 @@ def inertia_about_cog(p: npt.ArrayLike) -> npt.NDArray[np.float64]:
                                                          - r[..., :, None] * r[..., None, :])
 
 
-def inertia_ratio(p: npt.ArrayLike) -> float:
+def inertia_ratio(p: npt.ArrayLike) -> Any:
     """Smallest eigenvalue of I_O^-1/2 I_G I_O^-1/2.
 
     Parameters
     ----------
-    p : (14,) array_like
-        Parameter vector (SI units); requires Ixx, Iyy, Izz > 0.
+    p : (14,) or (..., 14) array_like
+        Parameter vector (SI units), or a stack of them; requires Ixx, Iyy, Izz > 0.
 
     Returns
     -------
-    float
+    float or numpy.ndarray
         The least fraction of the inertia about O that the inertia about the CoG keeps over
-        all directions (dimensionless; 1 for a CoG at O); NaN when the numbers overflow.
+        all directions (dimensionless; 1 for a CoG at O); NaN when the numbers overflow. One
+        per parameter vector of a stack.
     """
     p = np.asarray(p, dtype=float)
-    scale = 1.0 / np.sqrt(p[IDX["Ixx"]:IDX["Izz"] + 1])
-    with np.errstate(over="ignore", invalid="ignore"):
-        S = scale[:, None] * inertia_about_cog(p) * scale[None, :]
-    if not np.isfinite(S).all():
-        return float("nan")
-    return float(np.linalg.eigvalsh(0.5 * (S + S.T))[0])
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        scale = 1.0 / np.sqrt(p[..., IDX["Ixx"]:IDX["Izz"] + 1])
+        S = scale[..., :, None] * inertia_about_cog(p) * scale[..., None, :]
+    finite = np.isfinite(S).all(axis=(-2, -1))
+    S = np.where(finite[..., None, None], S, 0.0)
+    ratio = np.where(finite, np.linalg.eigvalsh(0.5 * (S + np.swapaxes(S, -1, -2)))[..., 0],
+                     np.nan)
+    return float(ratio) if p.ndim == 1 else ratio
 
 
 def admissible_radius(p: npt.ArrayLike) -> float:
@@ -180,10 +185,15 @@ def check_parameters(p: npt.ArrayLike, name: str = "p") -> npt.NDArray[np.float6
                                  f"sec. 1.4)")
     ratio = inertia_ratio(p)
     if not ratio >= MARGIN:             # NaN (overflow) fails too
+        where = (f"{name}: r_G = {p[R_G].tolist()} m is too far from O for m = "
+                 f"{p[IDX['m']]:g} kg and I_O = diag("
+                 f"{', '.join(f'{v:g}' for v in p[IDX['Ixx']:IDX['Izz'] + 1])})")
+        if np.isnan(ratio):
+            raise ParameterError(f"{where}: the inertia about the CoG overflows the float "
+                                 "range (docs/model.md sec. 1.4)")
         raise ParameterError(
-            f"{name}: r_G = {p[R_G].tolist()} m is too far from O for m = {p[IDX['m']]:g} kg and "
-            f"I_O = diag({', '.join(f'{v:g}' for v in p[IDX['Ixx']:IDX['Izz'] + 1])}): the "
-            f"inertia about the CoG keeps only {ratio:.3g} of I_O in its weakest direction "
-            f"(expected >= {MARGIN:g}, docs/model.md sec. 1.4); M is "
-            + ("not positive definite" if not ratio > 0 else "nearly singular"))
+            f"{where}: the inertia about the CoG keeps only {ratio:.3g} of I_O in its weakest "
+            f"direction (expected >= {MARGIN:g}, docs/model.md sec. 1.4); the mass matrix M "
+            "with this CoG is " + ("not positive definite (no rigid body has it)"
+                                   if not ratio > 0 else "nearly singular"))
     return p

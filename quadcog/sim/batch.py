@@ -16,6 +16,7 @@ from quadcog.codegen.vector_kernel import VectorKernel, kernel_for
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_STATE, R_G
+from quadcog.model.parameters import MARGIN, check_parameters, inertia_ratio
 from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, SLOW_INPUTS, monitored_chunk_function, monitored_step, packed
 from quadcog.sim.divergence import DivergenceCause, Limits, divergence_rule, magnitude
 from quadcog.sim.plant import Actuation, TruthOptions
@@ -26,7 +27,7 @@ from quadcog.sim.timeline import CogProfile, PayloadProfile
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["BatchResult", "batch_kernel", "simulate_batch", "run_kernel", "run_map",
+__all__ = ["BatchResult", "batch_kernel", "simulate_batch", "check_cog_range", "run_kernel", "run_map",
            "batch_metrics", "slow_row_entries"]
 
 
@@ -222,7 +223,45 @@ def _cog_scale(cog_shape: Any) -> Callable[[float], float] | None:
         return lambda t: profile.sample([t])[0, 0]
     if not callable(cog_shape):
         validate.fail("cog_shape", "None, a CogProfile or a function of time", cog_shape)
-    return lambda t: validate.real(cog_shape(t), f"cog_shape({validate.plain(float(t))})")
+    shape = validate.user_function(cog_shape, "cog_shape")
+    return lambda t: validate.real(shape(t), f"cog_shape({validate.plain(float(t))})")
+
+
+def check_cog_range(params: npt.NDArray[np.float64], schedule: Schedule) -> None:
+    """Refuse a batch whose CoG schedule takes a flight's truth where no rigid body is.
+
+    Flight b's r_G at step k is ``cog_scale_k * r_b + cog_k``. The inertia about the CoG's
+    least fraction of I_O (``inertia_ratio``) is concave in r_G (I_G = I_O - m S(r)^T S(r),
+    S linear in r), so along the schedule's scales it is least at the smallest or the
+    largest: those two CoGs of each flight are checked (each distinct CoG row, where the
+    additive part varies), as ``simulate`` checks each CoG of its profile.
+
+    Parameters
+    ----------
+    params : (B, 14) numpy.ndarray
+        The flights' parameter vectors (their own r_G).
+    schedule : Schedule
+        The batch's schedule (``cog_scale``, ``cog``).
+
+    Raises
+    ------
+    quadcog.ParameterError
+        Naming the flight, the time and the scale where its CoG is not admissible.
+    """
+    scale, cog = schedule.cog_scale, schedule.cog
+    if (cog == cog[0]).all():
+        steps = np.unique([int(np.argmin(scale)), int(np.argmax(scale))])
+    else:
+        steps = np.unique(np.column_stack([scale, cog]), axis=0, return_index=True)[1]
+    for k in steps:
+        P = params.copy()
+        with np.errstate(over="ignore", invalid="ignore"):
+            P[:, R_G] = cog_at(params[:, R_G], scale[k], cog[k])
+        ok = inertia_ratio(P) >= MARGIN       # NaN (overflow) is not
+        if not ok.all():
+            b = int(np.flatnonzero(~ok)[0])
+            check_parameters(P[b], f"vehicles[{b}] at t = {validate.plain(schedule.t[k])} s "
+                                   f"(cog_shape {validate.plain(scale[k])} x its r_G)")
 
 
 def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle,
@@ -280,6 +319,7 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
     if not isinstance(controller, Controller):
         validate.fail("controller", "a quadcog Controller", controller)
     options, limits = run_options(truth, limits, progress)
+    progress = validate.user_function(progress, "progress") if progress else None
     threads = validate.integer(threads, "threads", lo=1, hi=1024)
     cog_scale = _cog_scale(cog_shape)
     dt = config.get("simulate.dt", dt)
@@ -297,6 +337,7 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
                               disturbances=disturbances, cog_scale=cog_scale,
                               payloads=PayloadProfile([], vehicles[0].payloads))
+    check_cog_range(params, schedule)
     x0 = start_at_reference(schedule.ref[0])
     nX = N_STATE + actuation.n_rotor_states + controller.n_state
     P0 = params.copy()

@@ -143,6 +143,7 @@ def simulate(controller: Controller | Callable[..., Any], trajectory: Any = "hov
         controller = Sensed(controller, sensing, config.get("simulate.dt", dt))
     setup = prepare_flight(controller, trajectory, duration, dt, vehicle, controller_model, cog,
                            disturbances, truth, x0, path, limits, progress, check_dt, payloads)
+    progress = validate.user_function(progress, "progress") if progress else None
     t0 = time.perf_counter()
     if setup.path == "compiled":
         X, U, e, code = _run_compiled(setup, progress)

@@ -45,18 +45,26 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from quadcog import validate
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["DEG", "GYRO_NOISE_DENSITY", "ACCEL_NOISE_DENSITY", "ACCEL_BIAS", "per_sample",
-           "Sensing", "gaussian", "Sensed"]
+           "SENSING_LIMITS", "Sensing", "gaussian", "Sensed"]
 
 DEG = np.pi / 180.0
 GYRO_NOISE_DENSITY = 0.005 * DEG          # rad/s/sqrt(Hz), MPU-6000
 ACCEL_NOISE_DENSITY = 400e-6 * 9.80665    # m/s^2/sqrt(Hz), MPU-6000 (400 ug/sqrt(Hz))
 ACCEL_BIAS = 0.02                          # m/s^2 per axis, residual after calibration
 MAX_SEED = 2**32 - 1                       # seeds: 0 .. 2^32 - 1
+# the largest accuracy each field takes, and its unit: beyond these a "measurement" says
+# nothing about the state (a position noise past 100 m, an angle's past half a turn, a gyro
+# 1000 times a consumer MEMS part's, an accelerometer bias past 1 g)
+SENSING_LIMITS = {"position": (100.0, "m"), "velocity": (10.0, "m/s"),
+                  "attitude": (float(np.pi), "rad"), "gyro_density": (1.0, "rad/s/sqrt(Hz)"),
+                  "gyro_bias": (1.0, "rad/s"), "accel_density": (1.0, "m/s^2/sqrt(Hz)"),
+                  "accel_bias": (9.81, "m/s^2")}
 
 
 def per_sample(density: float, dt: float) -> float:
@@ -110,7 +118,7 @@ class Sensing:
     Raises
     ------
     quadcog.InputError
-        A field of the wrong kind or a negative accuracy.
+        A field of the wrong kind, or an accuracy below 0 or beyond ``SENSING_LIMITS``.
     """
     noise: bool = True
     delay: bool = True
@@ -133,12 +141,8 @@ class Sensing:
         if not 0 <= self.seed <= MAX_SEED:      # numpy's seeding refuses < 0; the noise
             raise InputError(f"Sensing.seed must be a whole number 0..{MAX_SEED}, got "
                              f"{self.seed!r}")  # hash needs 0.618 seed well inside floats
-        for name in ("position", "velocity", "attitude", "gyro_density", "gyro_bias",
-                     "accel_density", "accel_bias"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) \
-                    or v < 0:
-                raise InputError(f"Sensing.{name} must be a number >= 0, got {v!r}")
+        for name, (hi, unit) in SENSING_LIMITS.items():
+            validate.real(getattr(self, name), f"Sensing.{name}", lo=0.0, hi=hi, unit=unit)
 
     def sigmas(self, dt: float) -> npt.NDArray[np.float64]:
         """Per-sample standard deviations of the 12 state entries.

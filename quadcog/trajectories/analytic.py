@@ -14,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
-from quadcog.errors import InputError, QuadcogError
+from quadcog.errors import InputError
 from quadcog.kinds import Number, Vec3
 from quadcog.model.parameters import LARGEST
 from quadcog.numerics import fill_rows
@@ -23,8 +23,9 @@ from quadcog.numerics import fill_rows
 _PVAJ = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64],
               npt.NDArray[np.float64]]
 
-__all__ = ["sample_times", "Trajectory", "Hover", "Circle", "Figure8", "Helix", "FromCallable", "REF_SIZE",
-           "REF_NAMES", "REFERENCE_LIMIT", "POS", "VEL", "ACC", "JERK", "YAW", "YAW_RATE"]
+__all__ = ["sample_times", "Trajectory", "Hover", "Circle", "Figure8", "Helix", "FromCallable",
+           "DIFFERENCE_STEP", "REF_SIZE", "REF_NAMES", "REFERENCE_LIMIT", "POS", "VEL", "ACC", "JERK",
+           "YAW", "YAW_RATE"]
 
 REF_SIZE = 14
 POS, VEL, ACC, JERK = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -344,6 +345,11 @@ class Helix(Circle):
         return p, v, a, j
 
 
+# the central differences' step h of FromCallable (s): the jerk divides by h^3, so below
+# 1e-6 s a position's rounding (1e-16 of it) is amplified past 1e2 m/s^3; above 1 s it is
+# no derivative of a flight's reference
+DIFFERENCE_STEP = (1e-6, 1.0)
+
 class FromCallable(Trajectory):
     """Wrap a user function of time as a Trajectory.
 
@@ -356,21 +362,25 @@ class FromCallable(Trajectory):
         (position (m), velocity (m/s), acceleration (m/s^2)[, jerk (m/s^3)]) of 3-vectors, or
         the full 14-entry reference row.
     h : float
-        Step of the central differences (s), default 1e-3.
+        Step of the central differences (s), default 1e-3, within ``DIFFERENCE_STEP``: below
+        it the jerk's third difference is rounding noise, above it no derivative.
+
+    Raises
+    ------
+    InputError
+        ``f`` not callable, or ``h`` not a number within ``DIFFERENCE_STEP``.
     """
 
     def __init__(self, f: Callable[[float], Any], h: float = 1e-3) -> None:
-        self.f, self.h = f, h
+        if not callable(f):
+            validate.fail("FromCallable: f", "a function of time t (s)", f)
+        lo, hi = DIFFERENCE_STEP
+        self.f, self.h = f, validate.real(h, "FromCallable: h", lo=lo, hi=hi, unit="s")
 
     def _eval(self, t):
         name = getattr(self.f, "__name__", type(self.f).__name__)
         where = f"trajectory callable {name}(t = {validate.plain(t)})"
-        try:
-            out = self.f(float(t))
-        except QuadcogError:
-            raise
-        except Exception as e:          # the user's function failed: say where, keep the cause
-            raise InputError(f"{where} raised {type(e).__name__}: {e}") from e
+        out = validate.user_function(self.f, f"trajectory callable {name}")(float(t))
         shape = "a position (3,), a tuple (p, v, a[, j]) of 3-vectors or a 14-vector"
         if isinstance(out, tuple):
             if not 1 <= len(out) <= 4:
