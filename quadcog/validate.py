@@ -46,6 +46,8 @@ def plain(value: object) -> str:
     """
     if isinstance(value, (bool, np.bool_)):
         return str(bool(value))
+    if isinstance(value, (np.timedelta64, np.datetime64)):     # numpy calls the first Integral
+        return f"a numpy {type(value).__name__} ({value})"
     if isinstance(value, numbers.Integral):
         text = str(int(value))
         return text if len(text) <= 24 else f"an integer of {len(text.lstrip('-'))} digits"
@@ -103,7 +105,9 @@ def _is_real_scalar(value):
     """A real number that is not a bool (Python or numpy); 0-d real arrays count."""
     if isinstance(value, np.ndarray) and value.ndim == 0:
         return value.dtype.kind in "iuf"
-    return (isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)))
+    # numpy registers timedelta64 as an integer: a duration of unknown unit is no number here
+    return (isinstance(value, numbers.Real)
+            and not isinstance(value, (bool, np.bool_, np.timedelta64, np.datetime64)))
 
 
 def _describe(lo, hi, lo_open, hi_open, unit):
@@ -396,6 +400,9 @@ def array(value: npt.ArrayLike, where: str, shape: Sequence[int | None] | None =
             kind = {"b": "booleans", "c": "complex numbers"}.get(value.dtype.kind,
                                                                  f"dtype {value.dtype}")
             fail(where, f"{what} of real numbers, not {kind}", value, error)
+        if np.ma.is_masked(value):      # np.array would take the data under the mask
+            raise error(f"{where}: expected {what}, got a masked array with "
+                        f"{int(np.ma.count_masked(value))} masked entries")
     elif isinstance(value, (list, tuple)):
         _walk(value, where, (), error, what)
     elif not _is_real_scalar(value):

@@ -121,3 +121,21 @@ def test_an_overflowing_cog_is_said_to_overflow_not_to_keep_nan():
     with pytest.raises(ParameterError, match="overflows the float range") as e:
         check_parameters(p)
     assert "nan" not in str(e.value)
+
+
+@pytest.mark.parametrize("value", [np.timedelta64(5, "s"), np.datetime64("2026-12-06")])
+def test_numpy_times_are_no_numbers(value):
+    from quadcog import validate
+    with pytest.raises(InputError, match=r"^duration: expected "):
+        validate.real(value, "duration")
+    with pytest.raises(InputError, match=r"^x0\[1\]: expected a real number"):
+        validate.array([0.0, value, 1.0], "x0", (3,))
+
+
+def test_a_masked_array_with_masked_entries_is_refused_not_unmasked():
+    from quadcog import validate
+    masked = np.ma.array([1.0, 2.0, 3.0], mask=[False, True, False])
+    with pytest.raises(InputError, match=r"^r_G: expected .* got a masked array with 1 masked"):
+        validate.array(masked, "r_G", (3,))
+    np.testing.assert_array_equal(validate.array(np.ma.array([1.0, 2.0, 3.0]), "r_G", (3,)),
+                                  [1.0, 2.0, 3.0])
