@@ -31,13 +31,17 @@ What is read
 The functions here return the ``Vehicle`` fields (this module sits below ``vehicle.py``);
 ``Vehicle.from_urdf``, ``Vehicle.from_sdf`` and ``Vehicle.from_file`` make the vehicle.
 
-A needed value that is missing or not a number raises ``VehicleFileError`` naming the value
-(its element path) and the file.
+A needed value that is missing, not a number or out of its range raises ``VehicleFileError``
+naming the value (its element path) and the file; so does a URDF whose links are not one tree
+of uniquely named links, and an SDF whose ``<include>`` s loop or copy more than
+``MAX_INCLUDED_ELEMENTS`` elements. A read costs time linear in the files' size: each file is
+parsed once, each URDF joint read once.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import math
 import os
 from pathlib import Path
+import re
 from typing import Any
 import xml.etree.ElementTree as ET
 
@@ -47,10 +51,12 @@ import numpy.typing as npt
 from quadcog.errors import VehicleFileError
 from quadcog.files import input_file
 from quadcog.model.inertial_parameters import check_physically_consistent, inertial_parameters
-from quadcog.validate import fail
+from quadcog.model.parameters import LARGEST, SMALLEST
+from quadcog.validate import fail, flag, plain, real
 
 __all__ = ["urdf_fields", "sdf_fields", "file_fields", "GYM_PYBULLET_DIRECTIONS",
-           "RPM_PER_RAD_S", "GAZEBO_PATH_VARIABLES"]
+           "RPM_PER_RAD_S", "GAZEBO_PATH_VARIABLES", "MAX_INCLUDE_DEPTH", "MAX_INCLUDED_ELEMENTS",
+           "THRUST_TO_WEIGHT", "MAX_MOMENT_CONSTANT", "MAX_MOTOR_TIME_CONSTANT"]
 
 # gym-pybullet-drones, BaseAviary._physics: z_torque = -t0 + t1 - t2 + t3 with t_i = KM rpm_i^2,
 # and the torques negated for DroneModel.RACE (whose URDF is racer.urdf); the file has no
@@ -60,6 +66,21 @@ GYM_PYBULLET_DIRECTIONS = {"": (-1, 1, -1, 1), "racer": (1, -1, 1, -1)}
 RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
 # where Gazebo looks for model:// URIs (gz sim; Gazebo classic's name second)
 GAZEBO_PATH_VARIABLES = ("GZ_SIM_RESOURCE_PATH", "GAZEBO_MODEL_PATH")
+# SDF <include>s: how deep they may nest, and how many links, joints and plugins they may
+# copy into the model in all (each copy counted at every level it is copied through). PX4's
+# X500 copies 9. A file included k times at each of d levels copies k^d times: the limit
+# keeps a read linear in the files' size (each file is also parsed only once).
+MAX_INCLUDE_DEPTH = 8
+MAX_INCLUDED_ELEMENTS = 10_000
+# The rotors' largest total thrust over the weight: above 1, or the vehicle cannot hover;
+# racing quadrotors reach about 20, a file beyond 100 states impossible rotors.
+THRUST_TO_WEIGHT = (1.0, 100.0)
+# Drag moment over thrust of a rotor (m): about the propeller's radius times its drag over
+# lift ratio, 0.006 m (Crazyflie) to 0.025 m (gym-pybullet-drones); 1 m is no propeller.
+MAX_MOMENT_CONSTANT = 1.0
+# A motor's spin-up time constant (s): real ones take 0.01 to 0.1 s; a motor much slower
+# than 10 s cannot hold a quadrotor's attitude at all.
+MAX_MOTOR_TIME_CONSTANT = 10.0
 
 
 # -- XML reading -----------------------------------------------------------------------------
@@ -84,21 +105,48 @@ def _parse(path: Path) -> ET.Element:
         raise VehicleFileError(f"{path}: not readable as XML ({e})") from None
 
 
+# xsd:double as URDF and SDF write numbers; Python's float() also takes "1_000", "inf" and
+# non-ASCII digits, which no XML reader of these formats does
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+
 def _numbers(text: str | None, what: str, path: Path, n: int) -> npt.NDArray[np.float64]:
     if text is None:
         raise VehicleFileError(f"{path}: {what} is missing; expected {n} number(s)")
-    try:
-        values = np.array([float(t) for t in text.split()])
-    except ValueError:
-        values = np.array([])
+    words = text.split()
+    values = (np.array([float(t) for t in words]) if len(words) == n and
+              all(_NUMBER.fullmatch(t) for t in words) else np.array([]))
     if values.shape != (n,) or not np.isfinite(values).all():
-        raise VehicleFileError(f"{path}: {what} = {text.strip()!r}; expected {n} finite "
+        raise VehicleFileError(f"{path}: {what} = {plain(text.strip())}; expected {n} finite "
                                "number(s)")
     return values
 
 
 def _number(text: str | None, what: str, path: Path) -> float:
     return float(_numbers(text, what, path, 1)[0])
+
+
+def _bounded(value: float, what: str, path: Path, lo: float, hi: float, unit: str,
+             lo_open: bool = True) -> float:
+    """``value`` if it lies in (lo, hi] (``lo_open``) or [lo, hi], else a VehicleFileError
+    naming the file, the value's element path and the range."""
+    if not ((lo < value if lo_open else lo <= value) and value <= hi):
+        expected = (f"a number {'>' if lo_open else '>='} {lo:g}" if hi == math.inf else
+                    f"a number in {'(' if lo_open else '['}{lo:g}, {hi:g}]")
+        raise VehicleFileError(f"{path}: {what} = {value:g}; expected {expected} ({unit})")
+    return value
+
+
+def _check_lift(fields: dict[str, Any], source: str, path: Path) -> None:
+    """Refuse rotors whose largest total thrust does not lift the vehicle, or is beyond any
+    rotor's (``THRUST_TO_WEIGHT``); ``source`` says which of the file's values give it."""
+    lo, hi = THRUST_TO_WEIGHT
+    ratio = 4.0 * fields["max_rotor_thrust"] / (fields["m"] * fields["g"])
+    if not lo < ratio <= hi:        # NaN and inf fail too
+        raise VehicleFileError(
+            f"{path}: {source} gives a largest rotor thrust of {fields['max_rotor_thrust']:.4g} N, "
+            f"a thrust-to-weight ratio of {ratio:.4g} for the {fields['m']:.4g} kg vehicle; "
+            f"expected a ratio in ({lo:g}, {hi:g}] (above 1 the rotors lift the vehicle)")
 
 
 def _rotation(rpy: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -250,31 +298,24 @@ def urdf_fields(path: str | os.PathLike[str], *,
     Raises
     ------
     VehicleFileError
-        A missing file, a needed value missing or not a number (named with the file).
+        A missing file, a needed value missing or not a number, ``kf`` or ``km`` not > 0, a
+        drag moment per thrust ``km / kf`` above ``MAX_MOMENT_CONSTANT``, ``thrust2weight``
+        outside ``THRUST_TO_WEIGHT`` (at most 1: the rotors cannot lift the vehicle), a link
+        or joint without a name or named twice, a joint naming a link that does not exist, a
+        link with two parents, several root links, or joints that loop (named with the file).
+    InputError
+        ``g`` not a number in [SMALLEST, LARGEST] m/s^2 (``quadcog.model.parameters``).
     PhysicalConsistencyError
         A link whose mass and inertia no rigid body has.
     """
     path = _file_path(path, "path (Vehicle.from_urdf)")
+    g = real(g, "g (Vehicle.from_urdf)", lo=SMALLEST, hi=LARGEST, unit="m/s^2")
     root = _parse(path)
     if root.tag != "robot":
         raise VehicleFileError(f"{path}: the root element is <{root.tag}>; expected <robot> "
                                "(URDF)")
-    links = {link.get("name", ""): link for link in root.findall("link")}
-    parent_of = {}
-    for joint in root.findall("joint"):
-        child, parent = joint.find("child"), joint.find("parent")
-        if child is not None and parent is not None:
-            parent_of[child.get("link", "")] = (parent.get("link", ""), joint)
-
-    def link_pose(link: str) -> _Pose:
-        pose, seen = _IDENTITY, set()
-        while link in parent_of and link not in seen:
-            seen.add(link)
-            parent, joint = parent_of[link]
-            pose = _urdf_origin(joint, f"joint {joint.get('name')!r}", path).then(pose)
-            link = parent
-        return pose
-
+    links = _urdf_links(root, path)
+    link_pose = _urdf_link_poses(root, links, path)
     bodies = []
     for link_name, link in links.items():
         inertial = link.find("inertial")
@@ -291,7 +332,7 @@ def urdf_fields(path: str | os.PathLike[str], *,
                                    f"izz (kg m^2) of a link of mass {m:g} kg")
         values = {k: _number(node.get(k, "0" if k[1] != k[2] else None),
                              f"{what}/inertia@{k}", path) for k in _INERTIA_KEYS}
-        where = link_pose(link_name).then(_urdf_origin(inertial, what, path))
+        where = link_pose[link_name].then(_urdf_origin(inertial, what, path))
         bodies.append(_body(m, where, _inertia_matrix(values), what, path))
 
     rotors = []
@@ -300,25 +341,120 @@ def urdf_fields(path: str | os.PathLike[str], *,
         if link_name not in links:
             raise VehicleFileError(f"{path}: link {link_name!r} is missing; expected the four "
                                    "rotor links prop0_link .. prop3_link (gym-pybullet-drones)")
-        rotors.append(link_pose(link_name).then(
+        rotors.append(link_pose[link_name].then(
             _urdf_origin(links[link_name].find("inertial"), f"link {link_name!r} <inertial>",
                          path)).t)
     props = root.find("properties")
     if props is None:
         raise VehicleFileError(f"{path}: <properties> is missing; expected kf, km and "
                                "thrust2weight (gym-pybullet-drones)")
-    kf = _number(props.get("kf"), "<properties>@kf", path)
-    km = _number(props.get("km"), "<properties>@km", path)
+    kf = _bounded(_number(props.get("kf"), "<properties>@kf", path), "<properties>@kf", path,
+                  0.0, LARGEST / RPM_PER_RAD_S ** 2, "N/rpm^2")
+    km = _bounded(_number(props.get("km"), "<properties>@km", path), "<properties>@km", path,
+                  0.0, LARGEST, "N m/rpm^2")
+    if not km / kf <= MAX_MOMENT_CONSTANT:
+        raise VehicleFileError(f"{path}: <properties>@km / @kf = {km:g} / {kf:g} = "
+                               f"{km / kf:g} m; expected a drag moment per thrust in (0, "
+                               f"{MAX_MOMENT_CONSTANT:g}] m")
     t2w = _number(props.get("thrust2weight"), "<properties>@thrust2weight", path)
+    lo, hi = THRUST_TO_WEIGHT
+    if not lo < t2w <= hi:
+        raise VehicleFileError(f"{path}: <properties>@thrust2weight = {t2w:g}; expected a "
+                               f"number in ({lo:g}, {hi:g}] (above 1 the rotors lift the "
+                               "vehicle)")
     m_total = sum(b.m for b in bodies)
     if rotor_directions is None:
         rotor_directions = GYM_PYBULLET_DIRECTIONS.get(path.stem, GYM_PYBULLET_DIRECTIONS[""])
-    if not kf > 0:
-        raise VehicleFileError(f"{path}: <properties>@kf = {kf:g}; expected > 0 "
-                               "(N/rpm^2)")
     return _assemble(path, name or f"{root.get('name', path.stem)} ({path.name})", bodies,
                      np.array(rotors), tuple(rotor_directions), kf * RPM_PER_RAD_S ** 2,
                      km / kf, t2w * m_total * g / 4.0, 0.0, g)
+
+
+def _urdf_links(root: ET.Element, path: Path) -> dict[str, ET.Element]:
+    """The ``<link>`` elements by name; a link without a name, or a name given twice (which
+    would leave one of the two out of the vehicle), is refused."""
+    links: dict[str, ET.Element] = {}
+    for k, link in enumerate(root.findall("link")):
+        link_name = link.get("name")
+        if not link_name:
+            raise VehicleFileError(f"{path}: <link> number {k + 1} has no name; expected "
+                                   "<link name=...> (URDF)")
+        if link_name in links:
+            raise VehicleFileError(f"{path}: link {link_name!r} is declared twice; expected "
+                                   "each link name once (URDF)")
+        links[link_name] = link
+    return links
+
+
+def _urdf_link_poses(root: ET.Element, links: dict[str, ET.Element],
+                     path: Path) -> dict[str, _Pose]:
+    """Each link's pose in the root link's frame, in one pass down the joint tree.
+
+    A URDF's links and joints form one tree (PyBullet refuses other files): every joint
+    names an existing parent and child link, no link has two parents, one link has none (the
+    root) and no chain of joints loops. Anything else is refused with the joint or links
+    named, so no link's pose is a guess."""
+    parent_of: dict[str, tuple[str, str]] = {}        # child: (parent link, joint)
+    children: dict[str, list[tuple[str, ET.Element]]] = {name: [] for name in links}
+    joint_names: set[str] = set()
+    for k, joint in enumerate(root.findall("joint")):
+        joint_name = joint.get("name")
+        if not joint_name:
+            raise VehicleFileError(f"{path}: <joint> number {k + 1} has no name; expected "
+                                   "<joint name=...> (URDF)")
+        what = f"joint {joint_name!r}"
+        if joint_name in joint_names:
+            raise VehicleFileError(f"{path}: {what} is declared twice; expected each joint "
+                                   "name once (URDF)")
+        joint_names.add(joint_name)
+        ends = []
+        for end in ("parent", "child"):
+            node = joint.find(end)
+            link_name = None if node is None else node.get("link")
+            if link_name is None:
+                raise VehicleFileError(f"{path}: {what}/{end}@link is missing; expected the "
+                                       "name of a link")
+            if link_name not in links:
+                raise VehicleFileError(f"{path}: {what}/{end}@link = {link_name!r} is not a "
+                                       f"link; expected one of the file's {len(links)} "
+                                       "<link name>s")
+            ends.append(link_name)
+        parent, child = ends
+        if child in parent_of:
+            raise VehicleFileError(f"{path}: link {child!r} is the child of two joints "
+                                   f"({parent_of[child][1]!r} and {joint_name!r}); expected one "
+                                   "parent per link (a URDF is a tree)")
+        parent_of[child] = (parent, joint_name)
+        children[parent].append((child, joint))
+    roots = [name for name in links if name not in parent_of]
+    if len(roots) > 1:
+        raise VehicleFileError(f"{path}: links {roots[0]!r} and {roots[1]!r}"
+                               f"{f' (and {len(roots) - 2} more)' if len(roots) > 2 else ''} "
+                               "have no parent joint; expected one root link (a URDF is a "
+                               "tree)")
+    poses: dict[str, _Pose] = {}
+    stack = [(roots[0], _IDENTITY)] if roots else []
+    while stack:                     # each link once: linear in the links and joints
+        link_name, pose = stack.pop()
+        poses[link_name] = pose
+        stack += [(child, pose.then(_urdf_origin(joint, f"joint {joint.get('name')!r}", path)))
+                  for child, joint in children[link_name]]
+    if len(poses) < len(links):
+        # a link off the root's tree has a parent, and so has that one: the parents loop
+        link_name = next(name for name in links if name not in poses)
+        loop: list[str] = []
+        seen: set[str] = set()
+        while link_name not in seen:
+            seen.add(link_name)
+            loop.append(link_name)
+            link_name = parent_of[link_name][0]
+        loop = loop[loop.index(link_name):] + [link_name]
+        shown = " -> ".join([repr(n) for n in loop] if len(loop) <= 6 else
+                            [repr(n) for n in loop[:5]] + ["..."])
+        raise VehicleFileError(f"{path}: the joints make a loop: link {shown} (each the "
+                               f"parent of the one before, {len(loop) - 1} link(s)); expected "
+                               "a tree of links from one root (URDF)")
+    return poses
 
 
 # -- SDF -------------------------------------------------------------------------------------
@@ -339,43 +475,90 @@ def _model_folder(uri: str, beside: Path, model_paths: tuple[Path, ...], path: P
                            f"or its parent folder in model_paths or {GAZEBO_PATH_VARIABLES[0]}")
 
 
-def _model_file(folder: Path) -> Path:
+@dataclass
+class _SdfRead:
+    """One SDF read's memo and bounds: each file parsed once, each model's includes resolved
+    once (a model included many times over costs one read), the chain of includes being
+    resolved (a loop is named), and the elements the includes copied so far
+    (``MAX_INCLUDED_ELEMENTS``)."""
+    model_paths: tuple[Path, ...]
+    roots: dict[str, ET.Element] = field(default_factory=dict)
+    models: dict[str, "_SdfModel"] = field(default_factory=dict)
+    chain: list[Path] = field(default_factory=list)
+    copied: int = 0
+
+    def parse(self, path: Path) -> ET.Element:
+        key = os.path.realpath(path)       # one file by any of its names
+        if key not in self.roots:
+            self.roots[key] = _parse(path)
+        return self.roots[key]
+
+
+@dataclass(frozen=True)
+class _SdfModel:
+    """A model with its includes resolved: name, pose (its ``<model><pose>``), [(link, pose
+    in the model frame)], joints, plugins."""
+    name: str
+    pose: _Pose
+    links: list[tuple[ET.Element, _Pose]]
+    joints: list[ET.Element]
+    plugins: list[ET.Element]
+
+
+def _model_file(folder: Path, read: _SdfRead) -> Path:
     config = folder / "model.config"
     if config.is_file():
-        sdf = _parse(config).find("sdf")
+        sdf = read.parse(config).find("sdf")
         if sdf is not None and (sdf.text or "").strip():
             return folder / (sdf.text or "").strip()
     return folder / "model.sdf"
 
 
-def _sdf_model(path: Path, model_paths: tuple[Path, ...],
-               depth: int = 0) -> tuple[str, list[tuple[ET.Element, _Pose]],
-                                        list[ET.Element], list[ET.Element]]:
-    """(model name, [(link, link pose in the model frame)], joints, plugins) of an SDF
-    model, its ``<include>`` s resolved."""
-    root = _parse(path)
+def _sdf_model(path: Path, read: _SdfRead) -> _SdfModel:
+    """The SDF model of ``path``, its ``<include>`` s resolved (memoised in ``read``)."""
+    key = os.path.realpath(path)
+    if key in read.models:
+        return read.models[key]
+    root = read.parse(path)
     model = root.find("model") if root.tag == "sdf" else None
     if model is None:
         raise VehicleFileError(f"{path}: no <sdf><model>; expected an SDF model file")
     links = [(link, _sdf_pose(link, f"link {link.get('name')!r}", path))
              for link in model.findall("link")]
     joints, plugins = model.findall("joint"), model.findall("plugin")
+    read.chain.append(path)
     for include in model.findall("include"):
-        if depth > 8:
-            raise VehicleFileError(f"{path}: <include> nested deeper than 8; expected no loop")
+        if len(read.chain) > MAX_INCLUDE_DEPTH:
+            raise VehicleFileError(f"{path}: <include> nested deeper than {MAX_INCLUDE_DEPTH}; "
+                                   "expected no loop")
         uri = (include.findtext("uri") or "").strip()
         if not uri:
             raise VehicleFileError(f"{path}: <include><uri> is missing")
-        target = (_model_file(_model_folder(uri, path.parent.parent, model_paths, path))
+        target = (_model_file(_model_folder(uri, path.parent.parent, read.model_paths, path),
+                              read)
                   if uri.startswith("model://") else (path.parent / uri))
-        _, inner_links, inner_joints, inner_plugins = _sdf_model(target, model_paths, depth + 1)
-        inner_root = _parse(target).find("model")
-        placed = (_sdf_pose(include, "<include>", path) if include.find("pose") is not None
-                  else _sdf_pose(inner_root, "<model>", target))
-        links += [(link, placed.then(pose)) for link, pose in inner_links]
-        joints += inner_joints
-        plugins += inner_plugins
-    return model.get("name", path.stem), links, joints, plugins
+        if any(os.path.realpath(p) == os.path.realpath(target) for p in read.chain):
+            loop = " -> ".join(str(p) for p in read.chain + [target])
+            raise VehicleFileError(f"{path}: <include><uri>{uri}</uri> includes a model that "
+                                   f"includes this one ({loop}); expected includes without a "
+                                   "loop")
+        inner = _sdf_model(target, read)
+        read.copied += len(inner.links) + len(inner.joints) + len(inner.plugins)
+        if read.copied > MAX_INCLUDED_ELEMENTS:
+            raise VehicleFileError(f"{path}: <include><uri>{uri}</uri>: the includes copy more "
+                                   f"than {MAX_INCLUDED_ELEMENTS:,} links, joints and plugins "
+                                   "into the model; expected a vehicle's model (is a model "
+                                   "included many times at several levels?)")
+        placed = _sdf_pose(include, "<include>", path) if include.find("pose") is not None \
+            else inner.pose
+        links += [(link, placed.then(pose)) for link, pose in inner.links]
+        joints += inner.joints
+        plugins += inner.plugins
+    read.chain.pop()
+    resolved = _SdfModel(model.get("name", path.stem), _sdf_pose(model, "<model>", path),
+                         links, joints, plugins)
+    read.models[key] = resolved
+    return resolved
 
 
 def sdf_fields(path: str | os.PathLike[str], *,
@@ -414,41 +597,84 @@ def sdf_fields(path: str | os.PathLike[str], *,
     Raises
     ------
     VehicleFileError
-        A missing file or included model, a needed value missing or not a number, a rotor
-        axis that is not along body z (named with the file).
+        A missing file or included model, includes that loop, nest deeper than
+        ``MAX_INCLUDE_DEPTH`` or copy more than ``MAX_INCLUDED_ELEMENTS`` links, joints and
+        plugins, a needed value missing or not a number, a rotor axis that is not along body
+        z, a ``motorNumber`` that is not one of 0..3 or is given twice, a constant out of its
+        range (``motorConstant``, ``maxRotVelocity`` > 0, ``momentConstant`` in (0,
+        ``MAX_MOMENT_CONSTANT``] m, ``timeConstantUp`` in [0, ``MAX_MOTOR_TIME_CONSTANT``] s),
+        or a largest thrust whose ratio to the weight is outside ``THRUST_TO_WEIGHT`` (named
+        with the file).
+    InputError
+        ``g`` not a number in [SMALLEST, LARGEST] m/s^2 (``quadcog.model.parameters``),
+        ``model_paths`` not a tuple of paths, ``rotor_links`` not a bool.
     PhysicalConsistencyError
         A link whose mass and inertia no rigid body has.
     """
     path = _file_path(path, "path (Vehicle.from_sdf)")
-    model_name, links, joints, plugins = _sdf_model(
-        path, tuple(Path(p) for p in model_paths))
-    motors = [p for p in plugins if "MulticopterMotorModel" in (p.get("name", "")
-                                                               + p.get("filename", ""))]
+    g = real(g, "g (Vehicle.from_sdf)", lo=SMALLEST, hi=LARGEST, unit="m/s^2")   # the weight
+    rotor_links = flag(rotor_links, "rotor_links (Vehicle.from_sdf)")
+    # a str is iterable too: its letters would be searched as folders
+    if not isinstance(model_paths, (tuple, list)) or not all(
+            isinstance(p, (str, os.PathLike)) and not isinstance(p, bytes) for p in model_paths):
+        fail("model_paths (Vehicle.from_sdf)", "a tuple of folders (str or os.PathLike)",
+             model_paths)
+    model = _sdf_model(path, _SdfRead(tuple(Path(p) for p in model_paths)))
+    links, joints = model.links, model.joints
+    motors = [p for p in model.plugins if "MulticopterMotorModel" in (p.get("name", "")
+                                                                     + p.get("filename", ""))]
     if len(motors) != 4:
         raise VehicleFileError(f"{path}: {len(motors)} MulticopterMotorModel plugin(s); "
                                "expected 4 (one per rotor)")
-    poses = {link.get("name", ""): pose for link, pose in links}
+    poses: dict[str, _Pose] = {}
+    named_twice: set[str] = set()
+    for link, pose in links:
+        link_name = link.get("name", "")
+        if link_name in poses:
+            named_twice.add(link_name)
+        poses[link_name] = pose
     joint_of = {j.get("name", ""): j for j in joints}
 
     def text(plugin: ET.Element, tag: str) -> str | None:
         return plugin.findtext(tag)
 
-    def motor_number(plugin: ET.Element) -> float:
-        return _number(text(plugin, "motorNumber"), "MulticopterMotorModel/motorNumber", path)
-
-    motors.sort(key=motor_number)
+    # Gazebo hands motor k the k-th rotor command: the numbers order the rotors, so each of
+    # 0..3 must be given once, written as an integer (1.5 or 1e300 orders nothing)
+    numbered: dict[int, ET.Element] = {}
+    for plugin in motors:
+        number = (text(plugin, "motorNumber") or "").strip()
+        what = (f"MulticopterMotorModel of link {(text(plugin, 'linkName') or '').strip()!r}: "
+                "motorNumber")
+        if not (re.fullmatch(r"[+-]?[0-9]{1,9}", number) and 0 <= int(number) <= 3):
+            raise VehicleFileError(f"{path}: {what} = {plain(number)}; expected an integer "
+                                   "0..3 (the motor's command index)")
+        if int(number) in numbered:
+            raise VehicleFileError(f"{path}: {what} = {int(number)} is also the motorNumber of "
+                                   "another MulticopterMotorModel; expected each of 0..3 once")
+        numbered[int(number)] = plugin
     rotors: list[npt.NDArray[np.float64]] = []
     directions: list[int] = []
     rotor_names: set[str] = set()
     constants: dict[str, list[float]] = {k: [] for k in (
         "motorConstant", "momentConstant", "maxRotVelocity", "timeConstantUp")}
-    for plugin in motors:
-        k = int(motor_number(plugin))
+    # sign and scale of each constant: (lo, hi, lo excluded, unit); the largest thrust's
+    # scale is checked on the whole (_check_lift)
+    ranges = {"motorConstant": (0.0, LARGEST, True, "N/(rad/s)^2"),
+              "momentConstant": (0.0, MAX_MOMENT_CONSTANT, True, "m"),
+              "maxRotVelocity": (0.0, math.inf, True, "rad/s"),
+              "timeConstantUp": (0.0, MAX_MOTOR_TIME_CONSTANT, False, "s")}
+    for k in range(4):
+        plugin = numbered[k]
         what = f"MulticopterMotorModel of motor {k}"
         link_name = (text(plugin, "linkName") or "").strip()
         if link_name not in poses:
+            listed = (sorted(poses) if len(poses) <= 8 else
+                      f"the model's {len(poses)} links")
             raise VehicleFileError(f"{path}: {what}: linkName {link_name!r} is not a link; "
-                                   f"expected one of {sorted(poses)}")
+                                   f"expected one of {listed}")
+        if link_name in named_twice:
+            raise VehicleFileError(f"{path}: {what}: linkName {link_name!r} names more than "
+                                   "one link (the model's and its includes'); expected one")
         rotor_names.add(link_name)
         rotors.append(poses[link_name].t)
         joint = joint_of.get((text(plugin, "jointName") or "").strip())
@@ -458,11 +684,13 @@ def sdf_fields(path: str | os.PathLike[str], *,
             _check_axis(poses[link_name].R @ axis, f"joint {joint.get('name')!r} axis", path)
         spin = (text(plugin, "turningDirection") or "").strip().lower()
         if spin not in ("cw", "ccw"):
-            raise VehicleFileError(f"{path}: {what}: turningDirection = {spin!r}; expected "
-                                   "'cw' or 'ccw'")
+            raise VehicleFileError(f"{path}: {what}: turningDirection = {plain(spin)}; "
+                                   "expected 'cw' or 'ccw'")
         directions.append(-1 if spin == "ccw" else 1)
         for key, values in constants.items():
-            values.append(_number(text(plugin, key), f"{what}/{key}", path))
+            lo, hi, lo_open, unit = ranges[key]
+            values.append(_bounded(_number(text(plugin, key), f"{what}/{key}", path),
+                                   f"{what}/{key}", path, lo, hi, unit, lo_open))
     for key, values in constants.items():
         if max(values) != min(values):
             raise VehicleFileError(f"{path}: {key} differs between the rotors ({values}); "
@@ -486,9 +714,14 @@ def sdf_fields(path: str | os.PathLike[str], *,
         where = pose.then(_sdf_pose(inertial, what, path))
         bodies.append(_body(m, where, _inertia_matrix(inertia), what, path))
     c = {k: v[0] for k, v in constants.items()}
-    return _assemble(path, name or f"{model_name} ({path})", bodies, np.array(rotors),
-                     tuple(directions), c["motorConstant"], c["momentConstant"],
-                     c["motorConstant"] * c["maxRotVelocity"] ** 2, c["timeConstantUp"], g)
+    # a product, not ** 2: a float's power raises OverflowError where this gives inf
+    max_thrust = c["motorConstant"] * c["maxRotVelocity"] * c["maxRotVelocity"]
+    fields = _assemble(path, name or f"{model.name} ({path})", bodies, np.array(rotors),
+                       tuple(directions), c["motorConstant"], c["momentConstant"],
+                       max_thrust, c["timeConstantUp"], g)
+    _check_lift(fields, f"motorConstant {c['motorConstant']:g} N/(rad/s)^2 x maxRotVelocity "
+                f"{c['maxRotVelocity']:g} rad/s squared", path)
+    return fields
 
 
 def file_fields(path: str | os.PathLike[str], **options: Any) -> dict[str, Any]:

@@ -28,7 +28,7 @@ import numpy.typing as npt
 from quadcog import validate
 from quadcog.errors import InputError
 
-__all__ = ["RotorModel", "ROTOR_MODELS", "STANDARD_GRAVITY", "CRAZYFLIE_BITCRAZE_VOLTAGE",
+__all__ = ["RotorModel", "ROTOR_MODELS", "STANDARD_GRAVITY", "MAX_BATTERY_VOLTAGE", "CRAZYFLIE_BITCRAZE_VOLTAGE",
            "CRAZYFLIE_FOERSTER", "CRAZYFLIE_FIRMWARE_COMMAND", "CRAZYFLIE_21_PLUS_CUBIC",
            "cubic_voltage", "px4_thrust_curve",
            "px4_thrust_curve_from_log"]
@@ -36,6 +36,9 @@ __all__ = ["RotorModel", "ROTOR_MODELS", "STANDARD_GRAVITY", "CRAZYFLIE_BITCRAZE
 KINDS = ("polynomial", "voltage", "thr_mdl_fac", "voltage_cubic")
 SIGNALS_READ = ("motor_pwm", "motor_command")
 STANDARD_GRAVITY = 9.80665          # m/s^2: grams-force to newtons (CGPM 1901)
+# The largest battery voltage taken (V): multirotor packs reach 14 cells (about 60 V); far
+# beyond, a voltage is a unit or data error, and the maps' powers of it overflow.
+MAX_BATTERY_VOLTAGE = 1000.0
 
 
 @dataclass(frozen=True)
@@ -118,18 +121,41 @@ class RotorModel:
         "battery_voltage")."""
         return (self.signal, "battery_voltage") if self.uses_voltage else (self.signal,)
 
-    def _voltage(self, voltage, shape):
+    def _per_rotor(self, value: npt.ArrayLike, where: str) -> npt.NDArray[np.float64]:
+        """``value`` as a float array of shape (..., 4) of finite real numbers, checked before
+        any arithmetic (strings, bools, complex numbers, object arrays, ragged lists, integers
+        beyond the float range refused by ``quadcog.validate.array``)."""
+        where = f"rotor model {self.name!r}: {where}"
+        a = validate.array(value, where, what="an array of shape (..., 4) (one per rotor)")
+        if a.ndim < 1 or a.shape[-1] != 4:
+            raise InputError(f"{where}: expected an array of shape (..., 4) (one per rotor), "
+                             f"got shape {a.shape}")
+        return a
+
+    def _voltage(self, voltage: npt.ArrayLike | None,
+                 shape: tuple[int, ...]) -> npt.NDArray[np.float64] | None:
+        """The battery voltage as an array that broadcasts over outputs of ``shape`` (...,
+        4): one number, or one per row (shape ``shape[:-1]``); None when the model does not
+        use it (a voltage given then is not read)."""
         if not self.uses_voltage:
             return None
         if voltage is None:
             raise InputError(f"rotor model {self.name!r} needs the battery voltage (V), got "
                              "None")
-        v = np.asarray(voltage, dtype=float)
-        v = v.reshape(v.shape + (1,) * (len(shape) - v.ndim)) if v.ndim < len(shape) else v
-        if not (np.isfinite(v).all() and (v > 0).all()):
-            raise InputError(f"rotor model {self.name!r}: battery voltage must be finite and "
-                             f"> 0 V, got values from {np.nanmin(v):.4g} to {np.nanmax(v):.4g}")
-        return v
+        where = f"rotor model {self.name!r}: battery voltage"
+        rows = shape[:-1]
+        v = validate.array(voltage, where, finite=False,
+                           what=f"a number or an array of shape {rows} (V)")
+        if v.shape not in ((), rows):
+            raise InputError(f"{where}: expected a number or an array of shape {rows} (one per "
+                             f"row of outputs) (V), got shape {v.shape}")
+        bad = ~((v > 0) & (v <= MAX_BATTERY_VOLTAGE))      # NaN too
+        if bad.any():
+            k = np.unravel_index(int(np.argmax(bad)), v.shape) if v.ndim else ()
+            at = f"[{', '.join(str(int(i)) for i in k)}]" if k else ""
+            raise InputError(f"{where}{at}: expected a voltage in (0, {MAX_BATTERY_VOLTAGE:g}] "
+                             f"V, got {validate.plain(float(v[k]))}")
+        return v[..., None]
 
     def thrust(self, u: npt.ArrayLike,
                voltage: npt.ArrayLike | None = None) -> npt.NDArray[np.float64]:
@@ -138,9 +164,11 @@ class RotorModel:
         Parameters
         ----------
         u : array_like, shape (..., 4)
-            Motor outputs in 0..1 (values outside are clipped to 0..1).
-        voltage : array_like, shape (...,), optional
-            Battery voltage (V); required when ``uses_voltage``.
+            Motor outputs: finite real numbers (not bools), in 0..1 (finite values outside
+            are clipped to 0..1).
+        voltage : float or array_like, shape (...,), optional
+            Battery voltage (V), one number or one per row of ``u``; required when
+            ``uses_voltage``, not read otherwise.
 
         Returns
         -------
@@ -150,12 +178,14 @@ class RotorModel:
         Raises
         ------
         InputError
-            When an output is not finite, or the battery voltage is missing (``uses_voltage``),
-            not finite or not > 0 V.
+            When ``u`` is not an array of shape (..., 4) of finite real numbers, or the battery
+            voltage is missing (``uses_voltage``), of another shape, or not in
+            (0, ``MAX_BATTERY_VOLTAGE``] V; the message names the argument and the first bad
+            value.
         """
-        u = np.asarray(u, dtype=float).clip(0.0, 1.0)
-        if not np.isfinite(u).all():
-            raise InputError(f"rotor model {self.name!r}: motor outputs must be finite")
+        # checked before the clip, which would turn inf into full output
+        u = self._per_rotor(u, "motor outputs u").clip(0.0, 1.0)
+        volts = self._voltage(voltage, u.shape)
         c = self.coefficients
         if self.kind == "polynomial":
             s = self.scale * u
@@ -163,13 +193,13 @@ class RotorModel:
         elif self.kind == "thr_mdl_fac":
             f = self.max_thrust * ((1.0 - c[0]) * u + c[0] * u * u)
         elif self.kind == "voltage_cubic":
-            v = u * self._voltage(voltage, u.shape)
+            v = u * volts
             f = c[0] + v * (c[1] + v * (c[2] + v * c[3]))
         else:
-            volts = u * self._voltage(voltage, u.shape) - c[0]
+            across = u * volts - c[0]
             if c[2] < 0:        # beyond the parabola's vertex the fit means nothing: saturate
-                volts = np.minimum(volts, c[1] ** 2 / (-4.0 * c[2]))
-            f = self.thrust_unit * _quadratic_root(c[2], c[1], -np.maximum(volts, 0.0))
+                across = np.minimum(across, c[1] ** 2 / (-4.0 * c[2]))
+            f = self.thrust_unit * _quadratic_root(c[2], c[1], -np.maximum(across, 0.0))
         return np.maximum(f, 0.0)
 
     def command(self, f: npt.ArrayLike,
@@ -180,9 +210,10 @@ class RotorModel:
         Parameters
         ----------
         f : array_like, shape (..., 4)
-            Thrust of each rotor (N), >= 0.
-        voltage : array_like, shape (...,), optional
-            Battery voltage (V); required when ``uses_voltage``.
+            Thrust of each rotor (N): finite real numbers >= 0 (not bools).
+        voltage : float or array_like, shape (...,), optional
+            Battery voltage (V), one number or one per row of ``f``; required when
+            ``uses_voltage``, not read otherwise.
 
         Returns
         -------
@@ -192,28 +223,48 @@ class RotorModel:
         Raises
         ------
         InputError
-            When a thrust is not finite or < 0 N, needs more than full output, or the battery
-            voltage is missing (``uses_voltage``), not finite or not > 0 V.
+            When ``f`` is not an array of shape (..., 4) of finite real numbers >= 0 N, a
+            thrust needs more than full output, or the battery voltage is missing
+            (``uses_voltage``), of another shape, or not in (0, ``MAX_BATTERY_VOLTAGE``] V.
         """
-        f = np.asarray(f, dtype=float)
-        if not (np.isfinite(f).all() and (f >= 0).all()):
-            raise InputError(f"rotor model {self.name!r}: thrusts must be finite and >= 0 N")
+        f = self._per_rotor(f, "thrusts f")
+        if (f < 0).any():
+            k = np.unravel_index(int(np.argmax(f < 0)), f.shape)
+            at = ", ".join(str(int(i)) for i in k)
+            raise InputError(f"rotor model {self.name!r}: thrusts f[{at}]: expected a thrust "
+                             f">= 0 N, got {validate.plain(float(f[k]))}")
+        volts = self._voltage(voltage, f.shape)
+        # a finite thrust far beyond the rotor's overflows below: refused as beyond full
+        # output (the check after), with no numpy warning
+        with np.errstate(over="ignore", invalid="ignore"):
+            u = self._output(f, volts)
+        beyond = ~(u <= 1.0 + 1e-9)          # NaN (inf - inf) too
+        if beyond.any():
+            k = np.unravel_index(int(np.argmax(beyond)), u.shape)
+            needs = (f"output {u[k]:.4g} > 1" if np.isfinite(u[k]) else
+                     "more than the model's largest thrust")
+            raise InputError(f"rotor model {self.name!r}: a thrust of {f[k]:.4g} N needs "
+                             f"{needs} (beyond full output)")
+        return np.minimum(u, 1.0)
+
+    def _output(self, f: npt.NDArray[np.float64],
+                volts: npt.NDArray[np.float64] | None) -> npt.NDArray[np.float64]:
+        """The outputs of checked thrusts ``f`` (``command`` without its checks), >= 0; inf
+        for a thrust beyond the vertex of a falling parabola, which no output gives."""
         c = self.coefficients
         if self.kind == "polynomial":
             u = _quadratic_root(c[2], c[1], c[0] - f) / self.scale
+            u = np.where(c[1] * c[1] - 4.0 * c[2] * (c[0] - f) < 0, np.inf, u)
         elif self.kind == "thr_mdl_fac":
             u = _quadratic_root(c[0], 1.0 - c[0], -f / self.max_thrust)
         elif self.kind == "voltage_cubic":
-            u = np.where(f > 0, cubic_voltage(c, f), 0.0) / self._voltage(voltage, f.shape)
+            u = np.where(f > 0, cubic_voltage(c, f), 0.0) / volts
         else:
             F = f / self.thrust_unit
-            u = np.where(F > 0, c[0] + c[1] * F + c[2] * F * F, 0.0) \
-                / self._voltage(voltage, f.shape)
-        u = np.maximum(u, 0.0)
-        if u.max(initial=0.0) > 1.0 + 1e-9:
-            raise InputError(f"rotor model {self.name!r}: a thrust of {f.max():.4g} N needs "
-                             f"output {u.max():.4g} > 1 (beyond full output)")
-        return np.minimum(u, 1.0)
+            u = np.where(F > 0, c[0] + c[1] * F + c[2] * F * F, 0.0) / volts
+            if c[2] < 0:        # thrust saturates at the vertex (see thrust)
+                u = np.where(F > c[1] / (-2.0 * c[2]), np.inf, u)
+        return np.maximum(u, 0.0)
 
     def describe(self) -> str:
         """One line: name, form and source.
