@@ -275,7 +275,9 @@ class Vehicle:
         Raises
         ------
         VehicleFileError
-            A missing file, or a needed value missing or not a number (named with the file).
+            A missing file, a needed value missing, not a number or out of its range, or links
+            that are not one tree of uniquely named links (named with the file;
+            ``quadcog.vehicles.description.urdf_fields``).
         PhysicalConsistencyError
             A link whose mass and inertia no rigid body has.
         """
@@ -305,7 +307,9 @@ class Vehicle:
         Raises
         ------
         VehicleFileError
-            A missing file or included model, or a needed value missing or not a number.
+            A missing file or included model, includes that loop or copy too much, or a
+            needed value missing, not a number or out of its range
+            (``quadcog.vehicles.description.sdf_fields``).
         PhysicalConsistencyError
             A link whose mass and inertia no rigid body has.
         """
