@@ -12,12 +12,12 @@ decoder ``tools/usdlog/cfusdlog.py``), little-endian throughout:
   ``uint64`` us since boot), then the event's variables packed in header order;
 - the file ends with the CRC-32 (zlib's, ``uint32``) of every byte before it.
 
-Time base: the records of the ``fixedFrequency`` event (the logging at the configured rate,
-e.g. 100 Hz synchronous with the stabilizer), at their own time stamps, shifted to start at
-0 (``meta["time_origin_us"]``). Records are not resampled or filled: the log is event based,
-so a record dropped by the firmware (its buffer full) is a longer step, reported in
-``meta["max_step_s"]``. Other event types are not on that time base: their record counts are
-in ``meta["events"]``.
+Time base: the records of the fixed-frequency event, id ``0xFFFF`` (named
+``fixedFrequency``: the logging at the configured rate, e.g. 100 Hz synchronous with the
+stabilizer), at their own time stamps, shifted to start at 0 (``meta["time_origin_us"]``).
+Records are not resampled or filled: the log is event based, so a record dropped by the
+firmware (its buffer full) is a longer step, reported in ``meta["max_step_s"]``. Other event
+types are not on that time base: their record counts are in ``meta["events"]``.
 
 Conversions to quadcog's signals (the firmware's ground frame is z up and its body frame x
 forward, y left, z up, as quadcog's):
@@ -104,11 +104,17 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
     ------
     LogFormatError
         Not a uSD log (magic byte), an unknown version or type, a truncated header or
-        record, a record of an event the header does not declare.
+        record, a record of an event the header does not declare, two event types with one
+        id or one name.
     LogCRCError
         The stored CRC-32 differs from the content's.
     """
-    path = str(path)
+    version, events = _parse(str(path))
+    return version, {name: (ticks, variables) for name, ticks, variables in events.values()}
+
+
+def _parse(path: str) -> tuple[int, dict[int, tuple[str, np.ndarray, dict[str, np.ndarray]]]]:
+    """``parse_usd`` keyed by event id: (version, {id: (name, ticks, variables)})."""
     data = Path(path).read_bytes()
     if len(data) < 9:
         raise LogFormatError(f"{path}: {len(data)} bytes: too short for a Crazyflie uSD log "
@@ -125,7 +131,8 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
         raise LogFormatError(f"{path}: format version {version}; expected 1 or 2")
     end = len(data) - 4
     i = 5
-    layouts = {}
+    layouts: dict[int, tuple[str, np.dtype]] = {}
+    ids: dict[str, int] = {}          # event name -> its id
     for k in range(n_events):
         if i + 2 > end:
             raise LogFormatError(f"{path}: truncated header: event type {k + 1} of "
@@ -144,7 +151,14 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
                                      f"'name(T)' with T one of {''.join(_TYPES)}")
             fields.append((spec[:-3], _TYPES[spec[-2]]))
         if event_id in layouts:
-            raise LogFormatError(f"{path}: event id {event_id} declared twice")
+            raise LogFormatError(f"{path}: event id 0x{event_id:04X} declared twice (event "
+                                 f"types {layouts[event_id][0]!r} and {name!r}); expected one "
+                                 "event type per id")
+        if name in ids:             # events are known by name: the second would hide the first
+            raise LogFormatError(f"{path}: event name {name!r} declared twice (ids "
+                                 f"0x{ids[name]:04X} and 0x{event_id:04X}); expected one event "
+                                 "type per name")
+        ids[name] = event_id
         names = [f for f, _ in fields]
         reserved = [f for f in names if f in _RESERVED]
         if reserved:
@@ -182,7 +196,8 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
         rec = np.ascontiguousarray(block).view(dtype).reshape(-1)
         ticks = rec["_tick"].astype(np.float64) * _STAMP[version][1]
         # a structured dtype always has names
-        events[name] = (ticks, {f: rec[f] for f in dtype.names[2:]})  # type: ignore[index]
+        events[event_id] = (name, ticks,
+                            {f: rec[f] for f in dtype.names[2:]})  # type: ignore[index]
     return version, events
 
 
@@ -259,18 +274,21 @@ def read_usd(path: str | os.PathLike) -> FlightLog:
     Raises
     ------
     LogFormatError
-        See ``parse_usd``; also no fixed-frequency records, or time stamps that do not
-        increase.
+        See ``parse_usd``; also fewer than 2 fixed-frequency records (id ``0xFFFF``), time
+        stamps that do not increase, or a variable that is not finite (NaN, inf).
     LogCRCError
         The CRC-32 does not match.
     """
     path = str(path)
-    version, events = parse_usd(path)
-    if FIXED_FREQUENCY_NAME not in events or events[FIXED_FREQUENCY_NAME][0].size < 2:
-        counts = {k: v[0].size for k, v in events.items()}
-        raise LogFormatError(f"{path}: fewer than 2 '{FIXED_FREQUENCY_NAME}' records, the "
-                             f"time base of the signals; the events hold {counts}")
-    ticks, variables = events[FIXED_FREQUENCY_NAME]
+    version, events = _parse(path)
+    # the time base is the event of id 0xFFFF, whatever its name (the firmware's is
+    # FIXED_FREQUENCY_NAME; parse_usd has refused two events of one name or one id)
+    name, ticks, variables = events.get(FIXED_FREQUENCY_ID, (FIXED_FREQUENCY_NAME, None, {}))
+    if ticks is None or ticks.size < 2:
+        counts = {n: v.size for n, v, _ in events.values()}      # names are unique
+        raise LogFormatError(f"{path}: fewer than 2 '{FIXED_FREQUENCY_NAME}' records (event "
+                             f"id 0x{FIXED_FREQUENCY_ID:04X}), the time base of the signals; "
+                             f"the events hold {counts}")
     steps = np.diff(ticks)
     if not (steps > 0).all():
         k = int(np.argmax(steps <= 0))
@@ -279,9 +297,16 @@ def read_usd(path: str | os.PathLike) -> FlightLog:
                              "expected increasing")
     types = {k: v.dtype.str for k, v in variables.items()}
     raw = {k: v.astype(np.float64) for k, v in variables.items()}
+    for var, v in raw.items():      # before any conversion: named as logged, inf as inf
+        bad = ~np.isfinite(v)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise LogFormatError(f"{path}: variable {var!r} of event {name!r} is "
+                                 f"{float(v[k])!r} in record {k} (t = "
+                                 f"{float(ticks[k] - ticks[0])!r} s); expected finite values")
     median = float(np.median(steps))
-    others = ", ".join(f"{k}: {v[0].size} records" for k, v in events.items()
-                       if k != FIXED_FREQUENCY_NAME)
+    others = ", ".join(f"{n}: {v.size} records" for e, (n, v, _) in events.items()
+                       if e != FIXED_FREQUENCY_ID)
     meta = {"vehicle": "Crazyflie", "usd_version": str(version),
             "time_origin_us": str(int(round(ticks[0] * 1e6))),
             "rate_hz": f"{1.0 / median:.6g}", "median_step_s": repr(median),

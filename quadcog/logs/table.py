@@ -6,13 +6,18 @@ The columns are ``t_s`` (s) and, for each standard signal, its columns
 its columns are there; every column (signal or not) is also kept under its name in ``raw``.
 Time is taken as written, shifted to start at 0 (``meta["time_offset_s"]`` is the first
 ``t_s``); rows are not resampled. An empty cell, ``nan``, text, or time that does not increase
-is refused with the row and column named. A CSV file is UTF-8 text; a byte-order mark
-in front of it is dropped.
+is refused with the row and column named: a cell is a plain decimal number in ASCII (an
+optional sign, digits, a point, an exponent: ``-1.5e-3``), optionally quoted; ``#`` is not a
+comment, and ``1_000`` or digits of other scripts are refused, not read. A CSV file is UTF-8
+text; a byte-order mark in front of it is dropped.
 """
 from collections import Counter
 import csv
+import io
+import math
 import os
 from pathlib import Path
+import re
 from types import ModuleType
 import warnings
 
@@ -94,6 +99,21 @@ READ_ENCODING = "utf-8-sig"
 # The longest cell read: a float64 written with every digit takes 24 characters; anything
 # much longer is not a number (Python's csv module stops at 131,072 with its own error).
 MAX_CELL = 1000
+FLOAT_MAX = float(np.finfo(np.float64).max)
+
+# A plain decimal number, the one form of cell read (float() also takes "1_000", other
+# scripts' digits and surrounding Unicode blanks; numpy's parser takes "#" as a comment)
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+# nan and inf, read so that the log's check refuses them with their place (_from_columns)
+_NOT_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+# The characters of plain numbers, separators, quotes and line breaks: numpy's fast parser
+# is used only on text of these alone, anything else goes cell by cell through _cells
+_PLAIN_BYTES = b'0123456789eE+-.,"\r\n \t'
+
+
+def _plain(text):
+    """Whether ``text`` has only ``_PLAIN_BYTES`` (bytes.translate: C speed, linear)."""
+    return text.isascii() and not text.encode("ascii").translate(None, _PLAIN_BYTES)
 
 
 def _read_csv(path):
@@ -103,15 +123,21 @@ def _read_csv(path):
     try:
         with open(path, newline="", encoding=READ_ENCODING) as f:
             header, lines_before = _header(path, f)
+            rest = f.read()
+        ok = _plain(rest)
+        if ok:
             try:
                 with warnings.catch_warnings():      # a header without rows: said below
                     warnings.simplefilter("ignore", UserWarning)
-                    data = np.loadtxt(f, delimiter=",", dtype=np.float64, ndmin=2,
-                                      quotechar='"')
-                ok = data.shape[1] == len(header) or data.size == 0
+                    data = np.loadtxt(io.StringIO(rest), delimiter=",", dtype=np.float64,
+                                      ndmin=2, quotechar='"', comments=None)
+                # a cell beyond the float range reads as inf: named by _cells as written
+                ok = (data.shape[1] == len(header) or data.size == 0) and \
+                    bool(np.isfinite(data).all())
             except (ValueError, OverflowError):
                 ok = False
-        if not ok:        # read again cell by cell: a byte that is not UTF-8 may come here
+        del rest
+        if not ok:        # read again cell by cell: names the first bad cell
             data = _cells(path, header, lines_before)
     except UnicodeDecodeError as e:
         raise LogFormatError(f"{path}: not a text (UTF-8) CSV file ({e.reason} at byte "
@@ -167,24 +193,33 @@ def _cells(path, header, skip):
                                      f"expected numbers of at most {MAX_CELL} characters") \
                     from None
             line = skip + reader.line_num
-            if not row or not any(c.strip() for c in row):
-                continue
+            if not row or (len(row) == 1 and not row[0].strip(" \t")):
+                continue            # a blank line (a row of empty cells is refused below)
             if len(row) != len(header):
                 raise LogFormatError(f"{path}: line {line} has {len(row)} cells, the header "
                                      f"{len(header)}")
-            values = []
-            for j, cell in enumerate(row):
-                text = cell.strip()
-                if len(text) > MAX_CELL:
-                    raise LogFormatError(f"{path}: line {line}, column {header[j]!r}: a cell "
-                                         f"of {len(text):,} characters; expected a number")
-                try:
-                    values.append(float(text))
-                except ValueError:
-                    raise LogFormatError(f"{path}: line {line}, column {header[j]!r}: "
-                                         f"{text[:40]!r} is not a number") from None
-            rows.append(values)
+            rows.append([_cell(path, line, header[j], cell) for j, cell in enumerate(row)])
     return np.array(rows, dtype=np.float64).reshape(len(rows), len(header))
+
+
+def _cell(path, line, column, cell):
+    """The float of one CSV cell: a plain decimal number (``_NUMBER``) within the float
+    range, or nan/inf (refused later with its place), else a LogFormatError naming it."""
+    text = cell.strip(" \t")
+    where = f"{path}: line {line}, column {column!r}"
+    if len(text) > MAX_CELL:
+        raise LogFormatError(f"{where}: a cell of {len(text):,} characters; expected a number")
+    shown = repr(text) if len(text) <= 40 else f"{text[:40]!r}... ({len(text):,} characters)"
+    if _NUMBER.fullmatch(text):
+        value = float(text)
+        if not math.isfinite(value):
+            raise LogFormatError(f"{where}: {shown} is beyond the range of a float (magnitude "
+                                 f"at most {FLOAT_MAX:.4g}): not a finite number")
+        return value
+    if _NOT_FINITE.fullmatch(text):
+        return float(text)
+    raise LogFormatError(f"{where}: {shown} is not a number; expected a plain decimal number "
+                         "(ASCII digits, an optional sign, point and exponent: -1.5e-3)")
 
 
 def _read_parquet(path):

@@ -31,8 +31,9 @@ Time base: the time stamps (``timestamp``, us) of the first of ``vehicle_local_p
 ``vehicle_attitude``, ``vehicle_angular_velocity`` in the log, within the span that every
 topic read covers (so nothing is extrapolated; what is cut at either end is in
 ``meta["trimmed_s"]``). Each topic is interpolated onto it: linearly for float fields (the
-quaternion component-wise with its sign kept continuous, then normalized), by the previous
-sample for integer fields. ``raw`` holds every numeric field of the topics read as
+quaternion component-wise with its sign kept continuous, then normalized: a logged sample
+whose norm is farther from 1 than ``QUATERNION_NORM_TOLERANCE`` is refused), by the previous
+sample for integer fields. ``raw`` holds every numeric field (not ``char``) of the topics read as
 ``"topic.field"`` on that base (fields not finite somewhere, NaN or infinite, are left out and
 counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``,
 ``ver_sw``, ...), its rotor geometry in quadcog's order (``rotor_positions_m``,
@@ -44,6 +45,7 @@ infinite sample (an estimate not valid yet) is left out and named in
 """
 import contextlib
 import io
+import itertools
 import os
 from pathlib import Path
 import struct
@@ -55,7 +57,7 @@ from numpy.typing import ArrayLike
 from quadcog.errors import LogError, LogFormatError, LogSignalError
 from quadcog.files import atomic_write_bytes
 from quadcog.logs.flightlog import FlightLog
-from quadcog.logs.limits import check_range, check_unit_signals, microsecond_ticks
+from quadcog.logs.limits import FLOAT32_MAX, check_range, check_unit_signals, microsecond_ticks
 
 __all__ = ["read_ulog", "write_ulog", "px4_to_quadcog_quaternion", "quaternion_to_euler",
            "euler_to_quaternion", "TOPICS", "QUADX_ORDER"]
@@ -78,6 +80,18 @@ _FLIP = np.array([1.0, -1.0, -1.0])           # T = diag(1, -1, -1): NED <-> NWU
 _PARAMS = ("THR_MDL_FAC", "MPC_THR_HOVER", "SYS_AUTOSTART", "CA_AIRFRAME", "CA_ROTOR_COUNT")
 _STAMP_MAX = 2 ** 63 - 1        # us: the largest time stamp the reader's int64 steps hold
 _INFO = ("sys_name", "ver_hw", "ver_sw", "ver_sw_release", "sys_os_name", "sys_uuid")
+# ULog's base types and their sizes (bytes); char (text) and bool are not numbers
+_BASE_TYPES = {"int8_t": 1, "uint8_t": 1, "int16_t": 2, "uint16_t": 2, "int32_t": 4,
+               "uint32_t": 4, "int64_t": 8, "uint64_t": 8, "float": 4, "double": 8, "bool": 1,
+               "char": 1}
+_NOT_NUMBERS = ("char", "bool")
+# A data message's size is a uint16 that also counts its 2-byte message id, so no format
+# larger than this can be logged; PX4's nest at most a few deep
+MAX_FORMAT_BYTES = 0xFFFF - 2
+MAX_NESTING = 16
+# |q| of a logged attitude quaternion: PX4 logs unit quaternions (float32, |q| = 1 to 1e-6);
+# farther from 1 than this the sample is not an attitude (normalising would hide the damage)
+QUATERNION_NORM_TOLERANCE = 0.1
 
 
 def px4_to_quadcog_quaternion(q: ArrayLike) -> np.ndarray:
@@ -147,11 +161,12 @@ def euler_to_quaternion(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np
 
 def _check_messages(path, data):
     """Walk the message headers: a file cut inside a message is refused (pyulog would stop
-    there silently)."""
+    there silently); the format definitions met on the way are checked (``_check_formats``)."""
     if len(data) < 16 or data[:7] != ULOG_MAGIC:
         raise LogFormatError(f"{path}: not a ULog file (it does not start with the ULog magic "
                              f"bytes {ULOG_MAGIC.hex(' ')})")
     i, end = 16, len(data)
+    formats = []
     while i < end:
         if i + 3 > end:
             raise LogFormatError(f"{path}: truncated ULog: {end - i} bytes of a message "
@@ -161,7 +176,84 @@ def _check_messages(path, data):
             raise LogFormatError(f"{path}: truncated ULog: the message at byte {i} (type "
                                  f"{chr(data[i + 2])!r}) needs {size} bytes, the file has "
                                  f"{end - i - 3}")
+        if data[i + 2] == ord("F"):
+            formats.append(data[i + 3:i + 3 + size])
         i += 3 + size
+    _check_formats(path, formats)
+
+
+def _format_fields(payload: bytes) -> tuple[str, list[tuple[str, int]]] | None:
+    """(name, [(type name, count)]) of a format message's payload ``name:type name;...``,
+    parsed as pyulog parses it; None, or fields left out, where pyulog itself refuses."""
+    parts = payload.decode("utf-8", "ignore").split(":")     # pyulog drops bad bytes too
+    if len(parts) < 2:
+        return None
+    fields = []
+    for text in parts[1].split(";"):
+        words = text.split(" ")
+        if not text or len(words) < 2:
+            continue
+        typ, a = words[0], words[0].find("[")
+        count = 0
+        if a >= 0:
+            try:
+                count = int(typ[a + 1:typ.find("]")])
+            except ValueError:
+                continue
+            typ = typ[:a]
+        fields.append((typ, max(count, 1)))     # pyulog reads an array of 0 as one value
+    return parts[0], fields
+
+
+def _check_formats(path: str, payloads: list[bytes]) -> None:
+    """Refuse format definitions that pyulog would expand without end or beyond what a
+    message holds: a format nesting itself (directly or through others), nesting deeper than
+    ``MAX_NESTING``, or taking more than ``MAX_FORMAT_BYTES`` once expanded.
+
+    Iterative (a hostile file must not exhaust Python's stack here either) and linear in the
+    fields defined: each format is totalled once, and the chain searched for a cycle is at
+    most ``MAX_NESTING`` long. A name defined twice is checked in each definition, whichever
+    one pyulog keeps."""
+    graph: dict[str, list[list[tuple[str, int]]]] = {}      # name -> its definitions' fields
+    for payload in payloads:
+        parsed = _format_fields(payload)
+        if parsed is not None:
+            graph.setdefault(parsed[0], []).append(parsed[1])
+    size: dict[str, int] = {}       # bytes, an empty nested format counted as 1
+    for root in graph:
+        if root in size:
+            continue
+        chain = [root]        # the formats being expanded, outermost first (<= MAX_NESTING)
+        todo = [itertools.chain(*graph[root])]
+        while todo:
+            step = next(todo[-1], None)
+            if step is None:            # every field of chain[-1] is known: total it
+                todo.pop()
+                name = chain.pop()
+                total = max(sum(n * (_BASE_TYPES[t] if t in _BASE_TYPES else
+                                     max(size.get(t, 1), 1)) for t, n in fields)
+                            for fields in graph[name])
+                if total > MAX_FORMAT_BYTES:
+                    raise LogFormatError(
+                        f"{path}: ULog format {name!r} takes more than {MAX_FORMAT_BYTES:,} "
+                        f"bytes once its arrays and nested formats are expanded; a ULog data "
+                        f"message holds at most {MAX_FORMAT_BYTES:,}")
+                size[name] = total
+                continue
+            sub = step[0]
+            if sub in _BASE_TYPES or sub not in graph or sub in size:
+                continue                # unknown types are pyulog's to refuse
+            if sub in chain:
+                loop = " -> ".join(chain[chain.index(sub):] + [sub])
+                raise LogFormatError(f"{path}: ULog format {sub!r} contains itself ({loop}); "
+                                     "expected formats whose fields are base types or other "
+                                     "formats, without cycles")
+            if len(chain) >= MAX_NESTING:
+                raise LogFormatError(f"{path}: ULog format {chain[0]!r} nests formats more "
+                                     f"than {MAX_NESTING} deep ({' -> '.join(chain)} -> "
+                                     f"{sub} ...); expected at most {MAX_NESTING}")
+            chain.append(sub)
+            todo.append(itertools.chain(*graph[sub]))
 
 
 def _load(path):
@@ -175,6 +267,9 @@ def _load(path):
     except (ULogException, struct.error, ValueError, IndexError, KeyError, OverflowError,
             UnicodeDecodeError) as e:
         raise LogFormatError(f"{path}: pyulog cannot read the ULog ({e})") from None
+    except RecursionError:      # _check_formats should have refused such formats already
+        raise LogFormatError(f"{path}: the ULog's formats nest too deeply for pyulog to "
+                             "expand them (a damaged or hostile log)") from None
     if u.file_corruption:
         raise LogFormatError(f"{path}: the ULog is corrupt (pyulog found damaged messages)")
     return u
@@ -195,12 +290,37 @@ def _check_stamps(path, name, data):
                              "log")
 
 
+def _check_types(path, d):
+    """Refuse a topic whose time stamp or fields read as numbers (``TOPICS``) are declared
+    ``char`` (text: pyulog gives its byte codes, 'a' would read as 97) or ``bool``."""
+    for f in d.field_data:
+        if f.type_str in _NOT_NUMBERS and (f.field_name == "timestamp"
+                                           or f.field_name in TOPICS[d.name]):
+            raise LogFormatError(f"{path}: topic {d.name}: field {f.field_name} has type "
+                                 f"{f.type_str!r}; expected a number (float, double or an "
+                                 "integer type, as in PX4's message definition)")
+
+
 def _required(path, topic, data, names):
     """Refuse a topic that lacks fields the reader needs from it (a damaged format)."""
     missing = [n for n in names if n not in data]
     if missing:
         raise LogFormatError(f"{path}: topic {topic} lacks the field(s) {', '.join(missing)}; "
                              f"expected {', '.join(names)} (PX4's message definition)")
+
+
+def _check_quaternions(path, q, stamps):
+    """Refuse attitude samples that are not unit quaternions: |q| farther from 1 than
+    ``QUATERNION_NORM_TOLERANCE``, or an infinite component. A sample with a NaN (PX4: no
+    estimate yet) is left to the reader, which drops the attitude signals it spoils."""
+    norm = np.sqrt(np.einsum("ij,ij->i", q, q))
+    bad = np.isinf(q).any(axis=1) | (np.abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise LogFormatError(f"{path}: vehicle_attitude.q of sample {k} (time stamp "
+                             f"{int(stamps[k])} us) is {q[k].tolist()}, of norm "
+                             f"{float(norm[k]):.6g}; expected a unit quaternion (norm within "
+                             f"1 +- {QUATERNION_NORM_TOLERANCE:g})")
 
 
 def _rotor_map(params):
@@ -224,7 +344,7 @@ def _rotor_map(params):
     return tuple(order), flu[order], -np.sign(km[order]), "from CA_ROTOR{i}_PX/PY"
 
 
-def _motor_pwm(d, t_us, order, params):
+def _motor_pwm(path, d, t_us, order, params):
     """actuator_outputs as 0..1 per quadcog rotor (unclipped), and where its range came from."""
     # a function that is not a whole number (a damaged float parameter) assigns no motor
     funcs = {int(params[f"PWM_MAIN_FUNC{n}"]): n for n in range(1, 17)
@@ -237,6 +357,14 @@ def _motor_pwm(d, t_us, order, params):
         if f"output[{n - 1}]" not in d:
             return None, None
         lo, hi = params.get(f"PWM_MAIN_MIN{n}"), params.get(f"PWM_MAIN_MAX{n}")
+        for key, value in ((f"PWM_MAIN_MIN{n}", lo), (f"PWM_MAIN_MAX{n}", hi)):
+            ok = value is None or (isinstance(value, (int, float, np.number))
+                                   and not isinstance(value, bool)
+                                   and np.isfinite(float(value)))
+            if not ok:          # (output - lo) / (hi - lo) would be NaN or a TypeError
+                raise LogFormatError(f"{path}: parameter {key} is {value!r}; expected a finite "
+                                     "PWM (us) for the motor output on channel "
+                                     f"{n} (actuator_outputs.output[{n - 1}])")
         if lo is None or hi is None or not hi > lo:
             lo, hi, defaults = 1000.0, 2000.0, True
         out = np.interp(t_us, ts, d[f"output[{n - 1}]"].astype(np.float64))
@@ -274,8 +402,11 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     Raises
     ------
     LogFormatError
-        Not a ULog, truncated or corrupt, a topic whose time stamps do not increase, no
-        overlap of the topics' spans.
+        Not a ULog, truncated or corrupt, formats that contain themselves, nest deeper than
+        ``MAX_NESTING`` or expand beyond ``MAX_FORMAT_BYTES``, a field read as a number
+        declared ``char`` or ``bool``, a topic whose time stamps do not increase, no overlap
+        of the topics' spans, an attitude sample whose norm is not within
+        ``QUATERNION_NORM_TOLERANCE`` of 1, a PWM range parameter that is not a finite number.
     LogSignalError
         None of the time-base topics (``vehicle_local_position``, ``vehicle_attitude``,
         ``vehicle_angular_velocity``) is in the log.
@@ -283,11 +414,15 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     path = str(path)
     u = _load(path)
     topics = {}
+    text: set[str] = set()           # char fields: text, not numbers, so not in raw
     for d in u.data_list:
         if d.multi_id == 0 and d.name in TOPICS:
+            _check_types(path, d)
             _check_stamps(path, d.name, d.data)
             if d.data["timestamp"].size >= 2:
                 topics[d.name] = d.data
+                text.update(f"{d.name}.{f.field_name}" for f in d.field_data
+                            if f.type_str == "char")
     base = next((n for n in BASE_TOPICS if n in topics), None)
     if base is None:
         raise LogSignalError(f"{path}: the ULog has none of the topics {BASE_TOPICS} that "
@@ -313,7 +448,8 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     for name, d in topics.items():
         ts = d["timestamp"].astype(np.float64)
         for field, values in d.items():
-            if field.startswith("timestamp") or values.dtype.kind not in "biuf":
+            if field.startswith("timestamp") or values.dtype.kind not in "biuf" or \
+                    f"{name}.{field}" in text:
                 continue
             v = _interp(t_us, ts, values, values.dtype.kind == "f")
             if np.isfinite(v).all():
@@ -339,6 +475,7 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
         d = topics["vehicle_attitude"]
         _required(path, "vehicle_attitude", d, TOPICS["vehicle_attitude"])
         q = np.column_stack([d[f"q[{i}]"].astype(np.float64) for i in range(4)])
+        _check_quaternions(path, q, d["timestamp"])
         # q and -q are one rotation: keep the sign continuous before interpolating
         flips = np.cumprod(np.where(np.einsum("ij,ij->i", q[1:], q[:-1]) < 0, -1.0, 1.0))
         q[1:] *= flips[:, None]
@@ -381,7 +518,7 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
         signals["motor_command"] = np.column_stack(cols)
         meta["motor_command_nan_as_zero"] = str(nan)
     if order is not None and "actuator_outputs" in topics:
-        pwm, note = _motor_pwm(topics["actuator_outputs"], t_us, order, params)
+        pwm, note = _motor_pwm(path, topics["actuator_outputs"], t_us, order, params)
         if pwm is not None:
             signals["motor_pwm"] = np.clip(pwm, 0.0, 1.0)
             meta.update(pwm_range=note, motor_pwm_clipped=str(int(np.sum((pwm < 0) | (pwm > 1)))))
@@ -418,18 +555,42 @@ def _key_value(ctype, key, value):
     return bytes([len(name)]) + name + value
 
 
+# quadcog's rotors 1..4 (front-right, back-right, back-left, front-left): signs of x, y (FLU)
+_QUADRANTS = ((1, -1), (-1, -1), (-1, 1), (1, 1))
+
+
 def _nominal_positions(log):
-    """Rotor positions (FLU, quadcog order) to write: the log's own, else a nominal X."""
+    """Rotor positions (FLU, quadcog order) to write: the log's own, else a nominal X.
+
+    The log's own (``meta["rotor_positions_m"]``, "x y; x y; x y; x y" in m) must survive
+    the float32 parameters and the reader's assignment of motors by quadrant; anything else
+    is refused, not replaced, since the motor signals read back would be reordered or lost."""
     text = log.meta.get("rotor_positions_m")
-    if text:
-        try:
-            pos = np.array([[float(v) for v in pair.split()] for pair in text.split(";")])
-            if pos.shape == (4, 2):
-                return pos
-        except ValueError:
-            pass
-    from quadcog.vehicles.vehicle import x_layout
-    return np.array(x_layout(0.25))
+    if not text:
+        from quadcog.vehicles.vehicle import x_layout
+        return np.array(x_layout(0.25))
+    where = f"{log.source}: cannot write as ULog: meta['rotor_positions_m'] = {text!r:.120}"
+    try:
+        pos = np.array([[float(v) for v in pair.split()] for pair in text.split(";")])
+    except ValueError:
+        pos = np.zeros(0)
+    if pos.shape != (4, 2):
+        raise LogError(f"{where} is not four rotor positions; expected 'x y; x y; x y; x y' "
+                       "(m, FLU, quadcog's rotor order)")
+    bad = ~(np.abs(pos) <= FLOAT32_MAX)
+    if bad.any():
+        r, c = (int(i) for i in np.argwhere(bad)[0])
+        raise LogError(f"{where}: rotor {r + 1} {'xy'[c]} = {float(pos[r, c])!r} m is beyond "
+                       f"the float32 of a ULog parameter (magnitude at most "
+                       f"{FLOAT32_MAX:.4g}); expected a finite position")
+    signs = np.sign(pos.astype(np.float32))        # as the reader sees them
+    for r, (sx, sy) in enumerate(_QUADRANTS):
+        if (signs[r, 0], signs[r, 1]) != (sx, sy):
+            raise LogError(f"{where}: rotor {r + 1} at {pos[r].tolist()} m is not in its "
+                           f"quadrant; expected quadcog's order, one rotor per quadrant: "
+                           "front-right (x > 0, y < 0), back-right, back-left, front-left "
+                           "(as float32), which the reader assigns the motors by")
+    return pos
 
 
 # what write_ulog puts in the info messages: the vehicle of the log's meta when it names one,
@@ -477,6 +638,9 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
         signal at all, none of the signals of the time-base topics (``BASE_TOPICS``: the
         reader would refuse the file), or times the integer-us stamps cannot hold
         (``quadcog.logs.limits.microsecond_ticks``).
+    LogError
+        ``meta["rotor_positions_m"]`` is not four positions, one per quadrant in quadcog's
+        rotor order, that float32 parameters hold.
     """
     path = Path(path)
     s = log.signals
