@@ -10,7 +10,8 @@ exit status 2 by ``main``.
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+import contextlib
 import os
 from pathlib import Path
 import sys
@@ -30,22 +31,29 @@ _Subparsers = argparse._SubParsersAction  # the type of ``add_subparsers()``: fo
 
 def _check_out_dir(path: str | Path) -> Path:
     """Refuse, before any work, an --out that exists and is not a folder (a file, a FIFO, a
-    device): QuadcogError naming --out."""
+    device), or that cannot be made (``quadcog.files.creatable_folder``): QuadcogError naming
+    --out."""
+    from quadcog.files import creatable_folder
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise QuadcogError(f"--out {path}: is a file (or a FIFO or device), not a folder; "
                            "expected a folder for the results (a new or existing folder)")
-    return p
+    return creatable_folder(p, "--out", QuadcogError)
 
 
-def _out_dir(path: str | Path) -> Path:
-    """Create the output folder ``path``; QuadcogError naming --out if it cannot be made."""
+@contextlib.contextmanager
+def _out_dir(path: str | Path) -> Iterator[Path]:
+    """The output folder ``path``, created for the block (QuadcogError naming --out if it
+    cannot be made); the folders it created are removed again when the block fails and
+    leaves them empty, so a refused command leaves nothing behind."""
+    from quadcog.files import make_folder, remove_made
     _check_out_dir(path)
+    made = make_folder(path, "--out", QuadcogError)
     try:
-        Path(path).mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise QuadcogError(f"--out {path}: cannot create the folder ({e.strerror})") from None
-    return Path(path)
+        yield Path(path)
+    except BaseException:
+        remove_made(made)
+        raise
 
 
 def _positive_int(text: str) -> int:
@@ -217,7 +225,11 @@ def cmd_run(args: argparse.Namespace) -> None:
     import json
 
     from quadcog.scenarios.scenario import default_out, run_file
-    out = _out_dir(args.out if args.out is not None else default_out(args.scenario))
+    # made only when the results are written (quadcog.files.RunFiles): a refused scenario
+    # leaves no folder
+    out = _check_out_dir(args.out if args.out is not None else default_out(args.scenario))
+    inputs = [(f"--{name}", getattr(args, name)) for name in ("identified", "vehicle")
+              if getattr(args, name) is not None]
     if args.identified is not None:     # as --set vehicle.identified=... (and the model's)
         path = json.dumps(str(args.identified.resolve()))
         args.overrides = list(args.overrides) + [f"vehicle.identified={path}",
@@ -236,7 +248,7 @@ def cmd_run(args: argparse.Namespace) -> None:
     from quadcog.crazyflie.scenario import run_scenario
     run_file(args.scenario, out, progress=not args.quiet, overrides=args.overrides,
              plot=args.plot, every=args.every, fmt=args.fmt, animate=args.animate,
-             stack_runner=run_scenario)
+             stack_runner=run_scenario, inputs=inputs)
 
 
 def add_animate(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -305,7 +317,8 @@ def cmd_paper(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.studies.paper import run_paper
-    run_paper(_out_dir(args.out))
+    with _out_dir(args.out) as out:
+        run_paper(out)
 
 
 def add_analyze(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -339,7 +352,8 @@ def cmd_analyze(args: argparse.Namespace) -> None:
         The parsed command line.
     """
     from quadcog.studies.analysis import analyze
-    analyze(_out_dir(args.out), grid=args.grid, duration=args.duration)
+    with _out_dir(args.out) as out:
+        analyze(out, grid=args.grid, duration=args.duration)
 
 
 def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -403,19 +417,22 @@ def cmd_export(args: argparse.Namespace) -> None:
     if args.scenario is None:
         if args.overrides:
             raise QuadcogError("--set needs --scenario (the keys of a scenario file)")
-        paths = export_controller(args.controller, args.precision, _out_dir(args.out),
-                                  command=f"quadcog export --controller {args.controller} "
-                                          f"--precision {args.precision} --out DIR")
+        with _out_dir(args.out) as out:
+            paths = export_controller(args.controller, args.precision, out,
+                                      command=f"quadcog export --controller {args.controller} "
+                                              f"--precision {args.precision} --out DIR")
     else:
         from quadcog.scenarios.scenario import load_scenario
+        _check_out_dir(args.out)
         scenario = load_scenario(args.scenario, args.overrides)
         law = scenario.make_controller()
         law = getattr(law, "inner", law)        # without Sensed: on a vehicle the sensors are real
         command = " ".join(["quadcog export --scenario", str(args.scenario)]
                            + [f"--set {o}" for o in args.overrides]
                            + [f"--precision {args.precision} --out DIR"])
-        paths = export_controller(law, args.precision, _out_dir(args.out),
-                                  name=scenario.controller, command=command)
+        with _out_dir(args.out) as out:
+            paths = export_controller(law, args.precision, out, name=scenario.controller,
+                                      command=command)
     for path in paths:
         print(f"wrote {path}")
 
@@ -445,8 +462,8 @@ def _export_crazyflie(args: argparse.Namespace) -> None:
         law, name = getattr(law, "inner", law), scenario.controller
         which = [f"--scenario {args.scenario}"] + [f"--set {o}" for o in args.overrides]
     command = " ".join(["quadcog export --target crazyflie", *which, *vehicle, "--out DIR"])
-    out = _out_dir(args.out)
-    paths = write_crazyflie_app(law, out, vehicle=args.vehicle, name=name, command=command)
+    with _out_dir(args.out) as out:
+        paths = write_crazyflie_app(law, out, vehicle=args.vehicle, name=name, command=command)
     for path in paths:
         print(f"wrote {path}")
     if args.build:
@@ -524,7 +541,7 @@ def add_identify(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--rotor-model", default=None,
                    help="rotor model name instead of the vehicle's (bitcraze-voltage, "
                         "foerster, firmware-command)")
-    p.add_argument("--json", type=Path, default=None, metavar="FILE",
+    p.add_argument("--json", default=None, metavar="FILE",
                    help="write r_G, r_G_ci95, mass, mass_ci95, mass_change, samples, "
                         "identifiable as JSON")
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
@@ -541,7 +558,8 @@ def cmd_identify(args: argparse.Namespace) -> None:
     args : argparse.Namespace
         The parsed command line.
     """
-    from quadcog.files import RunFiles, atomic_write, output_path, strict_json
+    from quadcog.errors import LogError
+    from quadcog.files import RunFiles, atomic_write, check_outputs, input_file, one_line, output_path, strict_json
     from quadcog.identification import identify
     from quadcog.identification.figure import plot_identification
     from quadcog.logs.samples import resolve_log_argument
@@ -549,26 +567,34 @@ def cmd_identify(args: argparse.Namespace) -> None:
     if args.baseline is not None:
         args.baseline = [p for arg in args.baseline for p in resolve_log_argument(arg)]
     inputs = list(args.logs) + list(args.baseline or [])
-    for path in inputs:
-        if not path.is_file():
-            raise QuadcogError(f"{path}: no such log file")
-    if args.json is not None:      # refused before the work: a link, a FIFO, a device, a log
-        output_path(args.json, "--json", protect=inputs)
+    for path in inputs:             # what the path is, before the readers' work
+        input_file(path, "a flight log file (Crazyflie uSD .bin, ULog .ulg, .csv or "
+                   ".parquet)", LogError, hint="; a folder of shipped logs is given as "
+                   "sample:NAME")
+        if not path.exists():
+            raise LogError(f"{one_line(path)}: no such log file")
+    # every output refused before the work: a link, a FIFO, a device, a log, each other
+    outputs = []
+    if args.json is not None:
+        outputs.append(("--json", output_path(args.json, "--json", protect=inputs)))
     if args.out is not None:
-        _check_out_dir(args.out)
+        outputs.append(("--out (its identify.png)",
+                        _check_out_dir(args.out) / "identify.png"))
+    check_outputs(outputs, [("the log", p) for p in inputs], QuadcogError)
     result = identify(args.logs, vehicle=args.vehicle, baseline=args.baseline,
                       method=args.method, rotor_model=args.rotor_model)
     print(result.summary())
     if args.out is not None:
-        path = _out_dir(args.out) / "identify.png"
+        path = Path(args.out) / "identify.png"
         title = f"quadcog identify: {len(args.logs)} log(s) of {args.vehicle}" + (
             f" against {len(args.baseline)} baseline log(s)" if args.baseline else "")
-        with RunFiles(path.parent, owned=()) as files:      # whole or absent, even on Ctrl-C
+        # whole or absent, even on Ctrl-C; the folder is made here, after the work
+        with RunFiles(path.parent, owned=(), protect=inputs) as files:
             plot_identification(result, files.path(path.name), title=title)
-        print(f"wrote {path}")
+        print(f"wrote {one_line(path)}")
     if args.json is not None:
         atomic_write(args.json, strict_json(result.as_json()), "--json", protect=inputs)
-        print(f"wrote {args.json}")
+        print(f"wrote {one_line(args.json)}")
 
 
 def add_targets(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -614,7 +640,8 @@ def cmd_targets(args: argparse.Namespace) -> None:
     rows = run_targets(args.vehicles, args.laws, cases, progress=print)
     print()
     print(markdown_table(rows), end="")
-    print(f"written: {write_targets(rows, _out_dir(args.out))}")
+    with _out_dir(args.out) as out:
+        print(f"written: {write_targets(rows, out)}")
 
 
 def add_px4(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -655,10 +682,10 @@ def cmd_px4(args: argparse.Namespace) -> None:
     """
     from quadcog.px4 import fly, scenario_path
     name = scenario_path(args.scenario)
-    out = _out_dir(args.out if args.out is not None
-                   else Path("out") / f"{Path(args.scenario).stem}-px4")
-    flight = fly(name, px4=args.px4, out=out, allow_build=not args.no_build,
-                 progress=not args.quiet, overrides=tuple(args.overrides))
+    with _out_dir(args.out if args.out is not None
+                  else Path("out") / f"{Path(args.scenario).stem}-px4") as out:
+        flight = fly(name, px4=args.px4, out=out, allow_build=not args.no_build,
+                     progress=not args.quiet, overrides=tuple(args.overrides))
     r = flight.recording
     line = (f"{flight.scenario.name}: PX4 armed at {r.armed_at:.1f} s, disarmed at "
             f"{r.disarmed_at:.1f} s; " if r.armed_at is not None and r.disarmed_at is not None
@@ -759,7 +786,14 @@ def parser() -> argparse.ArgumentParser:
 
 def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
                   file: object = None, line: str | None = None) -> None:
-    print(f"quadcog: warning: {message}", file=sys.stderr)
+    print(f"quadcog: warning: {_line(message)}", file=sys.stderr)
+
+
+def _line(message: object) -> str:
+    """A message as one line: the one place where values from the command line or a file
+    (a name with a newline, a 300-digit number) are escaped or shortened for printing."""
+    from quadcog.files import one_line
+    return one_line(message)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -815,13 +849,14 @@ def _main(argv):
         if received() is not None:  # a signal inside compiled code, reported as a wrong input
             print("quadcog: interrupted", file=sys.stderr)
             return received().status
-        print(f"quadcog: error: {e}", file=sys.stderr)
+        print(f"quadcog: error: {_line(e)}", file=sys.stderr)
         return 2
     except BrokenPipeError:         # `quadcog ... | head`: the reader left, as for any tool
         _silence_stdout()
         return 141                  # 128 + SIGPIPE, as shells report it
     except OSError as e:
-        print(f"quadcog: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
+        print(f"quadcog: error: {_line(e.filename or '')}: {_line(e.strerror or e)}",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:       # Ctrl-C: files being written were not committed
         print("quadcog: interrupted", file=sys.stderr)
@@ -838,7 +873,7 @@ def _main(argv):
             return interrupt.status
         if os.environ.get("QUADCOG_TRACEBACK"):
             raise
-        print(f"quadcog: internal error: {type(e).__name__}: {e} (a bug in quadcog; "
+        print(f"quadcog: internal error: {type(e).__name__}: {_line(e)} (a bug in quadcog; "
               f"QUADCOG_TRACEBACK=1 shows where)", file=sys.stderr)
         return 3
     return 0

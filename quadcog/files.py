@@ -16,6 +16,7 @@ import numbers
 import os
 from pathlib import Path
 import platform
+import re
 import signal
 import stat as stat_mod
 import threading
@@ -27,10 +28,11 @@ import numpy.typing as npt
 
 from quadcog.errors import InputError, QuadcogError
 
-__all__ = ["input_file", "CSV_BLOCK", "CSV_DECIMALS", "plain_value", "strict_json", "rounded", "write_csv",
-           "plot_text", "RunFiles", "atomic_write", "atomic_write_bytes", "output_path",
-           "replacing", "read_json", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "cpu_model",
-           "run_stamp"]
+__all__ = ["input_file", "path_kind", "same_file", "check_outputs", "one_line", "make_folder",
+           "creatable_folder", "remove_made", "CSV_BLOCK", "CSV_DECIMALS", "plain_value",
+           "strict_json", "rounded", "write_csv", "plot_text", "RunFiles", "atomic_write",
+           "atomic_write_bytes", "output_path", "replacing", "read_json", "MAX_JSON_BYTES",
+           "MAX_JSON_DEPTH", "cpu_model", "run_stamp"]
 
 CSV_BLOCK = 1024            # rows formatted at a time
 CSV_DECIMALS = 10           # values are rounded to this many decimals ...
@@ -193,23 +195,25 @@ class RunFiles:
     owned : tuple of str
         Names of the files that belong to a run (default ``RUN_FILES``); ``()`` to add
         files without removing any.
+    protect : sequence of str or os.PathLike
+        The command's input files: none of them is replaced or removed (checked again at
+        the commit; commands check up front with ``check_outputs``).
 
     Returns
     -------
     RunFiles
     """
 
-    def __init__(self, out: str | os.PathLike[str], owned: tuple[str, ...] = RUN_FILES) -> None:
+    def __init__(self, out: str | os.PathLike[str], owned: tuple[str, ...] = RUN_FILES,
+                 protect: Sequence[str | os.PathLike[str]] = ()) -> None:
         self.out = Path(out)
         self.owned = tuple(owned)
+        self.protect = tuple(protect)
         self._pending: dict[str, Path] = {}
+        self._made: list[Path] = []
 
     def __enter__(self) -> "RunFiles":
-        try:
-            self.out.mkdir(parents=True, exist_ok=True)
-        except OSError as e:
-            raise QuadcogError(f"{self.out}: cannot create the output folder ({e.strerror})") \
-                from None
+        self._made = make_folder(self.out, "output folder", QuadcogError)
         if not self.out.is_dir():
             raise QuadcogError(f"{self.out}: not a folder")
         return self
@@ -251,9 +255,14 @@ class RunFiles:
             if not tmp.is_file():
                 raise QuadcogError(f"{self.out / name}: was not written (internal error)")
         names = list(self._pending)
-        for name in names:                  # only regular files are replaced
+        for name in names:                  # only regular files are replaced, never an input
             if os.path.lexists(self.out / name):
-                output_path(self.out / name, "run file", QuadcogError)
+                output_path(self.out / name, "run file", QuadcogError, self.protect)
+        for stale in self.owned:            # an earlier run's file that is an input stays
+            if stale not in self._pending and any(same_file(self.out / stale, p)
+                                                  for p in self.protect):
+                raise QuadcogError(f"run file {_describe(self.out / stale)}: is an input of "
+                                   "this command; it would be removed (give another --out)")
         marked = self.owned and COMPLETE_MARKER in self.owned
         if marked:
             with contextlib.suppress(FileNotFoundError):
@@ -271,6 +280,257 @@ class RunFiles:
         for tmp in self._pending.values():
             with contextlib.suppress(OSError):
                 tmp.unlink()
+        remove_made(self._made)
+
+
+def make_folder(path: str | os.PathLike[str], what: str = "--out",
+                error: type[Exception] = QuadcogError) -> list[Path]:
+    """Create the folder ``path`` and its missing parents.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The folder.
+    what : str
+        What it is, for the message (``"--out"``).
+    error : type, optional
+        Exception class raised (default QuadcogError).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The folders this call created, deepest first (for ``remove_made`` when the command
+        then fails before writing anything).
+
+    Raises
+    ------
+    QuadcogError
+        (or ``error``) naming the folder when it cannot be made.
+    """
+    target = Path(path)
+    missing = []
+    for folder in [target, *target.parents]:
+        if os.path.lexists(folder):
+            break
+        missing.append(folder)
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        remove_made(missing)
+        raise error(f"{what} {one_line(str(path))}: cannot create the folder "
+                    f"({e.strerror})") from None
+    return missing
+
+
+def creatable_folder(path: str | os.PathLike[str], what: str = "--out",
+                     error: type[Exception] = QuadcogError) -> Path:
+    """``path`` checked, before any work, as a folder that exists or can be made: its
+    nearest existing ancestor must be a folder this process may write in.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The folder.
+    what : str
+        What it is, for the message (``"--out"``).
+    error : type, optional
+        Exception class raised (default QuadcogError).
+
+    Returns
+    -------
+    pathlib.Path
+        The path; nothing is created.
+
+    Raises
+    ------
+    QuadcogError
+        (or ``error``) naming the folder and the ancestor that stops it.
+    """
+    target = Path(path)
+    if target.is_dir():
+        return target
+    for ancestor in target.parents:
+        if os.path.lexists(ancestor):
+            if not ancestor.is_dir():
+                raise error(f"{what} {_describe(target)}: cannot create the folder "
+                            f"({_describe(ancestor)} is not a folder)")
+            if not os.access(ancestor, os.W_OK | os.X_OK):
+                raise error(f"{what} {_describe(target)}: cannot create the folder (no "
+                            f"permission to write in {_describe(ancestor)})")
+            break
+    return target
+
+
+def remove_made(folders: Sequence[Path]) -> None:
+    """Remove the folders of ``make_folder`` that are still empty, deepest first (a failed
+    command leaves no empty folders behind; one that something else wrote into stays).
+
+    Parameters
+    ----------
+    folders : sequence of pathlib.Path
+        As ``make_folder`` returned them.
+
+    Returns
+    -------
+    None
+    """
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:         # not empty (or gone): the ones above are not empty either
+            return
+
+
+def one_line(text: object, digits: int = 30) -> str:
+    """``text`` as one printable line: control and other unprintable characters (a newline
+    in a file name) escaped as ``repr`` would, and integers of more than ``digits`` digits
+    shortened to their first digits and their length.
+
+    Parameters
+    ----------
+    text : object
+        A message or a value (converted with ``str``).
+    digits : int
+        The longest run of digits kept as it is.
+
+    Returns
+    -------
+    str
+        The line, with no line break in it.
+    """
+    line = "".join(ch if ch.isprintable() or ch == " " else repr(ch)[1:-1]
+                   for ch in str(text))
+    return re.sub(r"\d{%d,}" % (digits + 1),
+                  lambda m: f"{m.group()[:12]}...({len(m.group())} digits)", line)
+
+
+def _describe(path: str | os.PathLike[str]) -> str:
+    """``path`` for a message: as given, with line breaks and long numbers shortened."""
+    return one_line(os.fspath(path))
+
+
+def path_kind(path: str | os.PathLike[str]) -> str | None:
+    """What ``path`` is when it is not a regular file one can read, in words.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Any path.
+
+    Returns
+    -------
+    str or None
+        None for a regular file (or a link to one), or for a path that does not exist and is
+        not a link; else "a folder", "a FIFO (named pipe)", "a device", "a socket", "a
+        symbolic link that loops", "a symbolic link to a missing file", or "a path that
+        cannot be checked (reason)".
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return "a symbolic link to a missing file" if os.path.islink(path) else None
+    except OSError as e:
+        import errno
+        if e.errno == errno.ELOOP:
+            return "a symbolic link that loops (leads back to itself)"
+        return f"a path that cannot be checked ({e.strerror})"
+    kinds = ((stat_mod.S_ISREG, None), (stat_mod.S_ISDIR, "a folder"),
+             (stat_mod.S_ISFIFO, "a FIFO (named pipe)"), (stat_mod.S_ISCHR, "a device"),
+             (stat_mod.S_ISBLK, "a device"), (stat_mod.S_ISSOCK, "a socket"))
+    for test, kind in kinds:
+        if test(mode):
+            return kind
+    return "not a regular file"
+
+
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether the paths ``a`` and ``b`` are one file: the same path once resolved
+    (symbolic links followed, ``..`` removed; for files that do not exist yet too), or the
+    same inode (a hard link, a bind mount).
+
+    Parameters
+    ----------
+    a : str or os.PathLike
+        A path.
+    b : str or os.PathLike
+        Another path.
+
+    Returns
+    -------
+    bool
+        True when writing one would change the other.
+    """
+    try:
+        if Path(a).resolve() == Path(b).resolve():
+            return True
+    except (OSError, RuntimeError):     # a symbolic link loop
+        pass
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):       # one of them does not exist: not the same file
+        return False
+
+
+def check_outputs(outputs: Sequence[tuple[str, str | os.PathLike[str]]],
+                  inputs: Sequence[tuple[str, str | os.PathLike[str]]] = (),
+                  error: type[Exception] = InputError,
+                  folders: Sequence[tuple[str, str | os.PathLike[str]]] = ()) -> None:
+    """Refuse, before any work, a command whose outputs overwrite its inputs or each other.
+
+    Every output is compared with every input and with every other output (``same_file``:
+    resolved paths, symbolic links followed, and inodes), and each output that exists must
+    be a regular file (``output_path``'s rule); its folder need not exist yet.
+
+    Parameters
+    ----------
+    outputs : sequence of (str, path)
+        (what names it in a message, the file): ``("--json", "r.json")``,
+        ``("--out (its metrics.json)", "out/metrics.json")``.
+    inputs : sequence of (str, path)
+        The files the command reads, named the same way.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+    folders : sequence of (str, path)
+        Output folders the command writes anything into (a sweep's chunks): no input may lie
+        under them.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    InputError
+        (or ``error``) naming both files and the options they came from.
+    """
+    seen: list[tuple[str, str | os.PathLike[str]]] = []
+    for what, path in outputs:
+        for other_what, other in seen:
+            if same_file(path, other):
+                raise error(f"{what} {_describe(path)}: is the same file as {other_what} "
+                            f"{_describe(other)}; one would overwrite the other (give "
+                            "different names)")
+            for a, b, a_what, b_what in ((path, other, what, other_what),
+                                         (other, path, other_what, what)):
+                if same_file(a, Path(b).parent):
+                    raise error(f"{a_what} {_describe(a)}: is the folder of {b_what} "
+                                f"{_describe(b)}; one cannot be both a file and a folder "
+                                "(give different names)")
+        seen.append((what, path))
+        for in_what, source in inputs:
+            if same_file(path, source):
+                raise error(f"{what} {_describe(path)}: is the same file as {in_what} "
+                            f"{_describe(source)}, which this command reads; it would be "
+                            "overwritten (give another output name or folder)")
+        if os.path.lexists(path):
+            _check_replaceable(Path(path), what, error)
+    for what, folder in folders:
+        for in_what, source in inputs:
+            with contextlib.suppress(OSError, RuntimeError):
+                if Path(folder).resolve() in Path(source).resolve().parents:
+                    raise error(f"{what} {_describe(folder)}: holds {in_what} "
+                                f"{_describe(source)}, which this command reads; it could "
+                                "be overwritten (give another output folder)")
 
 
 def output_path(path: object, what: str = "output file", error: type[Exception] = InputError,
@@ -303,33 +563,39 @@ def output_path(path: object, what: str = "output file", error: type[Exception] 
     if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
         raise error(f"{what}: expected a file name (str or os.PathLike), got "
                     f"{type(path).__name__} {path!r:.60}")
-    target = Path(os.fspath(path))
-    if not str(path) or target.name in ("", ".", ".."):
-        raise error(f"{what}: expected a file name, got {str(path)!r}")
+    text = os.fspath(path)
+    target = Path(text)
+    # Path() drops a trailing "/" (and reads "" as "."): judge the text as given
+    if not text or target.name in ("", ".", "..") or str(text).endswith(("/", os.sep)):
+        raise error(f"{what}: expected a file name (not a folder), got "
+                    f"{one_line(repr(str(text)))}")
     folder = target.parent
     if not folder.is_dir():
-        raise error(f"{what} {target}: the folder {folder} does not exist (create it first)")
+        raise error(f"{what} {_describe(target)}: the folder {_describe(folder)} does not "
+                    "exist (create it first)")
+    _check_replaceable(target, what, error)
+    for other in protect:
+        if same_file(target, other):
+            raise error(f"{what} {_describe(target)}: is the input file {_describe(other)}; "
+                        "it would be overwritten (give another file name)")
+    return target
+
+
+def _check_replaceable(target: Path, what: str, error: type[Exception]) -> None:
+    """Refuse ``target`` when it exists and is not a regular file (never replaced)."""
     try:
         st = os.lstat(target)
     except FileNotFoundError:
-        st = None
+        return
     except OSError as e:
-        raise error(f"{what} {target}: cannot be checked ({e.strerror})") from None
-    if st is not None:
-        mode = st.st_mode
-        kinds = ((stat_mod.S_ISDIR, "a folder"), (stat_mod.S_ISLNK, "a symbolic link"),
-                 (stat_mod.S_ISFIFO, "a FIFO (named pipe)"), (stat_mod.S_ISCHR, "a device"),
-                 (stat_mod.S_ISBLK, "a device"), (stat_mod.S_ISSOCK, "a socket"))
-        for test, kind in kinds:
-            if test(mode):
-                raise error(f"{what} {target}: is {kind}; quadcog replaces only regular files "
-                            "(give the name of a new or regular file)")
-        for other in protect:
-            with contextlib.suppress(OSError):
-                if os.path.samefile(target, other):
-                    raise error(f"{what} {target}: is the input file {other}; it would be "
-                                "overwritten (give another file name)")
-    return target
+        raise error(f"{what} {_describe(target)}: cannot be checked ({e.strerror})") from None
+    kinds = ((stat_mod.S_ISDIR, "a folder"), (stat_mod.S_ISLNK, "a symbolic link"),
+             (stat_mod.S_ISFIFO, "a FIFO (named pipe)"), (stat_mod.S_ISCHR, "a device"),
+             (stat_mod.S_ISBLK, "a device"), (stat_mod.S_ISSOCK, "a socket"))
+    for test, kind in kinds:
+        if test(st.st_mode):
+            raise error(f"{what} {_describe(target)}: is {kind}; quadcog replaces only "
+                        "regular files (give the name of a new or regular file)")
 
 
 @contextlib.contextmanager
@@ -484,10 +750,11 @@ def _depth(text: str) -> int:
 
 
 def input_file(path: object, what: str, error: type[Exception] = InputError,
-               where: str | None = None) -> Path:
+               where: str | None = None, must_exist: bool = False, hint: str = "") -> Path:
     """``path`` checked as a file to read: a non-empty str or os.PathLike that is not a
-    folder, a FIFO, a device or a socket (opening a FIFO blocks until a writer comes; a
-    device never ends). A path that does not exist is returned (the reader says so).
+    folder, a FIFO, a device, a socket or a symbolic link that loops or leads nowhere
+    (opening a FIFO blocks until a writer comes; a device never ends). A path that does not
+    exist is returned (the reader says so) unless ``must_exist``.
 
     Parameters
     ----------
@@ -499,6 +766,10 @@ def input_file(path: object, what: str, error: type[Exception] = InputError,
         Exception class raised (default quadcog.InputError).
     where : str, optional
         The argument's name, for a value that is not a path (default ``what``).
+    must_exist : bool
+        Refuse a path that does not exist too.
+    hint : str
+        Appended to the message for a folder (``"; a folder of samples is sample:NAME"``).
 
     Returns
     -------
@@ -508,7 +779,8 @@ def input_file(path: object, what: str, error: type[Exception] = InputError,
     Raises
     ------
     InputError
-        (or ``error``) naming the path, or the argument and the value given.
+        (or ``error``) naming the path (line breaks escaped) and what it is, or the
+        argument and the value given.
     """
     text = None if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) \
         else os.fspath(path)
@@ -516,11 +788,13 @@ def input_file(path: object, what: str, error: type[Exception] = InputError,
         raise error(f"{where or what}: expected the path of {what} (a str or os.PathLike), "
                     f"got {type(path).__name__} {path!r:.60}")
     p = Path(text)
-    if p.is_dir():
-        raise error(f"{p}: is a folder; expected {what}")
-    if p.exists() and not p.is_file():     # a FIFO or a device would block or never end
-        raise error(f"{p}: is not a regular file (a FIFO, a device or a socket); expected "
-                    f"{what}")
+    kind = path_kind(p)         # a FIFO or a device would block or never end
+    if kind == "a folder":
+        raise error(f"{_describe(p)}: is a folder; expected {what}{hint}")
+    if kind is not None:
+        raise error(f"{_describe(p)}: is {kind}, not a regular file; expected {what}")
+    if must_exist and not p.exists():
+        raise error(f"{_describe(p)}: no such file; expected {what}")
     return p
 
 

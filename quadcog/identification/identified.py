@@ -17,7 +17,7 @@ import numpy.typing as npt
 from quadcog.errors import IdentificationError
 from quadcog.files import read_json
 from quadcog.model.parameters import LARGEST
-from quadcog.validate import fail, vector
+from quadcog.validate import fail, positive, vector
 
 if TYPE_CHECKING:
     from quadcog.identification.core import Identification
@@ -42,7 +42,10 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
     Raises
     ------
     IdentificationError
-        A file that cannot be read, is not JSON, or lacks a ``r_G`` of 3 finite numbers.
+        A file that cannot be read, is not JSON, lacks a ``r_G`` of 3 finite numbers, or
+        holds a ``mass`` that no vehicle has (not a finite number > 0; null or absent is
+        accepted: only r_G is used, but a file with an impossible mass is not an
+        identification to trust).
     """
     from quadcog.identification.core import Identification
     if isinstance(source, Identification):
@@ -67,4 +70,7 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
         fail(where, what, r, IdentificationError)
     if not np.abs(r_G).max() <= LARGEST:
         fail(where, f"3 numbers within +-{LARGEST:g} m", r, IdentificationError)
+    mass = data.get("mass")
+    if mass is not None:
+        positive(mass, f"{path}: key 'mass'", "kg", IdentificationError)
     return r_G

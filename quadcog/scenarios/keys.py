@@ -190,6 +190,12 @@ def parse_assignment(text: str) -> tuple[str, Any]:
         parsed = tomllib.loads(f"v = {value.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         parsed = value.strip()          # a bare word: controller=adaptive, trajectory.kind=circle
+    except ValueError:                  # tomllib's int() past Python's digit limit (4300)
+        from quadcog.files import one_line
+        digits = sum(ch.isdigit() for ch in value)
+        raise OverrideError(f"--set {key}={one_line(value.strip()[:12])}...: key {key!r}: "
+                            f"expected a finite real number, got an integer of {digits} "
+                            "digits") from None
     return key, parsed
 
 

@@ -8,13 +8,17 @@ name the file and say what is wrong with it.
 from importlib import resources
 import os
 from pathlib import Path
+import re
+import sys
 import tomllib
 from typing import Any
 
 from quadcog.errors import InputError, ScenarioError, SweepError
+from quadcog.files import one_line, path_kind
 
 __all__ = ["SUFFIX", "SHIPPED", "shipped_folder", "shipped_names", "find_file", "read_toml",
-           "scenario_names", "scenario_path", "shipped_scenarios", "display_name"]
+           "scenario_names", "scenario_path", "shipped_scenarios", "display_name",
+           "huge_integer"]
 
 SUFFIX = ".toml"
 # kind of file -> (folder inside the package, the error class of its messages)
@@ -86,7 +90,7 @@ def find_file(spec: str | os.PathLike[str], kind: str) -> Path:
         name = path.name[:-len(SUFFIX)] if path.name.endswith(SUFFIX) else path.name
         if name in shipped_names(kind):
             return shipped_folder(kind) / f"{name}{SUFFIX}"
-    if path.exists():
+    if os.path.lexists(path):       # a link that loops or leads nowhere too: read_toml says so
         return path
     error = SHIPPED[kind][1]
     raise error(f"{spec}: no such {kind} file, and no shipped {kind} of that name "
@@ -112,16 +116,22 @@ def read_toml(path: str | os.PathLike[str],
     Raises
     ------
     error
-        When the path is a folder or missing, not UTF-8, not valid TOML, nested too deeply
-        to read, or cannot be read.
+        When the path is a folder, not a regular file (a FIFO, a device) or missing, not
+        UTF-8, not valid TOML, nested too deeply to read, holds an integer of more digits than
+        Python reads (naming its key), or cannot be read.
     """
     path = Path(path)
-    if path.is_dir():
+    kind = path_kind(path)
+    if kind == "a folder":
         raise error(f"{path}: is a folder, not a TOML file")
+    if kind is not None:            # a FIFO blocks, a device never ends: never opened
+        raise error(f"{path}: is {kind}, not a regular file; expected a TOML file")
     if not path.is_file():
         raise error(f"{path}: no such file")
+    text = ""
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8-sig"))
+        text = path.read_text(encoding="utf-8-sig")
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise error(f"{path}: not valid TOML ({e})") from None
     except RecursionError:
@@ -131,6 +141,50 @@ def read_toml(path: str | os.PathLike[str],
         raise error(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     except OSError as e:
         raise error(f"{path}: cannot be read ({e.strerror})") from None
+    except ValueError as e:         # tomllib's int() past Python's digit limit (last: the
+        # two decode errors above are ValueErrors too)
+        huge = huge_integer(text)
+        if huge is None:
+            raise error(f"{path}: a value cannot be read ({one_line(e)})") from None
+        key, line, digits = huge
+        raise error(f"{path}: key {key!r} (line {line}): expected a finite real number, got "
+                    f"an integer of {digits} digits") from None
+
+
+# more digits than int() converts (0: no limit here, then the default's 4300 is the mark)
+_HUGE = re.compile(r"[0-9][0-9_]{%d,}" % (getattr(sys, "get_int_max_str_digits", int)()
+                                          or 4300))
+_KEY = re.compile(r"""([A-Za-z0-9_\-]+|"[^"]*"|'[^']*')\s*=\s*(\{)?""")
+_HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?", re.M)
+
+
+def huge_integer(text: str) -> tuple[str, int, int] | None:
+    """Where TOML text holds an integer longer than Python converts (tomllib then raises a
+    plain ValueError that names nothing).
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+
+    Returns
+    -------
+    tuple of (str, int, int) or None
+        (the dotted key as near as the line tells it: the table header, the inline tables
+        opened on the line and the key; the line number; the number of digits), or None when
+        there is no such integer.
+    """
+    m = _HUGE.search(text)
+    if m is None:
+        return None
+    start = text.rfind("\n", 0, m.start()) + 1
+    keys = list(_KEY.finditer(text, start, m.start()))
+    # the inline tables opened before it on its line, then its own key
+    parts = ([k.group(1).strip("\"'") for k in keys[:-1] if k.group(2)]
+             + [keys[-1].group(1).strip("\"'")]) if keys else ["?"]
+    headers = _HEADER.findall(text, 0, start)
+    key = ".".join(([headers[-1]] if headers else []) + parts)
+    return key, text.count("\n", 0, m.start()) + 1, len(m.group().replace("_", ""))
 
 
 def scenario_names() -> tuple[str, ...]:

@@ -20,7 +20,7 @@ from quadcog import config, validate
 from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import controller_names, make_controller
 from quadcog.errors import InputError, ScenarioError
-from quadcog.files import RunFiles, strict_json, write_csv
+from quadcog.files import RUN_FILES, RunFiles, check_outputs, creatable_folder, one_line, strict_json, write_csv
 from quadcog.model.columns import trajectory_columns
 from quadcog.scenarios.lookup import display_name, read_toml, scenario_path
 from quadcog.scenarios.schema import (
@@ -98,6 +98,9 @@ class Scenario:
     stack : dict
         The ``[stack]`` table: a flight stack's controller flies instead of ``controller``
         (``name``, ``controller``, ``propellers``, ``battery_voltage``); empty for none.
+    inputs : tuple of (str, pathlib.Path)
+        The files the scenario reads, each with what names it in a message (the scenario
+        file, ``key 'vehicle.file'``, ...): a run's outputs must not overwrite them.
     """
     name: str
     controller: str
@@ -118,6 +121,7 @@ class Scenario:
     initial_offset: tuple[float, ...] = (0.0, 0.0, 0.0)
     source: str = "<scenario>"
     stack: dict[str, Any] = field(default_factory=dict)   # [stack]: a flight stack flies instead
+    inputs: tuple[tuple[str, Path], ...] = ()
 
     def make_controller(self) -> Controller | Sensed:
         """The scenario's controller, designed for its controller model.
@@ -337,8 +341,10 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
                            ScenarioError)
     cls, schema = trajectory_schema()[kind]
     _validate(traj, schema, source, "trajectory.", f" for kind {kind!r}")
-    vehicle = _vehicle(data, "vehicle", None, source)
-    controller_model = (_vehicle(data, "controller_model", vehicle.with_cog(np.zeros(3)), source)
+    inputs: list[tuple[str, Path]] = []
+    vehicle = _vehicle(data, "vehicle", None, source, inputs)
+    controller_model = (_vehicle(data, "controller_model", vehicle.with_cog(np.zeros(3)), source,
+                                 inputs)
                         if "controller_model" in data else None)
     cparams = data.get("controller_params", {})
     _validate(cparams, controller_params()[controller], source, "controller_params.",
@@ -384,14 +390,14 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
             sensing=None if sensing is None else Sensing(**sensing),
             limits=Limits(max_error, math.radians(max_tilt_deg)),
             initial_offset=tuple(data.get("initial_offset", (0.0, 0.0, 0.0))), source=source,
-            stack=stack)
+            stack=stack, inputs=tuple(inputs))
     except InputError as e:
         raise ScenarioError(f"{source}: {e}") from None
 
 
-def _vehicle(data, key, base, source):
+def _vehicle(data, key, base, source, inputs):
     """The Vehicle of table ``key``: its ``preset`` (default: ``base``, or the Hummingbird)
-    with the fields the table sets."""
+    with the fields the table sets; the files it reads are appended to ``inputs``."""
     table = dict(data.get(key, {}))
     _validate(table, VEHICLE, source, f"{key}.", " vehicle field")
     preset = table.pop("preset", None)
@@ -402,11 +408,13 @@ def _vehicle(data, key, base, source):
                                        ScenarioError)]
     try:
         if file is not None:                # a URDF or SDF file, relative to the scenario file
+            inputs.append((f"key '{key}.file'", Path(source).parent / file))
             base = Vehicle.from_file(Path(source).parent / file)
         vehicle = (base or HUMMINGBIRD).replace(**table)
         if identified is not None:
             from quadcog.identification.identified import identified_cog
             path = Path(source).parent / identified        # relative to the scenario file
+            inputs.append((f"key '{key}.identified'", path))
             vehicle = vehicle.with_cog(identified_cog(path))
         return vehicle
     except InputError as e:
@@ -449,7 +457,9 @@ def load_scenario(path: str | os.PathLike[str],
         for note in notes:
             warnings.warn(f"{label}: {note}", stacklevel=2)
         source = f"{label} with " + " ".join(f"--set {o}" for o in overrides)
-    return parse(data, source)
+    scenario = parse(data, source)
+    scenario.inputs = (("the scenario file", path),) + scenario.inputs
+    return scenario
 
 
 def write_table(result: SimulationResult, path: str | os.PathLike[str], every: int = 1,
@@ -531,7 +541,8 @@ def output_files(fmt: str = "csv", plot: bool = True) -> tuple[str, ...]:
 
 def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.PathLike[str],
                   plot: bool = True, every: int = 1, fmt: str = "csv",
-                  animate: bool = False, progress: bool = False) -> dict[str, Any]:
+                  animate: bool = False, progress: bool = False,
+                  protect: Sequence[str | os.PathLike[str]] = ()) -> dict[str, Any]:
     """The files of one run, into a folder: all of them or none.
 
     metrics.json, vehicle.json, trajectory.csv (or .parquet), with ``plot`` flight.png and
@@ -559,6 +570,9 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
         Also write flight.gif (``quadcog.viz.animation``), in the same all-or-nothing commit.
     progress : bool
         A progress bar while the animation is drawn.
+    protect : sequence of str or os.PathLike
+        Files the run read, never replaced nor removed (default: the scenario's ``inputs``
+        too).
 
     Returns
     -------
@@ -571,7 +585,8 @@ def write_outputs(result: SimulationResult, scenario: Scenario, out: str | os.Pa
                    controller=result.controller if scenario.stack else scenario.controller,
                    duration=scenario.duration, dt=scenario.dt,
                    simulated_until=float(result.t[-1]), wall_time_s=result.info.get("seconds"))
-    with RunFiles(out) as files:
+    protect = [*protect, *(p for _, p in scenario.inputs)]
+    with RunFiles(out, protect=protect) as files:
         write_table(result, files.path(f"trajectory.{fmt}"), every=every, fmt=fmt)
         if plot:
             from quadcog.viz.plots import plot_flight
@@ -618,8 +633,8 @@ def run_with_progress(scenario: Scenario, label: str | None = None,
 def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = None,
              progress: bool = True, overrides: Sequence[str] = (), plot: bool = True,
              every: int = 1, fmt: str = "csv", animate: bool = False,
-             stack_runner: Callable[["Scenario"], SimulationResult] | None = None
-             ) -> dict[str, Any]:
+             stack_runner: Callable[["Scenario"], SimulationResult] | None = None,
+             inputs: Sequence[tuple[str, str | os.PathLike[str]]] = ()) -> dict[str, Any]:
     """`quadcog run`: load, simulate with a progress bar, write the outputs, print a line.
 
     Parameters
@@ -643,6 +658,9 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
     stack_runner : callable, optional
         Flies a scenario that has a ``[stack]`` table (the stacks layer's, which this layer
         cannot import; ``quadcog run`` passes ``quadcog.crazyflie.scenario.run_scenario``).
+    inputs : sequence of (str, path)
+        Files the command reads besides the scenario's own (``("--identified", path)``),
+        named as the command line gives them.
 
     Returns
     -------
@@ -654,9 +672,18 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
     quadcog.errors.ScenarioError
         When the scenario is not valid or its run refuses a setting (e.g. dt too large for
         the closed loop), naming the file.
+    quadcog.errors.InputError
+        Before the flight, when a file the run would replace or remove (any of
+        ``quadcog.files.RUN_FILES`` in ``out``) is one it reads.
     """
     scenario = load_scenario(path, overrides)
     out = Path(out) if out is not None else default_out(path)
+    inputs = [*inputs, *scenario.inputs]
+    # before the flight: the folder can be made, and a run replaces or removes each of these
+    # files in it
+    creatable_folder(out, "--out", ScenarioError)
+    check_outputs([(f"--out (its {name})", out / name) for name in RUN_FILES],
+                  inputs)
     if every is None:                       # the command's default: decimated, not every step
         every = max(1, round(config.defaults["run.sample_period"] / scenario.dt))
     try:
@@ -672,7 +699,7 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
     except InputError as e:                 # e.g. dt too large for the closed loop
         raise ScenarioError(f"{scenario.source}: {e}") from None
     metrics = write_outputs(result, scenario, out, plot=plot, every=every, fmt=fmt,
-                            animate=animate, progress=progress)
+                            animate=animate, progress=progress, protect=[p for _, p in inputs])
     written = ["metrics.json", f"trajectory.{fmt}"] + (["flight.png"] if plot else []) + (
         ["flight.gif"] if animate else [])
     status = (f"DIVERGED at {metrics['diverged_at']:.3f} s ({metrics['diverged_reason']}); "
@@ -680,7 +707,7 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
               f"not an error"
               if metrics["diverged"] else
               f"tail RMS position error {100 * metrics['rms_position_error_tail']:.2f} cm")
-    print(f"{scenario.name}: {status}; wrote {out}/{', '.join(written)}")
+    print(one_line(f"{scenario.name}: {status}; wrote {out}/{', '.join(written)}"))
     return metrics
 
 

@@ -21,17 +21,17 @@ from numpy.typing import NDArray
 
 from quadcog import validate
 from quadcog.errors import QuadcogError, SchedulerError, SizeError
-from quadcog.files import atomic_write
+from quadcog.files import atomic_write, check_outputs
 from quadcog.interrupts import children_without_sigint, die_with_parent
 from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.flights import make_job, run_chunk
-from quadcog.sweeps.integrity import SweepLock, chunk_metadata, columns_of_table, verify_chunk
+from quadcog.sweeps.integrity import LOCK_NAME, SweepLock, chunk_metadata, columns_of_table, verify_chunk
 from quadcog.sweeps.scheduler import probe_scheduler
 from quadcog.sweeps.spec import Sweep, SweepError, from_dict, load_sweep
 from quadcog.viz.progress import ProgressCounter
 
 __all__ = ["CHUNK_FOLDER", "MANIFEST", "ChunkStore", "SweepResult", "sweep",
-           "run_cli"]
+           "run_cli", "output_names"]
 
 CHUNK_FOLDER = "chunks"
 MANIFEST = "sweep.json"
@@ -335,9 +335,9 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
         s = spec
     elif isinstance(spec, dict):
         source = settings.pop("source", "<sweep>")
-        s = from_dict(dict(spec, **settings), source)
+        s = from_dict(dict(spec, **settings), source, progress=progress is True)
     else:
-        s = load_sweep(spec, **settings)
+        s = load_sweep(spec, progress=progress is True, **settings)
     say = (lambda text: print(f"sweep {s.name}: {text}", file=sys.stderr)) if progress \
         else (lambda text: None)
     if scheduler is not None:           # before any folder is made: it answers, or an error
@@ -345,6 +345,8 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
     if out is None:
         return _run(s, None, workers, scheduler, progress, plots, say, t0)
     out = Path(out)
+    check_outputs([(f"--out (its {name})", out / name) for name in output_names(s)], s.inputs,
+                  SweepError, folders=[(f"--out (its {CHUNK_FOLDER}/)", out / CHUNK_FOLDER)])
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -352,6 +354,27 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
             from None
     with SweepLock(out, say):
         return _run(s, out, workers, scheduler, progress, plots, say, t0)
+
+
+def output_names(s: Sweep) -> list[str]:
+    """The files a sweep writes into its results folder (besides ``chunks/``).
+
+    Parameters
+    ----------
+    s : quadcog.sweeps.spec.Sweep
+        The sweep.
+
+    Returns
+    -------
+    list of str
+        File names: the manifest, the lock, the tables, the summaries and every plot the
+        dimensions may give (``quadcog.sweeps.summary.plot_sweep``).
+    """
+    import re
+    plots = ["failure_map.png", "tail_rms_hist.png"] + [
+        "survival_" + re.sub(r"[^A-Za-z0-9]+", "_", c).strip("_") + ".png" for c in s.columns]
+    return [MANIFEST, LOCK_NAME, "results.parquet", "results.csv", "summary.json",
+            "summary.md", *plots]
 
 
 def check_backend(workers: object, scheduler: object, out: object = None) -> None:

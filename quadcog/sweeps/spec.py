@@ -145,6 +145,9 @@ class Sweep:
         The varied keys, in the file's order.
     flights : list of Flight
         The expanded flights, in order.
+    inputs : list of (str, pathlib.Path)
+        The files the sweep reads (the sweep file, the base scenario, its vehicle files),
+        each with what names it in a message: its results must not overwrite them.
     """
     name: str
     description: str
@@ -157,6 +160,7 @@ class Sweep:
     threshold: float
     dimensions: list[Dimension]
     flights: list[Flight] = field(default_factory=list)
+    inputs: list[tuple[str, Path]] = field(default_factory=list)
 
     @property
     def columns(self) -> list[str]:
@@ -459,7 +463,7 @@ def cog_admissible(scenario: Scenario) -> str | None:
 
 
 def from_dict(data: dict[str, Any], source: str = "<sweep>",
-              folder: str | os.PathLike[str] | None = None) -> Sweep:
+              folder: str | os.PathLike[str] | None = None, *, progress: bool = False) -> Sweep:
     """A validated Sweep from a parsed sweep file.
 
     Parameters
@@ -470,6 +474,9 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
         What error messages name.
     folder : str or os.PathLike, optional
         Resolves a relative base-scenario path (default: the current folder).
+    progress : bool
+        Show on stderr how far the validation of a large sweep (``VALIDATE_PROGRESS_AT``
+        flights or more) got.
 
     Returns
     -------
@@ -534,7 +541,7 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     for key, value in fixed.items():
         set_key(base, key, value, error=SweepError, where=f"{source}: key {'set.' + key!r}")
     try:
-        parse(base, base_source)
+        inputs = [("the base scenario", Path(base_path)), *parse(base, base_source).inputs]
     except ScenarioError as e:
         raise _err(source, "set", f"the base scenario with these settings is not valid: "
                    f"{e}") from None
@@ -557,20 +564,34 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     sweep = Sweep(name=data.get("name", Path(source).stem), description=data.get("description", ""),
                   source=source, base=base, base_source=base_source, mode=mode,
                   seed=ints["seed"], chunk=ints["chunk"], threshold=float(threshold),
-                  dimensions=dims)
+                  dimensions=dims, inputs=inputs)
+    if Path(source).is_file():
+        sweep.inputs.insert(0, ("the sweep file", Path(source)))
     combos = _expand(dims, mode, ints["samples"], ints["seed"])
     if not combos:
         raise SweepError(f"{source}: the sweep has no flights")
-    _validate_flights(sweep, combos, inadmissible == "skip")
+    _validate_flights(sweep, combos, inadmissible == "skip", progress)
     return sweep
 
 
-def _validate_flights(sweep, combos, skip):
+VALIDATE_PROGRESS_AT = 10_000
+"""Flights from which the validation shows its progress (about 1 ms a flight: 10 s)."""
+
+
+def _validate_flights(sweep, combos, skip, progress=False):
     """Parse every flight as a scenario (errors name the sweep file and the varied key) and
-    check its CoG; fills ``sweep.flights``."""
+    check its CoG; fills ``sweep.flights`` and adds the files the flights read to
+    ``sweep.inputs``."""
     by_key = {d.key: d for d in sweep.dimensions}
     designed = {}
+    report = None
+    if progress and len(combos) >= VALIDATE_PROGRESS_AT:    # minutes of silence otherwise
+        from quadcog.viz.progress import ProgressCounter
+        report = ProgressCounter(f"sweep {sweep.name}: validating", len(combos))
+    known = {path for _, path in sweep.inputs}
     for index, values in enumerate(combos):
+        if report is not None:
+            report(1)
         values = {k: _plain(v) for k, v in values.items()}
         data = copy.deepcopy(sweep.base)
         for key, value in values.items():
@@ -580,6 +601,10 @@ def _validate_flights(sweep, combos, skip):
         except ScenarioError as e:
             raise _err(sweep.source, _culprit(e, values), f"flight {index} "
                        f"({_describe(values)}) is not a valid scenario: {e}") from None
+        for what, path in scenario.inputs:      # a dimension may vary vehicle.file
+            if path not in known:
+                known.add(path)
+                sweep.inputs.append((what, path))
         key = group_key(data)
         if key not in designed:         # each controller design once, before any flight
             try:
@@ -689,13 +714,16 @@ def read_sweep_file(spec: str | os.PathLike[str]) -> tuple[dict[str, Any], Path]
     return read_toml(path, SweepError), path
 
 
-def load_sweep(spec: str | os.PathLike[str], **settings: Any) -> Sweep:
+def load_sweep(spec: str | os.PathLike[str], *, progress: bool = False,
+               **settings: Any) -> Sweep:
     """Read and validate a sweep file (a path or a shipped name).
 
     Parameters
     ----------
     spec : str or os.PathLike
         The sweep file, or the name of a shipped sweep (``"failure-map"``).
+    progress : bool
+        Show the validation's progress for a large sweep (``from_dict``).
     **settings
         Top-level keys of the sweep file to replace before validation (``seed=3``,
         ``set={...}``), as in the file.
@@ -712,4 +740,4 @@ def load_sweep(spec: str | os.PathLike[str], **settings: Any) -> Sweep:
     """
     data, path = read_sweep_file(spec)
     data.update(settings)
-    return from_dict(data, str(path), path.parent)
+    return from_dict(data, str(path), path.parent, progress=progress)

@@ -112,7 +112,7 @@ def write_outputs(sweep: Sweep, columns: dict[str, NDArray[Any]], summary: dict[
 
     from quadcog.files import RunFiles
     table = to_arrow(columns)
-    with RunFiles(out, owned=()) as files:       # all four or none, no .tmp left behind
+    with RunFiles(out, owned=(), protect=[p for _, p in sweep.inputs]) as files:  # all or none
         pa.parquet.write_table(table, files.path("results.parquet"))
         pa.csv.write_csv(table, files.path("results.csv"))
         files.path("summary.json").write_text(json.dumps(summary, indent=2) + "\n")
