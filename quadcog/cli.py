@@ -56,6 +56,14 @@ def _out_dir(path: str | Path) -> Iterator[Path]:
         raise
 
 
+def _path(text: str) -> Path:
+    """An option's path; an empty one is refused, since Path("") is the current folder (an
+    --out "" wrote the results into it, an animate "" read it as the run folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError("expected a path, got an empty string")
+    return Path(text)
+
+
 def _positive_int(text: str) -> int:
     try:
         value = int(text)
@@ -177,7 +185,7 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenario", help="scenario file (docs: Reference, Scenario keys) or the name "
                                     "of a shipped one (`quadcog scenarios` lists them)")
-    p.add_argument("--out", type=Path, default=None,
+    p.add_argument("--out", type=_path, default=None,
                    help="folder for the results (default: out/<scenario> in this folder)")
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="KEY=VALUE",
@@ -197,7 +205,7 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--format", dest="fmt", choices=("csv", "parquet"), default="csv",
                    help="table format (parquet needs pyarrow; default: csv)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--identified", type=Path, default=None, metavar="FILE",
+    p.add_argument("--identified", type=_path, default=None, metavar="FILE",
                    help="JSON of `quadcog identify --json`: its r_G becomes the vehicle's CoG "
                         "and the controller's starting estimate")
     p.add_argument("--stack", choices=("crazyflie",), default=None,
@@ -207,7 +215,7 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                    help="with --stack: the stack's controller (crazyflie: pid, mellinger, indi, "
                         "brescianini, lee, an out-of-tree controller's folder or a quadcog "
                         "law such as composite, flown as its app; default pid)")
-    p.add_argument("--vehicle", type=Path, default=None, metavar="FILE",
+    p.add_argument("--vehicle", type=_path, default=None, metavar="FILE",
                    help="fly the vehicle of a URDF or SDF file (Vehicle.from_urdf, "
                         "Vehicle.from_sdf) as the truth; the controller's model starts from it")
     p.set_defaults(func=cmd_run)
@@ -263,8 +271,8 @@ def add_animate(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                        description="Read RUN_DIR (written by `quadcog run`) and write a GIF of "
                                    "the flight in 3D: body axes, rotors, the CoG offset to scale, "
                                    "the trail and the reference, with the time.")
-    p.add_argument("run_dir", type=Path, help="folder written by `quadcog run`")
-    p.add_argument("--out", "--output", dest="out", type=Path, default=None,
+    p.add_argument("run_dir", type=_path, help="folder written by `quadcog run`")
+    p.add_argument("--out", "--output", dest="out", type=_path, default=None,
                    help="GIF to write (default: RUN_DIR/flight.gif; --output is the old name)")
     p.add_argument("--fps", type=_positive_int, default=15, help="frames per second (default 15)")
     p.add_argument("--speed", type=float, default=1.0,
@@ -302,7 +310,7 @@ def add_paper(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                        description="Run the paper's Figs. 3-8 as scenarios, draw each figure "
                                    "and write summary.md / summary.json with a verdict per "
                                    "claim.")
-    p.add_argument("--out", type=Path, default=Path("out/paper"),
+    p.add_argument("--out", type=_path, default=Path("out/paper"),
                    help="output folder (default: out/paper)")
     p.set_defaults(func=cmd_paper)
 
@@ -334,7 +342,7 @@ def add_analyze(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "zero dynamics for moving CoG, the adaptive law's Lyapunov "
                                    "function along Fig. 6, and the failure map over CoG "
                                    "offsets.")
-    p.add_argument("--out", type=Path, default=Path("out/analysis"),
+    p.add_argument("--out", type=_path, default=Path("out/analysis"),
                    help="output folder (default: out/analysis)")
     p.add_argument("--grid", type=_positive_int, default=41,
                    help="failure-map points per axis (default 41)")
@@ -381,7 +389,7 @@ def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                    help="with --scenario: override a scenario key (repeatable)")
     p.add_argument("--precision", default="float32", choices=("float32", "double"),
                    help="float32 (default) or double")
-    p.add_argument("--out", type=Path, required=True, help="folder for the .h and .c")
+    p.add_argument("--out", type=_path, required=True, help="folder for the .h and .c")
     p.add_argument("--target", default="c", choices=("c", "crazyflie"),
                    help="c (default: the C99 module) or crazyflie (an out-of-tree controller "
                         "app of the Crazyflie firmware, float32; docs: On a Crazyflie)")
@@ -390,7 +398,7 @@ def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--build", action="store_true",
                    help="with --target crazyflie: also build cf2.elf with the app in quadcog's "
                         "cache and print its size (needs gcc-arm-none-eabi)")
-    p.add_argument("--firmware", type=Path,
+    p.add_argument("--firmware", type=_path,
                    help="with --build: the firmware tree (default $QUADCOG_CRAZYFLIE_FIRMWARE, "
                         "else the vendored tarball); never written")
     p.set_defaults(func=cmd_export)
@@ -462,6 +470,10 @@ def _export_crazyflie(args: argparse.Namespace) -> None:
         law, name = getattr(law, "inner", law), scenario.controller
         which = [f"--scenario {args.scenario}"] + [f"--set {o}" for o in args.overrides]
     command = " ".join(["quadcog export --target crazyflie", *which, *vehicle, "--out DIR"])
+    if args.build:
+        # what the build needs, before the app is written: a refused build left a written app
+        from quadcog.embedded.crazyflie_firmware import check_build_inputs
+        check_build_inputs(args.firmware)
     with _out_dir(args.out) as out:
         paths = write_crazyflie_app(law, out, vehicle=args.vehicle, name=name, command=command)
     for path in paths:
@@ -488,7 +500,7 @@ def add_sweep(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "distributed): pip install 'quadcog[sweep]'.")
     p.add_argument("sweep", help="sweep file, or the name of a shipped one (`quadcog sweeps` "
                                  "lists them)")
-    p.add_argument("--out", type=Path, required=True,
+    p.add_argument("--out", type=_path, required=True,
                    help="results folder; run again with the same folder to resume")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, help="start a Dask LocalCluster of N processes")
@@ -544,7 +556,7 @@ def add_identify(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--json", default=None, metavar="FILE",
                    help="write r_G, r_G_ci95, mass, mass_ci95, mass_change, samples, "
                         "identifiable as JSON")
-    p.add_argument("--out", type=Path, default=None, metavar="DIR",
+    p.add_argument("--out", type=_path, default=None, metavar="DIR",
                    help="folder for the figure identify.png")
     p.set_defaults(func=cmd_identify)
 
@@ -613,7 +625,7 @@ def add_targets(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "sensing of the *-real scenarios and the defaults derived "
                                    "for the vehicle; print the table and write targets.csv, "
                                    "targets.json and targets.md.")
-    p.add_argument("--out", type=Path, default=Path("out/targets"),
+    p.add_argument("--out", type=_path, default=Path("out/targets"),
                    help="output folder (default: out/targets)")
     # a metavar, the choices in the help: the usage line stays within the docs' column
     p.add_argument("--vehicles", nargs="+", choices=tuple(PRESETS), default=tuple(PRESETS),
@@ -659,10 +671,10 @@ def add_px4(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "quadcog's truth plant; writes the run files, px4.ulg (PX4's "
                                    "own log) and px4.log.")
     p.add_argument("scenario", help="px4-hover, px4-payload, or any scenario name or file")
-    p.add_argument("--px4", default=None, metavar="PATH",
+    p.add_argument("--px4", type=_path, default=None, metavar="PATH",
                    help="PX4-Autopilot tree or tarball (default: $QUADCOG_PX4, else "
                         "shared/vendor/px4-autopilot.tar.xz next to the checkout)")
-    p.add_argument("--out", type=Path, default=None,
+    p.add_argument("--out", type=_path, default=None,
                    help="folder for the results (default: out/<scenario>-px4)")
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="KEY=VALUE", help="override a scenario key (as for `quadcog run`)")

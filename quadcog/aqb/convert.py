@@ -17,12 +17,12 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
-from quadcog.errors import InputError, PeerStateError
+from quadcog.errors import InputError, ParameterError, PeerStateError
 from quadcog.model.conventions import N_STATE
 from quadcog.trajectories.analytic import ACC, JERK, POS, REF_SIZE, VEL, YAW, YAW_RATE
 from quadcog.vehicles.vehicle import N_ROTORS, Vehicle
 
-__all__ = ["ROTORPY_GRAVITY", "STATE_KEYS", "FLAT_KEYS", "vehicle_from_quad_params",
+__all__ = ["ROTORPY_GRAVITY", "MAX_ROTOR_SPEED", "STATE_KEYS", "FLAT_KEYS", "vehicle_from_quad_params",
            "quaternion_to_matrix", "euler_zyx", "state_vector", "reference_row",
            "motor_speeds"]
 
@@ -45,6 +45,9 @@ _PARAM_CHECKS = (("mass", validate.positive, "kg"), ("Ixx", validate.positive, "
                  ("tau_m", validate.nonnegative, "s"),
                  ("rotor_speed_min", validate.nonnegative, "rad/s"),
                  ("rotor_speed_max", validate.positive, "rad/s"))
+# a rotor speed beyond this is no rotor's (the fastest small props turn ~6e3 rad/s); past
+# ~1e154 rad/s its square overflowed (OverflowError from 1e300 ** 2)
+MAX_ROTOR_SPEED = 1e6
 
 
 def _param(params, key):
@@ -82,7 +85,8 @@ def vehicle_from_quad_params(params: Mapping[str, Any], name: str = "aqb") -> Ve
     quadcog.InputError
         A key missing, a rotor out of the rotor plane, products of inertia, or not 4 rotors.
     quadcog.ParameterError
-        A value the Vehicle refuses (named by its field).
+        A value the Vehicle refuses (named by its field), a rotor speed beyond
+        ``MAX_ROTOR_SPEED``, or rotors that cannot lift the mass at ``rotor_speed_max``.
     """
     if not isinstance(params, Mapping):
         validate.fail("quad_params", "a RotorPy quad_params dictionary", params)
@@ -110,6 +114,20 @@ def vehicle_from_quad_params(params: Mapping[str, Any], name: str = "aqb") -> Ve
     number = {key: check(_param(params, key), f"quad_params[{key!r}]", unit)
               for key, check, unit in _PARAM_CHECKS}
     m, k_eta = number["mass"], number["k_eta"]
+    for key in ("rotor_speed_min", "rotor_speed_max"):
+        if not number[key] <= MAX_ROTOR_SPEED:
+            validate.fail(f"quad_params[{key!r}]", f"a rotor speed <= {MAX_ROTOR_SPEED:g} rad/s",
+                          number[key], ParameterError)
+    # a vehicle whose rotors at full speed cannot lift it flies no scenario: the impossible
+    # physics is named here, by its keys, not as a divergence later
+    lift = N_ROTORS * k_eta * number["rotor_speed_max"] ** 2
+    if not lift > m * ROTORPY_GRAVITY:
+        raise ParameterError(
+            f"quad_params: {N_ROTORS} rotors at rotor_speed_max = "
+            f"{validate.plain(number['rotor_speed_max'])} rad/s with k_eta = "
+            f"{validate.plain(k_eta)} N/(rad/s)^2 lift {lift:.3g} N, not more than the weight "
+            f"{m * ROTORPY_GRAVITY:.3g} N of mass = {validate.plain(m)} kg; expected a vehicle "
+            "that can hover")
     omega_h = np.sqrt(m * ROTORPY_GRAVITY / (N_ROTORS * k_eta))
     com = validate.array(params.get("com", np.zeros(3)), "quad_params['com']", (3,))
     return Vehicle(
@@ -172,7 +190,13 @@ def euler_zyx(R: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     -------
     (3,) numpy.ndarray
         [phi, theta, psi] (rad), theta in [-pi/2, pi/2].
+
+    Raises
+    ------
+    quadcog.InputError
+        ``R`` not a (3, 3) array of finite real numbers.
     """
+    R = validate.array(R, "R", (3, 3), what="a (3, 3) rotation matrix")
     return np.array([np.arctan2(R[2, 1], R[2, 2]), -np.arcsin(np.clip(R[2, 0], -1.0, 1.0)),
                      np.arctan2(R[1, 0], R[0, 0])])
 
@@ -267,6 +291,13 @@ def motor_speeds(vehicle: Vehicle, U: npt.ArrayLike) -> npt.NDArray[np.float64]:
     -------
     (4,) numpy.ndarray
         Rotor speeds (rad/s), in the order of the vehicle's rotors (RotorPy's ``rotor_pos``).
+
+    Raises
+    ------
+    quadcog.InputError
+        ``vehicle`` not a Vehicle, or ``U`` not 4 finite real numbers.
     """
+    if not isinstance(vehicle, Vehicle):
+        validate.fail("motor_speeds: vehicle", "a quadcog Vehicle", vehicle)
     f = np.clip(vehicle.rotor_thrusts(U), vehicle.min_rotor_thrust, vehicle.max_rotor_thrust)
     return np.asarray(vehicle.rotor_speeds(f), dtype=np.float64)

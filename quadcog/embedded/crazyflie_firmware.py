@@ -31,7 +31,7 @@ from quadcog.paths import cache_dir
 
 __all__ = ["FIRMWARE_ENV", "VENDOR_TARBALL", "ARM_INSTALL", "TREE_FILES", "FirmwareBuild",
            "GET_FIRMWARE", "TARBALL_NAME", "check_tree", "tree_hash", "firmware_tree",
-           "require_arm_toolchain", "first_error",
+           "require_arm_toolchain", "check_build_inputs", "first_error",
            "elf_size", "build_app", "build_plain"]
 
 FIRMWARE_ENV = "QUADCOG_CRAZYFLIE_FIRMWARE"
@@ -247,6 +247,28 @@ def _sync_app(app, ws):
             shutil.rmtree(entry) if entry.is_dir() else entry.unlink()
     shutil.copytree(app, ws, dirs_exist_ok=True,
                     ignore=lambda d, names: [n for n in names if n in _SKIP])
+
+
+def check_build_inputs(firmware: str | os.PathLike[str] | None = None) -> None:
+    """Refuse, before anything is written, a build that ``build_app`` would refuse: the ARM
+    toolchain missing, or no firmware tree (named, in the environment, or the tarball).
+
+    Parameters
+    ----------
+    firmware : str or os.PathLike, optional
+        The firmware tree or tarball (see ``firmware_tree``).
+
+    Raises
+    ------
+    quadcog.errors.TargetError
+        The ARM toolchain is missing.
+    quadcog.errors.FirmwareError
+        The tree named is not a firmware tree, or none is named and the tarball is absent.
+    """
+    require_arm_toolchain()
+    locate_tree(firmware, FIRMWARE_ENV, TARBALL_NAME, TREE_FILES, "Crazyflie firmware tree",
+                GET_FIRMWARE, tarball_argument=True, argument_name="firmware",
+                error=FirmwareError)
 
 
 def build_app(app: str | os.PathLike[str], firmware: str | os.PathLike[str] | None = None,

@@ -17,7 +17,7 @@ import numpy.typing as npt
 from quadcog.errors import IdentificationError
 from quadcog.files import read_json
 from quadcog.model.parameters import LARGEST
-from quadcog.validate import fail, positive, vector
+from quadcog.validate import fail, real, vector
 
 if TYPE_CHECKING:
     from quadcog.identification.core import Identification
@@ -43,8 +43,8 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
     ------
     IdentificationError
         A file that cannot be read, is not JSON, lacks a ``r_G`` of 3 finite numbers, or
-        holds a ``mass`` that no vehicle has (not a finite number > 0; null or absent is
-        accepted: only r_G is used, but a file with an impossible mass is not an
+        holds a ``mass`` that no vehicle has (not a number in (0, ``LARGEST``] kg; null or
+        absent is accepted: only r_G is used, but a file with an impossible mass is not an
         identification to trust).
     """
     from quadcog.identification.core import Identification
@@ -62,7 +62,9 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
                      IdentificationError)
     r = data.get("r_G") if isinstance(data, dict) else None
     where, what = f"{path}: key 'r_G'", "3 finite numbers (m)"
-    if not isinstance(r, list):
+    # a JSON list of 3 numbers, as `quadcog identify --json` writes: a column [[x], [y], [z]]
+    # (which vector() takes from Python) is not that file's shape
+    if not isinstance(r, list) or any(isinstance(v, (list, dict)) for v in r):
         fail(where, what, r, IdentificationError)
     try:
         r_G = vector(r, where, 3, error=IdentificationError)
@@ -72,5 +74,7 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
         fail(where, f"3 numbers within +-{LARGEST:g} m", r, IdentificationError)
     mass = data.get("mass")
     if mass is not None:
-        positive(mass, f"{path}: key 'mass'", "kg", IdentificationError)
+        # within the model's scale, as every vehicle's mass (a mass of 1e300 kg was accepted)
+        real(mass, f"{path}: key 'mass'", lo=0.0, lo_open=True, hi=LARGEST, unit="kg",
+             error=IdentificationError)
     return r_G

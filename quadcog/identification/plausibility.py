@@ -27,10 +27,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from quadcog.errors import IdentificationError
-from quadcog.identification.segments import MAX_GAP, commands_from_mixer
+from quadcog.identification.segments import MAX_GAP, check_arguments, commands_from_mixer
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.logs.ulog import WRITER_HW, WRITER_NAME
+from quadcog.validate import choice, fail, integer
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_BODY_RATE",
@@ -94,10 +95,21 @@ def column_name(log: FlightLog, signal: str, component: int | None = None) -> st
     -------
     str
         A quoted name for a message.
+
+    Raises
+    ------
+    IdentificationError
+        ``log`` not a FlightLog, ``signal`` not a signal name, or ``component`` not one of
+        the signal's (-1 named the last column, True the second).
     """
+    check_arguments("column_name", log)
+    if signal != "t":
+        choice(signal, "column_name: signal", SIGNALS, error=IdentificationError)
     if signal == "t":
         return f"column {TIME_COLUMN!r}" if log.format in ("csv", "parquet") else "the time stamps"
-    k = 0 if component is None else component
+    width = max(len(SIGNALS[signal].components), 1)
+    k = 0 if component is None else integer(component, "column_name: component", lo=0,
+                                            hi=width - 1, error=IdentificationError)
     if log.format in ("csv", "parquet"):
         return f"column {signal_columns(signal)[k]!r}"
     comps = SIGNALS[signal].components
@@ -424,7 +436,13 @@ def vehicle_type(log: FlightLog) -> str | None:
     -------
     str or None
         Lower case.
+
+    Raises
+    ------
+    IdentificationError
+        ``log`` not a FlightLog.
     """
+    check_arguments("vehicle_type", log)
     if log.format == "crazyflie-usd":
         return "crazyflie"
     if (log.format == "ulog" and log.meta.get("ver_hw") == WRITER_HW
@@ -466,8 +484,15 @@ def check_types(logs: Sequence[FlightLog], baseline: Sequence[FlightLog],
     Raises
     ------
     IdentificationError
-        Naming the two logs and their types.
+        Naming the two logs and their types; arguments of the wrong type (a vehicle that is
+        no Vehicle was ignored).
     """
+    for arg, value in (("logs", logs), ("baseline", baseline)):
+        if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
+            fail(f"check_types: {arg}", "a sequence of quadcog.logs.FlightLog", value,
+                 IdentificationError)
+    if vehicle is not None and not isinstance(vehicle, Vehicle):
+        fail("check_types: vehicle", "a quadcog Vehicle or None", vehicle, IdentificationError)
     named: list[tuple[FlightLog, str]] = []
     for log in list(logs) + list(baseline):
         kind = vehicle_type(log)

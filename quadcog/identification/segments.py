@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
 from quadcog.logs.flightlog import FlightLog
-from quadcog.validate import fail, real
+from quadcog.validate import fail, integer, real
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -327,6 +327,11 @@ def block_means(index: npt.NDArray[np.int_], values: npt.NDArray[np.float64]
     return (sums / counts[:, None]).reshape((n_blocks,) + values.shape[1:])
 
 
+# beyond this many degrees of freedom Student's t quantile is the normal's to 1e-9 (and
+# scipy takes no integer past int64: 10**400 raised TypeError)
+T_DOF_NORMAL = 10 ** 9
+
+
 def t_quantile(dof: int) -> float:
     """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom (two-sided 95 %).
 
@@ -339,9 +344,15 @@ def t_quantile(dof: int) -> float:
     -------
     float
         The quantile.
+
+    Raises
+    ------
+    IdentificationError
+        ``dof`` not a whole number >= 1 (0 or -1 was read as 1, True as 1, 2.7 as 2).
     """
     from scipy import stats  # here: slow to import
-    return float(stats.t.ppf(0.975, max(int(dof), 1)))
+    dof = integer(dof, "t_quantile: dof", lo=1, error=IdentificationError)
+    return float(stats.t.ppf(0.975, min(dof, T_DOF_NORMAL)))
 
 
 def block_mean_ci95(blocks: npt.ArrayLike

@@ -155,6 +155,10 @@ def find_source(tree: str | os.PathLike[str] | None = None) -> Path:
                            f"there is no shared/vendor/{TARBALL_NAME} next to the checkout; "
                            f"expected a PX4-Autopilot source folder or a .tar.xz of one")
         return path
+    if isinstance(named, bytes) or not isinstance(named, (str, os.PathLike)) or not str(named):
+        # Path("") is the current folder, which would be named '.'
+        raise Px4Error(f"{where} = {named!r}: expected the path of a PX4-Autopilot source "
+                       "folder or a .tar.xz of one")
     path = Path(named).expanduser()
     if path.is_file() and path.name.endswith((".tar.xz", ".tar.gz", ".tar")):
         return path
@@ -163,8 +167,13 @@ def find_source(tree: str | os.PathLike[str] | None = None) -> Path:
             raise Px4Error(f"{where} = {str(path)!r}: not a PX4-Autopilot source folder (no "
                            f"Makefile and ROMFS/ in it)")
         return path
-    raise Px4Error(f"{where} = {str(path)!r}: no such folder or tarball; expected a "
-                   f"PX4-Autopilot source folder or a .tar.xz of one")
+    from quadcog.files import path_kind
+    kind = path_kind(path)
+    found = (f"is {kind}" if kind is not None else
+             "is a file, not a tarball (.tar.xz, .tar.gz, .tar)" if path.is_file() else
+             "no such folder or tarball")
+    raise Px4Error(f"{where} = {str(path)!r}: {found}; expected a PX4-Autopilot source folder "
+                   "or a .tar.xz of one")
 
 
 def _tree_files(root: Path) -> Iterator[Path]:

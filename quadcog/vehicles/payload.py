@@ -45,6 +45,12 @@ def check_reach(position: npt.ArrayLike, size: npt.ArrayLike | None, arm: float,
     InputError
         Naming the position (and size), the distance and the reach.
     """
+    # checked here too: a public function, and a NaN arm or centre read as "beyond reach"
+    arm = validate.real(arm, f"{where}: arm length", lo=0.0, lo_open=True, unit="m")
+    position = validate.array(position, f"{where}: position", (3,),
+                              what="3 finite numbers (m, body axes)")
+    if size is not None:
+        size = validate.array(size, f"{where}: size", (3,), what="3 edge lengths >= 0 (m)")
     reach = PAYLOAD_REACH * arm
     centre = float(np.linalg.norm(position))
     corner = centre + (0.0 if size is None else 0.5 * float(np.linalg.norm(size)))
@@ -89,6 +95,8 @@ class Payload:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise InputError(f"payload name must be a non-empty string, got {self.name!r}")
+        # a str subclass (numpy.str_) is kept as the plain str that JSON and TOML write
+        object.__setattr__(self, "name", str(self.name))
         where = f"payload {self.name!r}"
         m = validate.real(self.mass, f"{where}: mass", lo=0.0, lo_open=True, hi=LARGEST,
                          unit="kg", error=ParameterError)
@@ -133,10 +141,25 @@ class Payload:
             inertia about its centre moved to O by the parallel-axis theorem
             (``quadcog.model.inertial_parameters.placed``); one row per position when
             ``positions`` is given.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``positions`` not an (N, 3) array of finite real numbers.
+        quadcog.ParameterError
+            A position beyond the model's scale (``LARGEST`` m), where pi would overflow.
         """
         if positions is None:
             return placed(self.mass, self.inertia_about_centre(), [self.position])[0]
-        return placed(self.mass, self.inertia_about_centre(), positions)
+        where = f"payload {self.name!r}: positions"
+        r = validate.array(positions, where, (None, 3),
+                           what="an (N, 3) array of finite positions (m, body axes)")
+        # as a payload's own position: past LARGEST m the parallel-axis terms m r^2 overflow
+        # to inf and their differences to NaN (a move to 1e300 m gave pi of NaN, silently)
+        if r.size and not np.abs(r).max() <= LARGEST:
+            validate.fail(where, f"entries within +-{LARGEST:g} m", float(np.abs(r).max()),
+                          ParameterError)
+        return placed(self.mass, self.inertia_about_centre(), r)
 
     def moved(self, position: npt.ArrayLike) -> "Payload":
         """The same payload at another position.

@@ -7,14 +7,16 @@ factor, stated in the title, so that it is visible on the scale of the path; the
 drawn with the same factor, so it is to scale with the body.
 """
 import dataclasses
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
+from quadcog import validate
 from quadcog.errors import InputError
-from quadcog.files import read_json
+from quadcog.files import path_kind, read_json
 from quadcog.model import columns as col
 from quadcog.model.conventions import rotation_matrix
 
@@ -137,6 +139,15 @@ def _is_float(text):
     return True
 
 
+def _run_folder_path(run_dir: object) -> Path:
+    """``run_dir`` as a Path; InputError for what is no path or is empty (Path("") is the
+    current folder, which would be named '.')."""
+    if isinstance(run_dir, bytes) or not isinstance(run_dir, (str, os.PathLike)) \
+            or not str(run_dir):
+        validate.fail("run folder", "the path of a folder written by `quadcog run`", run_dir)
+    return Path(run_dir)
+
+
 def read_run(run_dir: "str | Path") -> tuple:
     """(table (N, 37), metrics dict, Vehicle) of a folder written by `quadcog run`.
 
@@ -157,10 +168,13 @@ def read_run(run_dir: "str | Path") -> tuple:
         A missing folder or a damaged file, naming it.
     """
     from quadcog.vehicles.vehicle import FIELD_NAMES, HUMMINGBIRD, Vehicle
-    run_dir = Path(run_dir)
+    run_dir = _run_folder_path(run_dir)
     if not run_dir.is_dir():
-        raise InputError(f"run folder {run_dir}: no such folder (write one with "
-                         f"`quadcog run SCENARIO --out {run_dir}`)")
+        kind = path_kind(run_dir)
+        found = "no such folder" if kind is None and not run_dir.exists() else \
+            f"is {kind or 'a file'}, not a folder"
+        raise InputError(f"run folder {run_dir}: {found} (write one with "
+                         f"`quadcog run SCENARIO --out DIR`)")
     csv_path, pq_path = run_dir / "trajectory.csv", run_dir / "trajectory.parquet"
     if csv_path.is_file():
         table = read_table(csv_path)
@@ -217,6 +231,9 @@ def check_output(output: "str | Path") -> Path:
     -------
     pathlib.Path
     """
+    if isinstance(output, bytes) or not isinstance(output, (str, os.PathLike)) \
+            or not str(output):
+        validate.fail("output", "the path of a file ending in .gif", output)
     output = Path(output)
     if output.suffix.lower() != ".gif":
         raise InputError(f"output {str(output)!r}: expected a file name ending in .gif (the "
@@ -283,7 +300,8 @@ def animate_run(run_dir: str | Path, output: str | Path | None = None, fps: int 
     pathlib.Path
         The GIF written (renamed into place only once complete).
     """
-    output = check_output(output if output is not None else Path(run_dir) / "flight.gif")
+    output = check_output(output if output is not None else _run_folder_path(run_dir)
+                          / "flight.gif")
     _check_settings(fps, speed, max_frames)
     table, metrics, vehicle = read_run(run_dir)
     from quadcog.files import RunFiles
