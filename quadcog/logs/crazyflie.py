@@ -19,6 +19,12 @@ Records are not resampled or filled: the log is event based, so a record dropped
 firmware (its buffer full) is a longer step, reported in ``meta["max_step_s"]``. Other event
 types are not on that time base: their record counts are in ``meta["events"]``.
 
+Values no firmware logs are refused, named with their record: a variable that is not
+finite, a motor variable (``MOTOR_VARIABLES``) outside 0..65535 (the outputs are 16-bit
+whatever type the header declares), a motor request (``MOTOR_REQUEST_VARIABLES``) beyond an
+int32, a roll or pitch beyond +-180 deg, a yaw beyond
++-``YAW_MAX_DEG``.
+
 Conversions to quadcog's signals (the firmware's ground frame is z up and its body frame x
 forward, y left, z up, as quadcog's):
 
@@ -71,6 +77,23 @@ _TYPES = {"B": "<u1", "b": "<i1", "H": "<u2", "h": "<i2", "I": "<u4", "i": "<i4"
 _STAMP = {1: ("<u4", 1e-3), 2: ("<u8", 1e-6)}          # version: (dtype, s per tick)
 _DEG = np.pi / 180.0
 _RESERVED = ("_id", "_tick")          # the fields of every record before its variables
+# The motor variables: the firmware's 16-bit outputs (motor power capped by the power
+# distribution, or PWM duty cycle: 0..FULL_SCALE), whatever type a log declares them in
+# (type I holds up to 2^32 - 1)
+MOTOR_VARIABLES = tuple([f"motor.m{k}" for k in range(1, 5)]
+                        + [f"pwm.m{k}_pwm" for k in range(1, 5)])
+# The requests before the cap (stabilizer.c: motorThrustBatCompUncapped, logged as int32):
+# beyond 0..FULL_SCALE when saturated, never beyond an int32
+MOTOR_REQUEST_VARIABLES = tuple(f"motor.m{k}req" for k in range(1, 5))
+_INT32 = (-2.0 ** 31, 2.0 ** 31 - 1)
+# |roll|, |pitch| (deg): the firmware's estimators give atan2/asin angles, within 180 deg
+ROLL_PITCH_MAX_DEG = 180.0
+# |yaw| (deg): the firmware's is within 180 deg, but a yaw written unwrapped (quadcog's
+# writer keeps a log's own yaw) is read and wrapped; up to 1e5 deg (278 turns) float32
+# still resolves it to 0.01 deg, beyond that wrapping would give rounding noise
+YAW_MAX_DEG = 1e5
+# float32 rounding of an angle at its limit (atan2f can return pi as 3.1415927 > pi)
+ANGLE_ROUNDING_DEG = 1e-3
 
 
 def _cstring(data, i, path, what):
@@ -201,6 +224,39 @@ def _parse(path: str) -> tuple[int, dict[int, tuple[str, np.ndarray, dict[str, n
     return version, events
 
 
+def _limits(var):
+    """(lo, hi, what) the values of a variable the reader converts must lie within, or
+    None when the reader does not bound it."""
+    if var in MOTOR_VARIABLES:
+        return 0.0, FULL_SCALE, "the firmware's 16-bit motor output"
+    if var in MOTOR_REQUEST_VARIABLES:
+        return *_INT32, "the firmware's int32 motor request"
+    angle = var.removeprefix("stateEstimate.")
+    if angle in ("roll", "pitch"):
+        return (-ROLL_PITCH_MAX_DEG - ANGLE_ROUNDING_DEG, ROLL_PITCH_MAX_DEG + ANGLE_ROUNDING_DEG,
+                f"a {angle} angle (deg)")
+    if angle == "yaw":
+        return -YAW_MAX_DEG, YAW_MAX_DEG, "a yaw angle (deg) that float32 resolves"
+    return None
+
+
+def _check_limits(path, event, ticks, raw):
+    """Refuse a variable outside its ``_limits`` (motor outputs beyond 16 bits, attitudes
+    beyond any orientation), naming it, its value, record and time."""
+    for var, v in raw.items():
+        limits = _limits(var)
+        if limits is None:
+            continue
+        lo, hi, what = limits
+        bad = (v < lo) | (v > hi)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise LogFormatError(f"{path}: variable {var!r} of event {event!r} is "
+                                 f"{float(v[k])!r} in record {k} (t = "
+                                 f"{float(ticks[k] - ticks[0])!r} s); expected {what} within "
+                                 f"{lo:g}..{hi:g}")
+
+
 def _pick(raw, *groups):
     """The first group of variable names that are all logged, or None."""
     for names in groups:
@@ -275,7 +331,11 @@ def read_usd(path: str | os.PathLike) -> FlightLog:
     ------
     LogFormatError
         See ``parse_usd``; also fewer than 2 fixed-frequency records (id ``0xFFFF``), time
-        stamps that do not increase, or a variable that is not finite (NaN, inf).
+        stamps that do not increase, a variable that is not finite (NaN, inf), a motor
+        variable (``MOTOR_VARIABLES``) outside 0..65535, a motor request beyond an int32,
+        a roll or pitch beyond
+        ``ROLL_PITCH_MAX_DEG`` or a yaw beyond ``YAW_MAX_DEG`` (plus float32 rounding,
+        ``ANGLE_ROUNDING_DEG``).
     LogCRCError
         The CRC-32 does not match.
     """
@@ -304,6 +364,7 @@ def read_usd(path: str | os.PathLike) -> FlightLog:
             raise LogFormatError(f"{path}: variable {var!r} of event {name!r} is "
                                  f"{float(v[k])!r} in record {k} (t = "
                                  f"{float(ticks[k] - ticks[0])!r} s); expected finite values")
+    _check_limits(path, name, ticks, raw)
     median = float(np.median(steps))
     others = ", ".join(f"{n}: {v.size} records" for e, (n, v, _) in events.items()
                        if e != FIXED_FREQUENCY_ID)
@@ -351,6 +412,11 @@ def _variables(log):
     return out
 
 
+# the attitude variables the writer writes, and the magnitude the reader takes (deg)
+_ANGLE_MAX_DEG = {"stateEstimate.roll": ROLL_PITCH_MAX_DEG,
+                  "stateEstimate.pitch": ROLL_PITCH_MAX_DEG, "stateEstimate.yaw": YAW_MAX_DEG}
+
+
 def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
     """Write a log's signals as a Crazyflie uSD log (version 2) that ``read_usd`` reads back.
 
@@ -375,8 +441,10 @@ def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
     Raises
     ------
     LogSignalError
-        The log has none of the signals a Crazyflie log carries, or a motor value outside
-        0..1 or a voltage outside 0..65.535 V (the integer fields cannot hold it).
+        The log has none of the signals a Crazyflie log carries, a motor value outside
+        0..1 or a voltage outside 0..65.535 V (the integer fields cannot hold it), a roll or
+        pitch beyond ``ROLL_PITCH_MAX_DEG`` or a yaw beyond ``YAW_MAX_DEG`` (the reader
+        refuses them).
     """
     path = Path(path)
     variables = _variables(log)
@@ -395,6 +463,9 @@ def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
                 raise LogSignalError(
                     f"{log.source}: {name} would be {values.min():g}..{values.max():g}, "
                     f"outside the 0..{hi:g} the Crazyflie logs", source=log.source)
+        elif name in _ANGLE_MAX_DEG:        # within the reader's limits (exactly: float32
+            bound = _ANGLE_MAX_DEG[name]    # holds 180 and 1e5 without rounding)
+            check_range(log, name, values, "Crazyflie", -bound, bound, "deg")
         else:
             check_range(log, name, values, "Crazyflie")
         fields.append((name, _TYPES[typ]))

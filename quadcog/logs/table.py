@@ -8,8 +8,9 @@ Time is taken as written, shifted to start at 0 (``meta["time_offset_s"]`` is th
 ``t_s``); rows are not resampled. An empty cell, ``nan``, text, or time that does not increase
 is refused with the row and column named: a cell is a plain decimal number in ASCII (an
 optional sign, digits, a point, an exponent: ``-1.5e-3``), optionally quoted; ``#`` is not a
-comment, and ``1_000`` or digits of other scripts are refused, not read. A CSV file is UTF-8
-text; a byte-order mark in front of it is dropped.
+comment, and ``1_000`` or digits of other scripts are refused, not read, as is a number
+beyond the float range either way (``1e400``, or ``1e-400``, which would read as 0). A CSV
+file is UTF-8 text; a byte-order mark in front of it is dropped.
 """
 from collections import Counter
 import csv
@@ -100,6 +101,14 @@ READ_ENCODING = "utf-8-sig"
 # much longer is not a number (Python's csv module stops at 131,072 with its own error).
 MAX_CELL = 1000
 FLOAT_MAX = float(np.finfo(np.float64).max)
+# The smallest normal float: a nonzero cell below it reads as 0.0 or a subnormal (digits
+# lost), so it is refused as the cell beyond FLOAT_MAX is
+FLOAT_TINY = float(np.finfo(np.float64).tiny)
+# Text that may hold such a cell: a number below 1e-307 has an exponent of 3 digits or, with
+# one of at most 2, a run of over 200 zeros after its point (false alarms only cost the
+# cell-by-cell reading, which decides)
+_TINY_EXPONENT = re.compile(r"[eE]-[0-9]{3}")
+_TINY_ZEROS = "0" * 200
 
 # A plain decimal number, the one form of cell read (float() also takes "1_000", other
 # scripts' digits and surrounding Unicode blanks; numpy's parser takes "#" as a comment)
@@ -109,6 +118,11 @@ _NOT_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 # The characters of plain numbers, separators, quotes and line breaks: numpy's fast parser
 # is used only on text of these alone, anything else goes cell by cell through _cells
 _PLAIN_BYTES = b'0123456789eE+-.,"\r\n \t'
+
+
+def _may_underflow(text):
+    """Whether ``text`` may hold a nonzero number below ``FLOAT_TINY`` (linear: C searches)."""
+    return _TINY_ZEROS in text or _TINY_EXPONENT.search(text) is not None
 
 
 def _plain(text):
@@ -124,7 +138,7 @@ def _read_csv(path):
         with open(path, newline="", encoding=READ_ENCODING) as f:
             header, lines_before = _header(path, f)
             rest = f.read()
-        ok = _plain(rest)
+        ok = _plain(rest) and not _may_underflow(rest)
         if ok:
             try:
                 with warnings.catch_warnings():      # a header without rows: said below
@@ -204,7 +218,8 @@ def _cells(path, header, skip):
 
 def _cell(path, line, column, cell):
     """The float of one CSV cell: a plain decimal number (``_NUMBER``) within the float
-    range, or nan/inf (refused later with its place), else a LogFormatError naming it."""
+    range (zero, or a magnitude within ``FLOAT_TINY``..``FLOAT_MAX``), or nan/inf (refused
+    later with its place), else a LogFormatError naming it."""
     text = cell.strip(" \t")
     where = f"{path}: line {line}, column {column!r}"
     if len(text) > MAX_CELL:
@@ -215,6 +230,11 @@ def _cell(path, line, column, cell):
         if not math.isfinite(value):
             raise LogFormatError(f"{where}: {shown} is beyond the range of a float (magnitude "
                                  f"at most {FLOAT_MAX:.4g}): not a finite number")
+        mantissa = text.partition("e")[0].partition("E")[0]
+        if abs(value) < FLOAT_TINY and mantissa.strip("+-.0"):      # nonzero digits
+            raise LogFormatError(f"{where}: {shown} is below the range of a float (a nonzero "
+                                 f"magnitude at least {FLOAT_TINY:.4g}): it would read as "
+                                 f"{value!r}")
         return value
     if _NOT_FINITE.fullmatch(text):
         return float(text)
@@ -260,7 +280,8 @@ def read_table(path: str | os.PathLike, fmt: str) -> FlightLog:
     Raises
     ------
     LogFormatError
-        No ``t_s`` column, a cell that is not a finite number, time not strictly increasing,
+        No ``t_s`` column, a cell that is not a finite number (or a nonzero number that
+        would read as 0 or a subnormal), time not strictly increasing,
         a signal with only some of its columns, a damaged file.
     MissingDependencyError
         Parquet without pyarrow.
@@ -278,8 +299,9 @@ def write_table(log: FlightLog, path: str | os.PathLike, fmt: str) -> Path:
     path : str or os.PathLike
         The file to write (replaced if it exists).
     fmt : str
-        ``"csv"`` (numbers written with every digit: read back exactly) or ``"parquet"``
-        (float64 columns).
+        ``"csv"`` (numbers written with every digit: read back exactly; a subnormal,
+        below ``FLOAT_TINY`` in magnitude, is written as 0, which the reader takes, where
+        it refuses the subnormal) or ``"parquet"`` (float64 columns).
 
     Returns
     -------
@@ -291,6 +313,8 @@ def write_table(log: FlightLog, path: str | os.PathLike, fmt: str) -> Path:
                                 for n in SIGNALS if n in log.signals]
     data = np.hstack(blocks)
     pq = require_pyarrow() if fmt == "parquet" else None
+    if pq is None:
+        data = np.where(np.abs(data) < FLOAT_TINY, np.copysign(0.0, data), data)
     with replacing(path, "write_log path", LogError) as tmp:
         if pq is None:
             with open(tmp, "w", newline="", encoding="utf-8") as f:

@@ -21,11 +21,15 @@ PX4's ground frame is NED and its body frame FRD; both become z-up frames by the
 - ``actuator_outputs``: ``output[n - 1]`` (us) of the channel ``n`` whose ``PWM_MAIN_FUNC{n}``
   is motor ``101 + i`` (channel ``i + 1`` without those parameters) -> ``motor_pwm`` =
   ``(output - PWM_MAIN_MIN{n}) / (PWM_MAIN_MAX{n} - PWM_MAIN_MIN{n})`` (PX4's defaults 1000 and
-  2000 us when not logged, ``meta["pwm_range"]`` says which), clipped to 0..1: a disarmed
+  2000 us when not logged or -1, ``meta["pwm_range"]`` says which; logged, they must lie
+  within ``PWM_RANGE_US``, the minimum below the maximum), clipped to 0..1: a disarmed
   output (PWM_MAIN_DIS, 900 us) is 0, counted in ``meta["motor_pwm_clipped"]``;
 - ``battery_status``: ``voltage_v`` (V) -> ``battery_voltage``;
 - ``vehicle_thrust_setpoint``: ``xyz[2]`` (normalized, FRD: thrust along -z) ->
   ``thrust_command`` = ``-xyz[2]``.
+
+The file must be of a format version PX4 writes (``ULOG_VERSIONS``) and every topic read
+must stamp its samples with ``uint64_t timestamp`` (us), as PX4's do.
 
 Time base: the time stamps (``timestamp``, us) of the first of ``vehicle_local_position``,
 ``vehicle_attitude``, ``vehicle_angular_velocity`` in the log, within the span that every
@@ -39,8 +43,8 @@ counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys
 ``ver_sw``, ...), its rotor geometry in quadcog's order (``rotor_positions_m``,
 ``rotor_directions``: ``-sign(CA_ROTOR{i}_KM)``, KM being positive for a counter-clockwise
 rotor) and parameters of a rotor model (``param.THR_MDL_FAC``, ``param.MPC_THR_HOVER``, ...)
-when logged. A signal with a NaN or
-infinite sample (an estimate not valid yet) is left out and named in
+when logged (as logged: only ``THR_MDL_FAC``, which the thrust curve reads, is checked). A
+signal with a NaN or infinite sample (an estimate not valid yet) is left out and named in
 ``meta["signals_dropped"]``, which ``FlightLog.signal`` quotes when it is asked for.
 """
 import contextlib
@@ -63,6 +67,10 @@ __all__ = ["read_ulog", "write_ulog", "px4_to_quadcog_quaternion", "quaternion_t
            "euler_to_quaternion", "TOPICS", "QUADX_ORDER"]
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
+# The header's file format versions PX4 has written: 0 (its first ULogs, without the flag
+# bits message) and 1 (since, with it); pyulog reads any version as 1, but a later version
+# may change the messages, so it is refused rather than misread
+ULOG_VERSIONS = (0, 1)
 # topic -> the fields the reader uses
 TOPICS = {
     "vehicle_local_position": ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az"),
@@ -92,6 +100,13 @@ MAX_NESTING = 16
 # |q| of a logged attitude quaternion: PX4 logs unit quaternions (float32, |q| = 1 to 1e-6);
 # farther from 1 than this the sample is not an attitude (normalising would hide the damage)
 QUATERNION_NORM_TOLERANCE = 0.1
+# PWM_MAIN_MIN/MAX{n} (us): PX4's pulse widths lie within 0..2500 us (drv_pwm_output.h:
+# PWM_HIGHEST_MAX = 2500); -1 is the older firmware's "not set" (use PWM_MIN/PWM_MAX), read
+# as an absent parameter
+PWM_RANGE_US = (0.0, 2500.0)
+PWM_UNSET = -1
+# THR_MDL_FAC, copied to meta and used by the thrust curve (rotor_model): PX4's range
+THR_MDL_FAC_RANGE = (0.0, 1.0)
 
 
 def px4_to_quadcog_quaternion(q: ArrayLike) -> np.ndarray:
@@ -165,6 +180,11 @@ def _check_messages(path, data):
     if len(data) < 16 or data[:7] != ULOG_MAGIC:
         raise LogFormatError(f"{path}: not a ULog file (it does not start with the ULog magic "
                              f"bytes {ULOG_MAGIC.hex(' ')})")
+    if data[7] not in ULOG_VERSIONS:
+        raise LogFormatError(f"{path}: ULog file format version {data[7]} (header byte 7); "
+                             f"expected {' or '.join(map(str, ULOG_VERSIONS))}, the versions "
+                             "PX4 writes (a later version may define messages this reader "
+                             "would misread)")
     i, end = 16, len(data)
     formats = []
     while i < end:
@@ -262,8 +282,10 @@ def _load(path):
     data = Path(path).read_bytes()
     _check_messages(path, data)
     try:
-        with contextlib.redirect_stdout(io.StringIO()):      # pyulog prints its warnings
-            u = ULog(str(path), message_name_filter_list=list(TOPICS))
+        # pyulog reads the bytes checked above, from memory: given a name it opens the file
+        # itself and leaves it open when it raises (a ResourceWarning)
+        with contextlib.redirect_stdout(io.StringIO()), io.BytesIO(data) as f:
+            u = ULog(f, message_name_filter_list=list(TOPICS))
     except (ULogException, struct.error, ValueError, IndexError, KeyError, OverflowError,
             UnicodeDecodeError) as e:
         raise LogFormatError(f"{path}: pyulog cannot read the ULog ({e})") from None
@@ -276,10 +298,11 @@ def _load(path):
 
 
 def _check_stamps(path, name, data):
-    """A topic the reader uses must have ``timestamp`` as the format defines it: integers
-    (us) that fit an int64, the type the reader computes its steps in."""
+    """A topic the reader uses must have ``timestamp`` as the format defines it,
+    ``uint64_t`` (us since boot: a narrower or signed type wraps or goes negative), with
+    values that fit an int64, the type the reader computes its steps in."""
     stamps = data.get("timestamp")
-    if stamps is None or stamps.dtype.kind not in "iu":
+    if stamps is None or stamps.dtype != np.uint64:
         what = "no field 'timestamp'" if stamps is None else \
             f"a 'timestamp' of type {stamps.dtype}"
         raise LogFormatError(f"{path}: topic {name} has {what}; expected the ULog time stamp "
@@ -323,6 +346,22 @@ def _check_quaternions(path, q, stamps):
                              f"1 +- {QUATERNION_NORM_TOLERANCE:g})")
 
 
+def _check_thr_mdl_fac(path, params):
+    """Refuse a logged ``THR_MDL_FAC`` that is not a number within ``THR_MDL_FAC_RANGE``:
+    meta carries it to the thrust curve (``px4_thrust_curve_from_log``), where a NaN or
+    inf would otherwise be refused without the log's name. The other parameters copied to
+    meta are descriptive: nothing computes with them."""
+    if "THR_MDL_FAC" not in params:
+        return
+    value = params["THR_MDL_FAC"]
+    lo, hi = THR_MDL_FAC_RANGE
+    ok = isinstance(value, (int, float, np.number)) and not isinstance(value, bool) \
+        and lo <= float(value) <= hi          # False for NaN
+    if not ok:
+        raise LogFormatError(f"{path}: parameter THR_MDL_FAC is {value!r}; expected PX4's "
+                             f"thrust model factor, a number within {lo:g}..{hi:g}")
+
+
 def _rotor_map(params):
     """(PX4 motor index of quadcog's rotors 1..4, positions FLU (4, 2), directions, note)."""
     keys = [(f"CA_ROTOR{i}_PX", f"CA_ROTOR{i}_PY", f"CA_ROTOR{i}_KM") for i in range(4)]
@@ -344,6 +383,35 @@ def _rotor_map(params):
     return tuple(order), flu[order], -np.sign(km[order]), "from CA_ROTOR{i}_PX/PY"
 
 
+def _pwm_range(path, params, n):
+    """(PWM_MAIN_MIN{n}, PWM_MAIN_MAX{n}) in us, each None when not logged (or
+    ``PWM_UNSET``); refused unless finite numbers within ``PWM_RANGE_US``, min below max."""
+    lo_us, hi_us = PWM_RANGE_US
+    where = f"for the motor output on channel {n} (actuator_outputs.output[{n - 1}])"
+    keys = (f"PWM_MAIN_MIN{n}", f"PWM_MAIN_MAX{n}")
+    values = []
+    for key in keys:
+        value = params.get(key)
+        ok = value is None or (isinstance(value, (int, float, np.number))
+                               and not isinstance(value, bool)
+                               and np.isfinite(float(value)))
+        if not ok:          # (output - lo) / (hi - lo) would be NaN or a TypeError
+            raise LogFormatError(f"{path}: parameter {key} is {value!r}; expected a finite "
+                                 f"PWM (us) {where}")
+        if value is None or value == PWM_UNSET:
+            values.append(None)
+            continue
+        if not lo_us <= float(value) <= hi_us:
+            raise LogFormatError(f"{path}: parameter {key} is {value!r} us; expected a PWM "
+                                 f"within {lo_us:g}..{hi_us:g} us (PX4's pulse widths) {where}")
+        values.append(float(value))
+    lo, hi = values
+    if lo is not None and hi is not None and not lo < hi:
+        raise LogFormatError(f"{path}: parameters {keys[0]} = {lo:g} us and {keys[1]} = "
+                             f"{hi:g} us; expected the minimum below the maximum {where}")
+    return lo, hi
+
+
 def _motor_pwm(path, d, t_us, order, params):
     """actuator_outputs as 0..1 per quadcog rotor (unclipped), and where its range came from."""
     # a function that is not a whole number (a damaged float parameter) assigns no motor
@@ -356,16 +424,8 @@ def _motor_pwm(path, d, t_us, order, params):
         n = funcs.get(101 + i, i + 1) if funcs else i + 1
         if f"output[{n - 1}]" not in d:
             return None, None
-        lo, hi = params.get(f"PWM_MAIN_MIN{n}"), params.get(f"PWM_MAIN_MAX{n}")
-        for key, value in ((f"PWM_MAIN_MIN{n}", lo), (f"PWM_MAIN_MAX{n}", hi)):
-            ok = value is None or (isinstance(value, (int, float, np.number))
-                                   and not isinstance(value, bool)
-                                   and np.isfinite(float(value)))
-            if not ok:          # (output - lo) / (hi - lo) would be NaN or a TypeError
-                raise LogFormatError(f"{path}: parameter {key} is {value!r}; expected a finite "
-                                     "PWM (us) for the motor output on channel "
-                                     f"{n} (actuator_outputs.output[{n - 1}])")
-        if lo is None or hi is None or not hi > lo:
+        lo, hi = _pwm_range(path, params, n)
+        if lo is None or hi is None:
             lo, hi, defaults = 1000.0, 2000.0, True
         out = np.interp(t_us, ts, d[f"output[{n - 1}]"].astype(np.float64))
         cols.append((out - lo) / (hi - lo))
@@ -406,7 +466,10 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
         ``MAX_NESTING`` or expand beyond ``MAX_FORMAT_BYTES``, a field read as a number
         declared ``char`` or ``bool``, a topic whose time stamps do not increase, no overlap
         of the topics' spans, an attitude sample whose norm is not within
-        ``QUATERNION_NORM_TOLERANCE`` of 1, a PWM range parameter that is not a finite number.
+        ``QUATERNION_NORM_TOLERANCE`` of 1, a PWM range parameter that is not a finite number
+        within ``PWM_RANGE_US`` or a minimum not below its maximum, a file format version
+        not in ``ULOG_VERSIONS``, a time stamp not declared ``uint64_t``, a
+        ``THR_MDL_FAC`` not within ``THR_MDL_FAC_RANGE``.
     LogSignalError
         None of the time-base topics (``vehicle_local_position``, ``vehicle_attitude``,
         ``vehicle_angular_velocity``) is in the log.
@@ -493,6 +556,7 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     params = dict(u.initial_parameters)
     order, positions, directions, note = _rotor_map(params)
     meta = {str(k): str(u.msg_info_dict[k]) for k in _INFO if k in u.msg_info_dict}
+    _check_thr_mdl_fac(path, params)
     meta.update({f"param.{k}": repr(params[k]) for k in _PARAMS if k in params})
     meta.update(vehicle=meta.get("sys_name", "PX4"), time_base=base,
                 start_timestamp_us=str(int(tb[0])), rotor_order=note,
