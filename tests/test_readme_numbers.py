@@ -57,7 +57,7 @@ def test_make_bench_writes_into_out_not_the_tracked_file(tmp_path, monkeypatch):
     spec.loader.exec_module(run)
     for name in ("bench_single_call", "bench_controllers", "bench_op_estimate",
                  "bench_vector_limits", "bench_rotorpy_batched", "bench_rotorpy",
-                 "bench_scale", "bench_crazyflow", "bench_isa",
+                 "bench_scale", "bench_crazyflow", "bench_numba", "bench_isa",
                  "bench_float32"):
         monkeypatch.setattr(run, name, lambda *args: None)
     monkeypatch.setattr(run, "bench_flight", lambda: (None, None, 0.015))
