@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
+from quadcog.identification import _checks
 from quadcog.identification.estimators import (
     REGRESSION_SIGNALS,
     FlightEstimate,
@@ -187,9 +188,11 @@ def as_logs(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
     Raises
     ------
     IdentificationError
-        An empty sequence or an item of another type; the readers' LogError for bad files.
+        An empty sequence or an item of another type, ``what`` not a str; the readers'
+        LogError for bad files.
     """
     from quadcog.logs import FlightLog, read_log
+    _checks.text(what, "as_logs: what")
     expected = "a FlightLog, a log file's path, or a list of them"
     if isinstance(logs, (str, os.PathLike, FlightLog)):
         items = [logs]
@@ -247,15 +250,29 @@ def pooled_estimate(estimates: Sequence[FlightEstimate]
     (numpy.ndarray (3,), numpy.ndarray (3,), float, float, int)
         r_G and its half-widths (m, NaN where not estimated), mass and half-width (kg),
         samples.
+
+    Raises
+    ------
+    IdentificationError
+        ``estimates`` not a non-empty list or tuple of FlightEstimate, or estimates of
+        different methods.
     """
-    from quadcog.identification.segments import block_mean_ci95, speed_corrected
+    from quadcog.identification.segments import _block_mean_ci95, _speed_corrected
+    estimates = _checks.sequence(estimates, "pooled_estimate: estimates", FlightEstimate,
+                                 "FlightEstimate", min_items=1)
+    methods = [e.method for e in estimates]
+    for i, method in enumerate(methods):
+        if method != methods[0] or method not in ("static", "regression"):
+            fail(f"pooled_estimate: estimates[{i}].method",
+                 "'static' or 'regression', the same for every estimate", method,
+                 IdentificationError)
     samples = sum(e.samples for e in estimates)
-    m, m_half = block_mean_ci95(np.concatenate([e.blocks_m for e in estimates]))
+    m, m_half = _block_mean_ci95(np.concatenate([e.blocks_m for e in estimates]))
     if estimates[0].method == "static":
         if len(estimates) == 1:
             r, half = estimates[0].r_G, estimates[0].r_G_ci95
         else:
-            r, half, _ = speed_corrected(np.concatenate([e.blocks_r for e in estimates]),
+            r, half, _ = _speed_corrected(np.concatenate([e.blocks_r for e in estimates]),
                                          np.concatenate([e.blocks_v for e in estimates]))
             half[2] = np.nan
         return r, half, float(m), float(m_half), samples

@@ -29,26 +29,28 @@ import numpy.typing as npt
 
 from quadcog.controllers.design import REFERENCE
 from quadcog.errors import IdentificationError
+from quadcog.identification import _checks
 from quadcog.identification.segments import (
     BLOCK_SECONDS,
     MIN_BLOCKS,
     SPEED_SPREAD,
     HoverWindow,
-    block_mean_ci95,
-    block_means,
+    _block_mean_ci95,
+    _block_means,
+    _speed_corrected,
     body_velocity,
     check_arguments,
     hover_window,
     rotor_thrusts,
-    speed_corrected,
     t_quantile,
     vertical_acceleration,
 )
 from quadcog.logs.flightlog import FlightLog
+from quadcog.logs.signals import SIGNALS
 from quadcog.model.conventions import B_U, rotation_matrix
 from quadcog.model.functions import load
 from quadcog.model.parameters import with_cog
-from quadcog.validate import nonnegative, positive
+from quadcog.validate import fail, nonnegative, positive
 from quadcog.vehicles.rotor_model import RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -84,8 +86,30 @@ def missing_for(log: FlightLog, names: Sequence[str]) -> list[str]:
     -------
     list of str
         Those of ``names`` the log does not have, in their order.
+
+    Raises
+    ------
+    IdentificationError
+        ``log`` not a FlightLog; ``names`` not a list or tuple of names of ``SIGNALS`` (a
+        str is one name, not a sequence of its letters).
     """
+    check_arguments("missing_for", log)
+    names = _checks.sequence(names, "missing_for: names", str, "signal name (str)")
+    for i, n in enumerate(names):
+        if n not in SIGNALS:
+            fail(f"missing_for: names[{i}]", "a name of quadcog.logs.SIGNALS", n,
+                 IdentificationError)
     return [n for n in names if not log.has(n)]
+
+
+def _check_window(where: str, log: FlightLog, window: object) -> None:
+    """Refuse a ``window`` that is neither None nor a HoverWindow of ``log``'s samples."""
+    if window is None:
+        return
+    if not isinstance(window, HoverWindow):
+        fail(f"{where}: window", "a HoverWindow (segments.hover_window) or None", window,
+             IdentificationError)
+    _checks.mask(window.mask, f"{where}: window.mask", log.n_samples)
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,9 +213,13 @@ def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | s
     Raises
     ------
     IdentificationError
-        Missing signals or too few hover samples.
+        Missing signals or too few hover samples; ``log``, ``vehicle``, ``rotor_model`` or
+        ``window`` of another type (a window of another log's samples).
     """
     check_arguments("static_balance", log, vehicle)
+    _checks.vehicle(vehicle, "static_balance: vehicle")
+    _checks.rotor_model(rotor_model, "static_balance: rotor_model")
+    _check_window("static_balance", log, window)
     window = hover_window(log) if window is None else window
     f_all, rotor, _ = rotor_thrusts(log, vehicle, rotor_model)
     notes: list[str] = []
@@ -204,7 +232,7 @@ def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | s
     thrust_up = f.sum(axis=1) * cos_tilt[sel]
     moment = np.column_stack([f @ pos[:, 1], -(f @ pos[:, 0])])      # [U2, U3] (N m)
     lift = g + a_z[sel]
-    blocks = block_means(window.blocks(t), np.column_stack([thrust_up, lift, moment,
+    blocks = _block_means(window.blocks(t), np.column_stack([thrust_up, lift, moment,
                                                             body_velocity(log)[sel]]))
     if len(blocks) < MIN_BLOCKS:
         raise IdentificationError(f"{log.source}: too few hover samples ({sel.sum()} in "
@@ -214,9 +242,9 @@ def static_balance(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | s
     r_b = np.column_stack([-blocks[:, 3] / (m_b * g), blocks[:, 2] / (m_b * g),
                            np.zeros(len(m_b))])
     v_b = blocks[:, 4:6]
-    r, half, slopes = speed_corrected(r_b, v_b)
+    r, half, slopes = _speed_corrected(r_b, v_b)
     half[2] = np.nan
-    m, m_half = block_mean_ci95(m_b)
+    m, m_half = _block_mean_ci95(m_b)
     notes.append(f"vertical acceleration: {a_from}")
     tilt = _rms_tilt(log, sel)
     if tilt is not None and tilt > STATIC_MAX_TILT:
@@ -290,9 +318,14 @@ def regression(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str |
     Raises
     ------
     IdentificationError
-        Missing signals or too few samples.
+        Missing signals or too few samples; ``log``, ``vehicle``, ``rotor_model``, ``window``
+        of another type (a window of another log's samples), ``filter_rate``, ``mass`` or
+        ``min_tilt`` not a finite number in range.
     """
     check_arguments("regression", log, vehicle)
+    _checks.vehicle(vehicle, "regression: vehicle")
+    _checks.rotor_model(rotor_model, "regression: rotor_model")
+    _check_window("regression", log, window)
     filter_rate = positive(filter_rate, "regression: filter_rate", "1/s", IdentificationError)
     min_tilt = nonnegative(min_tilt, "regression: min_tilt", "rad", IdentificationError)
     if mass is not None:

@@ -10,7 +10,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from quadcog.errors import IdentificationError
 from quadcog.files import plot_text
+from quadcog.validate import fail
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -37,7 +39,21 @@ def plot_identification(result: "Identification", path: str | Path | None = None
     -------
     matplotlib.figure.Figure
         The figure (closed when saved).
+
+    Raises
+    ------
+    quadcog.IdentificationError
+        ``result`` not an Identification with per-log estimates, ``path`` neither None nor a
+        path, ``title`` not a str (before matplotlib is imported).
     """
+    from quadcog.identification import _checks
+    from quadcog.identification.core import Identification
+    if not isinstance(result, Identification) or not result.flights:
+        fail("plot_identification: result", "a quadcog Identification with its per-log "
+             "estimates (flights)", result, IdentificationError)
+    if path is not None:
+        path = _checks.path(path, "plot_identification: path")
+    title = _checks.text(title, "plot_identification: title")
     import matplotlib
     if path is not None:
         matplotlib.use("Agg", force=False)

@@ -27,11 +27,12 @@ from collections.abc import Sequence
 import numpy as np
 
 from quadcog.errors import IdentificationError
+from quadcog.identification import _checks
 from quadcog.identification.segments import MAX_GAP, check_arguments, commands_from_mixer
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.logs.ulog import WRITER_HW, WRITER_NAME
-from quadcog.validate import choice, fail, integer
+from quadcog.validate import array, choice, fail, integer
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_BODY_RATE",
@@ -103,6 +104,9 @@ def column_name(log: FlightLog, signal: str, component: int | None = None) -> st
         the signal's (-1 named the last column, True the second).
     """
     check_arguments("column_name", log)
+    if not isinstance(signal, str):         # an array compared with "t" raised ValueError
+        fail("column_name: signal", "'t' or a name of quadcog.logs.SIGNALS", signal,
+             IdentificationError)
     if signal != "t":
         choice(signal, "column_name: signal", SIGNALS, error=IdentificationError)
     if signal == "t":
@@ -134,8 +138,10 @@ def check_log(log: FlightLog) -> None:
     Raises
     ------
     IdentificationError
-        Naming the log, the column and what is wrong, in the log's units.
+        Naming the log, the column and what is wrong, in the log's units; ``log`` not a
+        FlightLog.
     """
+    check_arguments("check_log", log)
     step = float(np.median(np.diff(log.t)))
     span = float(log.t[-1] - log.t[0])
     if not RATE_HZ[0] <= 1.0 / step <= RATE_HZ[1] or span > MAX_SPAN:
@@ -209,8 +215,17 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
     Raises
     ------
     IdentificationError
-        Naming the log and what is impossible.
+        Naming the log and what is impossible; arguments of another type or shape (``mask``
+        not a bool array of the log's samples selecting one at least, ``thrusts`` not finite
+        (N, 4), ``a_z`` not finite (N,), ``a_from`` not a str).
     """
+    check_arguments("hover_physics", log)
+    _checks.vehicle(vehicle, "hover_physics: vehicle")
+    n = log.n_samples
+    mask = _checks.mask(mask, "hover_physics: mask", n)
+    thrusts = array(thrusts, "hover_physics: thrusts", shape=(n, 4), error=IdentificationError)
+    a_z = array(a_z, "hover_physics: a_z", shape=(n,), error=IdentificationError)
+    _checks.text(a_from, "hover_physics: a_from")
     g, weight = vehicle.g, vehicle.m * vehicle.g
     h = float(np.median(log.signal("position")[mask, 2]))
     cos_tilt = _hover_tilt(log, mask, h)
@@ -493,6 +508,11 @@ def check_types(logs: Sequence[FlightLog], baseline: Sequence[FlightLog],
                  IdentificationError)
     if vehicle is not None and not isinstance(vehicle, Vehicle):
         fail("check_types: vehicle", "a quadcog Vehicle or None", vehicle, IdentificationError)
+    for arg, value in (("logs", logs), ("baseline", baseline)):
+        for i, item in enumerate(value):
+            if not isinstance(item, FlightLog):
+                fail(f"check_types: {arg}[{i}]", "a quadcog.logs.FlightLog", item,
+                     IdentificationError)
     named: list[tuple[FlightLog, str]] = []
     for log in list(logs) + list(baseline):
         kind = vehicle_type(log)

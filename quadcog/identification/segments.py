@@ -15,8 +15,9 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
+from quadcog.identification import _checks
 from quadcog.logs.flightlog import FlightLog
-from quadcog.validate import fail, integer, real
+from quadcog.validate import array, fail, integer, positive, real
 from quadcog.vehicles.rotor_model import CRAZYFLIE_FIRMWARE_COMMAND, ROTOR_MODELS, RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
@@ -93,7 +94,14 @@ class HoverWindow:
         -------
         numpy.ndarray of int, shape (n,)
             Block numbers from 0 over the segments in turn; -1 outside every block.
+
+        Raises
+        ------
+        IdentificationError
+            ``t`` not a 1-D array of finite real numbers, ``seconds`` not a finite number > 0.
         """
+        t = array(t, "HoverWindow.blocks: t", shape=(None,), error=IdentificationError)
+        seconds = positive(seconds, "HoverWindow.blocks: seconds", "s", IdentificationError)
         index = np.full(len(t), -1)
         first = 0
         for a, b in self.segments:
@@ -124,8 +132,9 @@ def check_arguments(where: str, log: object, vehicle: object = None) -> None:
     Raises
     ------
     IdentificationError
-        Naming the argument and what was expected.
+        Naming the argument and what was expected (``where`` not a str).
     """
+    _checks.text(where, "check_arguments: where")
     if not isinstance(log, FlightLog):
         fail(f"{where}: log", "a quadcog.logs.FlightLog", log, IdentificationError)
     if vehicle is not None and not isinstance(vehicle, Vehicle):
@@ -210,7 +219,16 @@ def commands_from_mixer(log: FlightLog, vehicle: Vehicle) -> npt.NDArray[np.floa
     -------
     numpy.ndarray of shape (N, 4)
         The commands 0..1 of full scale (clipped), rotors in quadcog's order.
+
+    Raises
+    ------
+    IdentificationError
+        ``log`` not a FlightLog, ``vehicle`` not a Vehicle.
+    LogSignalError
+        The log lacks thrust_command or moment_command.
     """
+    check_arguments("commands_from_mixer", log)
+    _checks.vehicle(vehicle, "commands_from_mixer: vehicle")
     pos = np.asarray(vehicle.rotor_positions)
     d = np.asarray(vehicle.rotor_directions, float)
     T = log.signal("thrust_command")[:, None]
@@ -243,9 +261,11 @@ def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | st
     ------
     IdentificationError
         No rotor model, or the log lacks the signals it needs and no fallback applies (the
-        message names the signals).
+        message names the signals); ``log``, ``vehicle`` or ``rotor_model`` of another type.
     """
     check_arguments("rotor_thrusts", log, vehicle)
+    _checks.vehicle(vehicle, "rotor_thrusts: vehicle")
+    _checks.rotor_model(rotor_model, "rotor_thrusts: rotor_model")
     model = vehicle.rotor_model if rotor_model is None else rotor_model
     if isinstance(model, str):
         if model not in ROTOR_MODELS:
@@ -292,7 +312,13 @@ def vertical_acceleration(log: FlightLog) -> tuple[npt.NDArray[np.float64], str]
     -------
     (numpy.ndarray of shape (N,), str)
         The acceleration (m/s^2) and a phrase saying where it came from.
+
+    Raises
+    ------
+    IdentificationError
+        ``log`` not a FlightLog.
     """
+    check_arguments("vertical_acceleration", log)
     if log.has("acceleration"):
         return log.signal("acceleration")[:, 2], "the logged acceleration"
     if log.has("velocity"):
@@ -315,7 +341,20 @@ def block_means(index: npt.NDArray[np.int_], values: npt.NDArray[np.float64]
     -------
     numpy.ndarray, shape (B, ...)
         One mean per block, B = index.max() + 1.
+
+    Raises
+    ------
+    IdentificationError
+        ``index`` not integers from -1 to n - 1 in one dimension; ``values`` not finite real
+        numbers with n rows.
     """
+    index = _checks.block_index(index, "block_means: index")
+    values = _checks.rows(values, "block_means: values", n_rows=len(index))
+    return _block_means(index, values)
+
+
+def _block_means(index, values):
+    """``block_means`` without the argument checks (the estimators' own arrays)."""
     # one pass over the samples (a mask per block would make it quadratic in the log)
     n_blocks = int(index.max(initial=-1)) + 1
     keep = index >= 0
@@ -368,11 +407,21 @@ def block_mean_ci95(blocks: npt.ArrayLike
     -------
     (numpy.ndarray, numpy.ndarray)
         Mean and half-width, each of shape (...).
+
+    Raises
+    ------
+    IdentificationError
+        ``blocks`` not finite real numbers of at least 2 rows.
     """
+    return _block_mean_ci95(_checks.rows(blocks, "block_mean_ci95: blocks", min_rows=2))
+
+
+def _block_mean_ci95(blocks):
+    """``block_mean_ci95`` without the argument checks (the estimators' own arrays)."""
     b = np.asarray(blocks, dtype=float)
     n = b.shape[0]
     return b.mean(axis=0), t_quantile(n - 1) * b.std(axis=0, ddof=1) / np.sqrt(n) \
-        * np.sqrt(ar1_inflation(b))
+        * np.sqrt(_ar1_inflation(b))
 
 
 def ar1_inflation(blocks: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -388,7 +437,17 @@ def ar1_inflation(blocks: npt.ArrayLike) -> npt.NDArray[np.float64]:
     -------
     numpy.ndarray, shape (...)
         The factor, >= 1.
+
+    Raises
+    ------
+    IdentificationError
+        ``blocks`` not finite real numbers of at least one row.
     """
+    return _ar1_inflation(_checks.rows(blocks, "ar1_inflation: blocks", min_rows=1))
+
+
+def _ar1_inflation(blocks):
+    """``ar1_inflation`` without the argument checks (the estimators' own arrays)."""
     b = np.asarray(blocks, dtype=float)
     if b.shape[0] < 4:
         return np.ones(b.shape[1:])
@@ -412,7 +471,13 @@ def body_velocity(log: FlightLog) -> npt.NDArray[np.float64]:
     -------
     numpy.ndarray, shape (N, 2)
         Forward and left velocity (m/s).
+
+    Raises
+    ------
+    IdentificationError
+        ``log`` not a FlightLog.
     """
+    check_arguments("body_velocity", log)
     if log.has("velocity"):
         v = log.signal("velocity")[:, :2]
     elif log.has("position"):
@@ -450,8 +515,24 @@ def speed_corrected(blocks_r: npt.NDArray[np.float64], blocks_v: npt.NDArray[np.
     (numpy.ndarray (3,), numpy.ndarray (3,), numpy.ndarray (2,))
         r_G, half-widths (the z entry as ``block_mean_ci95`` gives it) and the slopes k
         (m per m/s; 0 where not fitted).
+
+    Raises
+    ------
+    IdentificationError
+        ``blocks_r`` not finite real numbers of shape (B, 3) with B >= 2, ``blocks_v`` not
+        of shape (B, 2), ``spread`` not a finite number >= 0.
     """
-    r, half = block_mean_ci95(blocks_r)
+    blocks_r = _checks.rows(blocks_r, "speed_corrected: blocks_r", columns=3, min_rows=2)
+    blocks_v = _checks.rows(blocks_v, "speed_corrected: blocks_v", columns=2,
+                            n_rows=len(blocks_r))
+    spread = real(spread, "speed_corrected: spread", lo=0.0, unit="m/s",
+                  error=IdentificationError)
+    return _speed_corrected(blocks_r, blocks_v, spread)
+
+
+def _speed_corrected(blocks_r, blocks_v, spread=SPEED_SPREAD):
+    """``speed_corrected`` without the argument checks (the estimators' own arrays)."""
+    r, half = _block_mean_ci95(blocks_r)
     slopes = np.zeros(2)
     n = len(blocks_r)
     for i in (0, 1):
@@ -463,5 +544,5 @@ def speed_corrected(blocks_r: npt.NDArray[np.float64], blocks_v: npt.NDArray[np.
         e = blocks_r[:, i] - A @ coef
         cov = np.linalg.inv(A.T @ A) * (e @ e) / (n - 2)
         r[i], slopes[i] = coef
-        half[i] = t_quantile(n - 2) * np.sqrt(cov[0, 0] * ar1_inflation(e[:, None])[0])
+        half[i] = t_quantile(n - 2) * np.sqrt(cov[0, 0] * _ar1_inflation(e[:, None])[0])
     return r, half, slopes

@@ -13,8 +13,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from quadcog.errors import IdentificationError
+from quadcog.identification import _checks
 from quadcog.model.conventions import rotation_matrix
 from quadcog.sim.sensing import Sensing
+from quadcog.validate import fail, integer, positive, vector
 
 if TYPE_CHECKING:
     from quadcog.logs.flightlog import FlightLog
@@ -65,9 +67,33 @@ def simulated_log(result: "SimulationResult", vehicle: "Vehicle", sensing: Sensi
     Raises
     ------
     IdentificationError
-        No rotor model, or a log rate faster than the simulation's.
+        No rotor model, or a log rate faster than the simulation's; an argument of another
+        type (``result`` not a SimulationResult of two samples at least, ``rate`` not a
+        finite number > 0, ``voltage`` not two finite numbers > 0, ``seed`` not an integer
+        >= 0, ``source`` not a str).
     """
     from quadcog.logs import FlightLog
+    from quadcog.sim.result import SimulationResult
+    from quadcog.vehicles.rotor_model import RotorModel
+    if not isinstance(result, SimulationResult) or len(result.t) < 2:
+        fail("simulated_log: result", "a quadcog SimulationResult of 2 samples at least",
+             result, IdentificationError)
+    _checks.vehicle(vehicle, "simulated_log: vehicle")
+    if sensing is not None and not isinstance(sensing, Sensing):
+        fail("simulated_log: sensing", "a quadcog Sensing or None", sensing,
+             IdentificationError)
+    rate = positive(rate, "simulated_log: rate", "Hz", IdentificationError)
+    v = vector(voltage, "simulated_log: voltage", 2, error=IdentificationError)
+    if not (v > 0).all():
+        fail("simulated_log: voltage", "two battery voltages > 0 (V)", voltage,
+             IdentificationError)
+    voltage = (float(v[0]), float(v[1]))
+    if rotor_model is not None and not isinstance(rotor_model, RotorModel):
+        fail("simulated_log: rotor_model", "a RotorModel or None", rotor_model,
+             IdentificationError)
+    if seed is not None:
+        seed = integer(seed, "simulated_log: seed", lo=0, error=IdentificationError)
+    source = _checks.text(source, "simulated_log: source")
     model = vehicle.rotor_model if rotor_model is None else rotor_model
     if model is None:
         raise IdentificationError(f"vehicle {vehicle.name!r} has no rotor_model: the motor "

@@ -17,10 +17,12 @@ from pathlib import Path
 import sys
 from typing import Any
 
-from quadcog.errors import QuadcogError
+from quadcog.errors import IdentificationError, QuadcogError
 from quadcog.files import atomic_write
+from quadcog.identification import _checks
 from quadcog.identification.core import identify
 from quadcog.logs import read_log
+from quadcog.validate import choice
 from quadcog.vehicles.rotor_model import ROTOR_MODELS
 
 __all__ = ["EXPECTED_DIRECTION", "flights", "survey_rows", "rotor_model_rows", "tables", "main"]
@@ -49,8 +51,10 @@ def flights(root: str | Path) -> list[tuple[str, str, str, Path]]:
     ------
     quadcog.QuadcogError
         No flight files under ``root``.
+    quadcog.IdentificationError
+        ``root`` not a path (a non-empty str or Path).
     """
-    root = Path(root)
+    root = _checks.path(root, "flights: root")
     out = []
     for path in sorted(root.glob("*/*/*_log*")):
         kind, folder = path.parent.parent.name, path.parent.name
@@ -87,7 +91,16 @@ def survey_rows(root: str | Path, rotor_model: str | None = None) -> list[dict[s
     list of dict
         Keys kind, folder, drone, log, dx, dy (mm), size (mm), direction (deg), hx, hy
         (95 % half-widths, mm), dm (mass change, g), mass (g).
+
+    Raises
+    ------
+    quadcog.IdentificationError
+        ``root`` not a path, ``rotor_model`` not None or a name of ``ROTOR_MODELS`` (before
+        any log is read).
     """
+    root = _checks.path(root, "survey_rows: root")
+    if rotor_model is not None:
+        choice(rotor_model, "survey_rows: rotor_model", ROTOR_MODELS, IdentificationError)
     items = flights(root)
     logs = {path: read_log(path) for *_, path in items}
     rows = []
@@ -124,7 +137,13 @@ def rotor_model_rows(root: str | Path) -> list[dict[str, Any]]:
     -------
     list of dict
         As ``survey_rows`` plus key ``model``; only the pooled rows.
+
+    Raises
+    ------
+    quadcog.IdentificationError
+        ``root`` not a path.
     """
+    root = _checks.path(root, "rotor_model_rows: root")
     out = []
     for name in ROTOR_MODELS:
         for row in survey_rows(root, rotor_model=name):
@@ -149,7 +168,13 @@ def tables(root: str | Path) -> str:
     -------
     str
         The markdown, ending in a newline.
+
+    Raises
+    ------
+    quadcog.IdentificationError
+        ``root`` not a path.
     """
+    root = _checks.path(root, "tables: root")
     lines = ["Shift of the CoG against the same drone's normal flights (static hover balance, "
              "rotor model bitcraze-voltage where the log has PWM and battery voltage, else "
              "firmware-command; direction in degrees from body x forward toward y left: "
@@ -189,7 +214,14 @@ def main(argv: list[str] | None = None) -> int:
     -------
     int
         Exit status: 0, or 2 after a one-line error.
+
+    Raises
+    ------
+    quadcog.IdentificationError
+        ``argv`` neither None nor a list or tuple of str.
     """
+    if argv is not None:
+        argv = _checks.sequence(argv, "main: argv", str, "str")
     ap = argparse.ArgumentParser(prog="python -m quadcog.identification.survey",
                                  description="CoG shift of every CrazyPAD flight")
     ap.add_argument("root", type=Path, help="the CrazyPAD folder")
