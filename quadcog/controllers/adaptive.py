@@ -15,7 +15,7 @@ import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.controllers.decoupling import decoupled_input, linearizing_terms
-from quadcog.controllers.design import admissible_estimate_radius, design
+from quadcog.controllers.design import admissible_estimate_radius, design, setting
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.errors import InputError
 from quadcog.kinds import NumberOrNone, NumberOrVec3
@@ -90,7 +90,7 @@ class AdaptiveFeedbackLinearization(FeedbackLinearization):
         if isinstance(projection_radius, str) and projection_radius == "default":
             projection_radius = design(self.vehicle).projection_radius
         elif projection_radius is not None:
-            projection_radius = validate.positive(projection_radius, "projection_radius", "m")
+            projection_radius = setting(projection_radius, "projection_radius", "m")
         # a str other than "default" was refused by validate.positive above
         self.projection_radius = projection_radius
         self.A_error = np.block([[np.zeros((4, 4)), np.eye(4)],

@@ -51,7 +51,7 @@ import numpy.typing as npt
 from quadcog import validate
 from quadcog.controllers.adaptive import AdaptiveFeedbackLinearization
 from quadcog.controllers.allocation import prioritized_input
-from quadcog.controllers.design import design
+from quadcog.controllers.design import design, setting
 from quadcog.kinds import Flag, Number, NumberOrVec3
 from quadcog.model.conventions import B_U, NU
 from quadcog.model.functions import Model
@@ -63,7 +63,7 @@ _P_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
 
 def _positive(name, value):
-    return validate.positive(value, name)
+    return setting(value, name)
 
 
 def unpack_covariance(v: ca.SX | npt.NDArray[np.float64]) -> ca.SX | npt.NDArray[np.float64]:
@@ -207,7 +207,7 @@ class CompositeAdaptive(AdaptiveFeedbackLinearization):
                                     else forgetting)
         self.covariance_bound = _positive("covariance_bound", d.covariance_bound
                                           if covariance_bound is None else covariance_bound)
-        self.force_weight = validate.nonnegative(force_weight, "force_weight")
+        self.force_weight = setting(force_weight, "force_weight", zero=True)
         self.warm_up = (5.0 / self.filter_rate if warm_up is None
                         else validate.nonnegative(warm_up, "warm_up", "s"))
         self.allocation = validate.flag(allocation, "allocation")

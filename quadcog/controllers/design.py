@@ -28,13 +28,16 @@ from dataclasses import dataclass
 import functools
 import math
 
+from quadcog import validate
+from quadcog.model.parameters import LARGEST
 from quadcog.vehicles.vehicle import HUMMINGBIRD, N_ROTORS, Vehicle
 
 __all__ = ["REFERENCE", "REFERENCE_VEHICLE", "DERIVED_SETTINGS", "Design", "design",
            "rotor_bandwidth", "thrust_to_weight", "pendulum_rate", "attitude_rate",
            "similarity", "tilt_limit_of", "adaptation_gain", "filter_rate_of",
            "admissible_estimate_radius", "mass_bounds_of", "PROJECTION_ARM_FRACTION",
-           "ROTOR_FRACTION", "FILTER_ROTOR_FRACTION", "TILT_FRACTION", "MASS_LOWER_FRACTION"]
+           "ROTOR_FRACTION", "FILTER_ROTOR_FRACTION", "TILT_FRACTION", "MASS_LOWER_FRACTION",
+           "setting"]
 
 REFERENCE_VEHICLE = HUMMINGBIRD
 
@@ -50,6 +53,38 @@ TILT_FRACTION = 0.75           # of the tilt at which full thrust just holds the
 PROJECTION_ARM_FRACTION = 1.0  # r_hat within the circle through the rotors
 MASS_LOWER_FRACTION = 0.5      # the lightest mass estimate, of the model's mass
 _MIN_TILT = 0.1                # rad: the floor of max_tilt for a vehicle that can barely hover
+
+
+def setting(value: object, where: str, unit: str | None = None, zero: bool = False) -> float:
+    """A controller's rate, gain or bound given by the caller: a finite number > 0 (>= 0 with
+    ``zero``) and at most ``LARGEST`` (1e6, the parameters' scale), as ``float``.
+
+    Beyond that scale the law's products (a filter rate times a covariance, a gain times a
+    weight) leave the float range, and the first call of the law would blame the state.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    where : str
+        The keyword's name, for the message.
+    unit : str, optional
+        Its unit, named in the message.
+    zero : bool, optional
+        Accept 0 (a weight or a gain that turns a term off).
+
+    Returns
+    -------
+    float
+        ``value`` as a Python float.
+
+    Raises
+    ------
+    InputError
+        ``value`` is not a finite real number in (0, 1e6] (or [0, 1e6] with ``zero``).
+    """
+    x = (validate.nonnegative if zero else validate.positive)(value, where, unit)
+    return validate.real(x, where, lo=0.0, lo_open=not zero, hi=LARGEST, unit=unit)
 
 
 def rotor_bandwidth(vehicle: Vehicle) -> float:

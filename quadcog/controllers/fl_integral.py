@@ -20,10 +20,11 @@ import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.controllers.decoupling import decoupled_input
-from quadcog.controllers.design import design
+from quadcog.controllers.design import design, setting
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.kinds import Number
 from quadcog.model.functions import Model
+from quadcog.model.parameters import LARGEST
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["FeedbackLinearizationIntegral", "ATTITUDE_ROWS"]
@@ -66,8 +67,9 @@ class FeedbackLinearizationIntegral(FeedbackLinearization):
         d = design(self.vehicle)            # the settings not given follow from the vehicle
         integral_pole = d.integral_pole if integral_pole is None else integral_pole
         integral_limit = d.integral_limit if integral_limit is None else integral_limit
-        a = validate.real(integral_pole, "integral_pole", hi=0.0, hi_open=True, unit="1/s")
-        limit = validate.positive(integral_limit, "integral_limit", "rad s")
+        a = validate.real(integral_pole, "integral_pole", lo=-LARGEST, hi=0.0, hi_open=True,
+                          unit="1/s")
+        limit = setting(integral_limit, "integral_limit", "rad s")
         self.integral_pole, self.integral_limit = a, limit
         kp, kd = self.kp[ATTITUDE_ROWS].copy(), self.kd[ATTITUDE_ROWS].copy()
         self.kp[ATTITUDE_ROWS] = kp - a * kd

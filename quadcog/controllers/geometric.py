@@ -58,7 +58,7 @@ import numpy as np
 
 from quadcog import validate
 from quadcog.controllers.base import Controller
-from quadcog.controllers.design import attitude_rate, design, mass_bounds_of, rotor_bandwidth
+from quadcog.controllers.design import attitude_rate, design, mass_bounds_of, rotor_bandwidth, setting
 from quadcog.controllers.payload_adaptive import N_THETA, PayloadAdaptive
 from quadcog.controllers.shaping import second_order_gains
 from quadcog.kinds import Flag, Number, Poles, Vector
@@ -182,16 +182,14 @@ class GeometricAdaptive(Controller):
         self.k_R, self.k_W = second_order_gains(
             d.poles_attitude if poles_attitude is None else poles_attitude, "poles_attitude")
         # the estimator's settings and scales, as PayloadAdaptive holds them
-        self.filter_rate = validate.positive(d.filter_rate if filter_rate is None
-                                             else filter_rate, "filter_rate", "1/s")
-        self.ls_gain = validate.positive(d.ls_gain if ls_gain is None else ls_gain,
-                                         "ls_gain", "1/s")
-        self.forgetting = validate.positive(d.forgetting if forgetting is None else forgetting,
-                                            "forgetting", "1/s")
-        self.covariance_bound = validate.positive(
-            d.covariance_bound if covariance_bound is None else covariance_bound,
-            "covariance_bound")
-        self.force_weight = validate.nonnegative(force_weight, "force_weight")
+        self.filter_rate = (d.filter_rate if filter_rate is None
+                            else setting(filter_rate, "filter_rate", "1/s"))
+        self.ls_gain = d.ls_gain if ls_gain is None else setting(ls_gain, "ls_gain", "1/s")
+        self.forgetting = (d.forgetting if forgetting is None
+                           else setting(forgetting, "forgetting", "1/s"))
+        self.covariance_bound = (d.covariance_bound if covariance_bound is None
+                                 else setting(covariance_bound, "covariance_bound"))
+        self.force_weight = setting(force_weight, "force_weight", zero=True)
         self.gamma = 0.0
         bounds = validate.array(mass_bounds_of(v) if mass_bounds is None else mass_bounds,
                                 "mass_bounds", (2,),
@@ -213,9 +211,8 @@ class GeometricAdaptive(Controller):
         self.motor_states = 4 if (self.motor_lag and v.motor_time_constant > 0) else 0
         self.n_estimator = 75 + self.motor_states      # PayloadAdaptive's state, then Omega_f
         self.n_state = self.n_estimator + 3
-        self.rate_filter = validate.positive(
-            min(rotor_bandwidth(v), 8.0 * attitude_rate(v)) if rate_filter is None
-            else rate_filter, "rate_filter", "1/s")
+        self.rate_filter = (min(rotor_bandwidth(v), 8.0 * attitude_rate(v)) if rate_filter is None
+                            else setting(rate_filter, "rate_filter", "1/s"))
         pi, _, _ = inertial_arguments(self.nominal, "the controller model's parameters")
         self.inertia = pi[N_THETA:]
         self.sigma_inverse = exact_inverse(pseudo_inertia(pi)[:3, :3], "Sigma_O")

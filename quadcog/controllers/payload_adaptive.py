@@ -119,7 +119,7 @@ import numpy.typing as npt
 from quadcog import validate
 from quadcog.controllers.composite import believed_input
 from quadcog.controllers.decoupling import decoupled_input, linearizing_terms
-from quadcog.controllers.design import mass_bounds_of
+from quadcog.controllers.design import mass_bounds_of, setting
 from quadcog.controllers.feedback_linearization import FeedbackLinearization
 from quadcog.errors import PhysicalConsistencyError
 from quadcog.kinds import Flag, Number, Vector
@@ -255,15 +255,15 @@ class PayloadAdaptive(FeedbackLinearization):
         super().__init__(vehicle, model, **kwargs)
         v = self.vehicle
         tau_m = v.motor_time_constant
-        self.filter_rate = (validate.positive(filter_rate, "filter_rate", "1/s")
+        self.filter_rate = (setting(filter_rate, "filter_rate", "1/s")
                             if filter_rate is not None
                             else (0.25 / tau_m if tau_m > 0 else 20.0))
-        self.ls_gain = validate.positive(ls_gain, "ls_gain", "1/s")
-        self.forgetting = (validate.positive(forgetting, "forgetting", "1/s")
+        self.ls_gain = setting(ls_gain, "ls_gain", "1/s")
+        self.forgetting = (setting(forgetting, "forgetting", "1/s")
                            if forgetting is not None else self.filter_rate / 2.5)
-        self.covariance_bound = validate.positive(covariance_bound, "covariance_bound")
-        self.force_weight = validate.nonnegative(force_weight, "force_weight")
-        self.gamma = validate.nonnegative(gamma, "gamma")
+        self.covariance_bound = setting(covariance_bound, "covariance_bound")
+        self.force_weight = setting(force_weight, "force_weight", zero=True)
+        self.gamma = setting(gamma, "gamma", zero=True)
         bounds = validate.array(mass_bounds_of(v) if mass_bounds is None else mass_bounds,
                                 "mass_bounds", (2,),
                                 what="[m_lo, m_hi] relative to the model's mass")

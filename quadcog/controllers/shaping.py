@@ -10,8 +10,9 @@ import numpy.typing as npt
 from quadcog import validate
 from quadcog.model.conventions import IDX, OUTPUT_ROWS
 from quadcog.model.functions import Model
+from quadcog.model.parameters import LARGEST, SMALLEST
 
-__all__ = ["second_order_gains", "tilt_limit", "wrap_angle", "yaw_rotation_T", "desired_tilt",
+__all__ = ["second_order_gains", "checked_poles", "tilt_limit", "wrap_angle", "yaw_rotation_T", "desired_tilt",
            "kinematics", "drag_over_mass"]
 
 
@@ -42,8 +43,41 @@ def second_order_gains(poles: Sequence[complex], what: str) -> tuple[float, floa
     return _gains_of_poles(poles, what)
 
 
+def checked_poles(poles: object, what: str, n: int) -> npt.NDArray[np.complex128]:
+    """``n`` stable poles (``validate.poles``) whose magnitudes lie within [SMALLEST, LARGEST]
+    (1e-9 to 1e6 rad/s): beyond, the gains (products of up to ``n`` poles) overflow to inf or
+    vanish to 0, and the loop has poles other than the ones asked for.
+
+    Parameters
+    ----------
+    poles : sequence of n numbers
+        The poles (rad/s), real or in conjugate pairs, negative real parts.
+    what : str
+        The setting's name, for the error message.
+    n : int
+        How many poles.
+
+    Returns
+    -------
+    (n,) numpy.ndarray of complex128
+        The poles.
+
+    Raises
+    ------
+    InputError
+        When ``poles`` are not ``n`` stable poles of magnitudes within the range.
+    """
+    p = validate.poles(poles, what, n)
+    for k, z in enumerate(p):
+        if not SMALLEST <= abs(z) <= LARGEST:
+            validate.fail(f"{what}[{k}]", f"a pole of magnitude in [{SMALLEST:g}, {LARGEST:g}] "
+                          "rad/s (the gains stay within the float range)",
+                          z.real if z.imag == 0 else z)
+    return p
+
+
 def _gains_of_poles(poles, what):
-    coeffs = np.poly(validate.poles(poles, what, 2))
+    coeffs = np.poly(checked_poles(poles, what, 2))
     return float(coeffs.real[2]), float(coeffs.real[1])
 
 

@@ -8,11 +8,19 @@ read from there (the copy that ships with the package) when quadcog is imported.
 import numpy as np
 import numpy.typing as npt
 
+from quadcog.errors import ParameterError
 from quadcog.model.generated_files import imported_contract
+from quadcog.validate import array, fail, real
 
 __all__ = ["CONTRACT", "STATE_NAMES", "INPUT_NAMES", "PARAM_NAMES", "OUTPUT_NAMES", "FUNCTIONS",
            "N_STATE", "N_INPUT", "N_PARAM", "ETA", "NU", "IDX", "R_G", "OUTPUT_ROWS", "B_U",
-           "rotation_matrix", "hover_trim"]
+           "SMALLEST", "LARGEST", "rotation_matrix", "hover_trim"]
+
+# The scale of every parameter in SI units: m, g, Ixx, Iyy, Izz in [SMALLEST, LARGEST], drag
+# coefficients in [0, LARGEST]. Far wider than any vehicle (a Crazyflie's Ixx is 1.4e-5 kg m^2),
+# and narrow enough that the model's products and inverses (1 / Izz, c v, m g r_G) stay finite.
+# (quadcog.model.parameters, which checks them, exports them too.)
+SMALLEST, LARGEST = 1e-9, 1e6
 
 CONTRACT = imported_contract()
 STATE_NAMES = CONTRACT.vectors["x"]
@@ -60,7 +68,14 @@ def rotation_matrix(phi: float, theta: float, psi: float) -> npt.NDArray[np.floa
     -------
     (3, 3) numpy.ndarray
         R, rotating body-axis components into ground axes.
+
+    Raises
+    ------
+    InputError
+        An angle that is not a finite real number (NaN gave a matrix of NaN).
     """
+    phi, theta, psi = (real(a, name, unit="rad")
+                       for a, name in ((phi, "phi"), (theta, "theta"), (psi, "psi")))
     c, s = np.cos, np.sin
     return (np.array([[c(psi), -s(psi), 0.0], [s(psi), c(psi), 0.0], [0.0, 0.0, 1.0]])
             @ np.array([[c(theta), 0.0, s(theta)], [0.0, 1.0, 0.0], [-s(theta), 0.0, c(theta)]])
@@ -79,8 +94,24 @@ def hover_trim(p: npt.ArrayLike) -> npt.NDArray[np.float64]:
     -------
     (4,) or (B, 4) numpy.ndarray
         U* = [m g, m g y_G, -m g x_G, 0] (N, N m, N m, N m).
+
+    Raises
+    ------
+    ParameterError
+        ``p`` is not one or a stack of parameter vectors of finite numbers with m and g in
+        [SMALLEST, LARGEST] and the CoG offset within LARGEST (NaN gave NaN, 1e200 overflowed).
     """
-    p = np.asarray(p, dtype=float)
+    p = array(p, "p", error=ParameterError)
+    if p.ndim not in (1, 2) or p.shape[-1] != N_PARAM:
+        fail("p", f"an array of shape ({N_PARAM},) or (B, {N_PARAM})",
+             f"an array of shape {p.shape}", ParameterError)
+    for k, lo in (("m", SMALLEST), ("g", SMALLEST), ("x_G", -LARGEST), ("y_G", -LARGEST)):
+        column = p[..., IDX[k]]
+        bad = np.flatnonzero((column < lo) | (column > LARGEST))
+        if bad.size:
+            fail(f"p[{IDX[k]}] ({k})" if p.ndim == 1 else f"p[{bad[0]}, {IDX[k]}] ({k})",
+                 f"a number in [{lo:g}, {LARGEST:g}] (SI units, docs/model.md sec. 1.4)",
+                 column.flat[bad[0]], ParameterError)
     mg = p[..., IDX["m"]] * p[..., IDX["g"]]
     return np.stack([mg, mg * p[..., IDX["y_G"]], -mg * p[..., IDX["x_G"]], np.zeros_like(mg)],
                     axis=-1)

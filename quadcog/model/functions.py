@@ -19,7 +19,7 @@ from quadcog.model.inertial_parameters import check_physically_consistent
 from quadcog.model.parameters import check_parameters
 from quadcog.model.shared_docs import shared_parameters
 from quadcog.paths import generated_dir
-from quadcog.validate import array, nonnegative, positive, vector
+from quadcog.validate import array, nonnegative, plain, positive, vector
 
 __all__ = ["Linearization", "Model", "load"]
 
@@ -46,6 +46,28 @@ def _as_vector_or_matrix(value: ArrayLike) -> np.ndarray:
     """``value`` as a float array of real numbers for reshaping, or InputError naming R
     (``validate.array``: bools, complex numbers, strings and ragged lists refused, not cast)."""
     return array(value, "R", finite=False, what="a finite (3, 3) rotation matrix")
+
+
+def _checked_out(out: Any, spec_out: Any) -> tuple[np.ndarray, ...]:
+    """``out`` as a tuple of writeable float64 arrays of the output shapes, or InputError (a
+    list, an int or a read-only array would raise raw or truncate the results silently)."""
+    if len(spec_out) > 1:
+        if not isinstance(out, (tuple, list)) or len(out) != len(spec_out):
+            raise InputError(f"out: expected a tuple of {len(spec_out)} arrays (one per output: "
+                             f"{', '.join(n for n, _ in spec_out)}), got {plain(out)}")
+        outs = tuple(out)
+    else:
+        outs = (out,)
+    for dst, (oname, shape) in zip(outs, spec_out):
+        if not (isinstance(dst, np.ndarray) and dst.shape == shape and dst.dtype == np.float64
+                and dst.flags.writeable):
+            kind = ("a read-only array" if isinstance(dst, np.ndarray) and dst.shape == shape
+                    and dst.dtype == np.float64 else
+                    f"an array of shape {dst.shape} and dtype {dst.dtype}"
+                    if isinstance(dst, np.ndarray) else plain(dst))
+            raise InputError(f"out for {oname} must have shape {shape} (expected a writeable "
+                             f"float64 numpy array), got {kind}")
+    return outs
 
 
 def _key(value: object) -> bytes | None:
@@ -95,9 +117,9 @@ class Model:
         return self._library.contract
 
     def _known(self, name: str) -> None:
-        if name not in self._library.contract:
-            raise InputError(f"unknown function {name!r}; expected one of "
-                             f"{tuple(self._library.contract)}")
+        if not isinstance(name, str) or name not in self._library.contract:
+            raise InputError(f"name: expected one of {tuple(self._library.contract)} (a "
+                             f"generated function), got {plain(name)}")
 
     def call(self, name: str, *args: ArrayLike, out: Any = None) -> Any:
         """Evaluate the generated function ``name`` on numpy arguments.
@@ -184,6 +206,7 @@ class Model:
                 f"{', '.join(self._library.contract) or 'none'}): the manifest is damaged or "
                 f"from another version; run `make derive` in a checkout, or reinstall quadcog")
         spec_in, spec_out = spec
+        outs = None if out is None else _checked_out(out, spec_out)
         call = self._calls.get(name)
         if call is None:
             call = self._calls[name] = self.fast(name)
@@ -214,14 +237,10 @@ class Model:
                     f"{name}: {oname} is not finite (it overflows) at {given}; expected "
                     "inputs within the model's range (states, inputs and parameters of a "
                     "vehicle that flies)")
-        if out is None:
+        if outs is None:
             results = [o.copy() for o in call.outputs]
         else:
-            outs = out if len(spec_out) > 1 else (out,)
-            for dst, src, (oname, shape) in zip(outs, call.outputs, spec_out):
-                if np.shape(dst) != shape:
-                    raise InputError(f"out for {oname} must have shape {shape}, "
-                                     f"got {np.shape(dst)}")
+            for dst, src in zip(outs, call.outputs):
                 dst[...] = src
             results = list(outs)
         if len(results) == 1:
@@ -734,10 +753,16 @@ def load(folder: str | os.PathLike[str] | None = None) -> Model:
 
     Raises
     ------
+    InputError
+        ``folder`` is not a path (or an empty one).
     GeneratedFilesError
         Naming the file when generated/ is missing, corrupted or incomplete, and what to do
         about it.
     """
+    if folder is not None and (not isinstance(folder, (str, os.PathLike))
+                               or not os.fspath(folder)):
+        raise InputError(f"folder: expected the path of a generated folder (a non-empty str "
+                         f"or os.PathLike), got {plain(folder)}")
     folder = generated_dir() if folder is None else folder
     folder = Path(folder).resolve()
     with _cache_lock:

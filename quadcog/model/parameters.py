@@ -21,16 +21,11 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog.errors import ParameterError
-from quadcog.model.conventions import IDX, N_PARAM, PARAM_NAMES, R_G
-from quadcog.validate import vector
+from quadcog.model.conventions import IDX, LARGEST, N_PARAM, PARAM_NAMES, R_G, SMALLEST
+from quadcog.validate import array, fail, vector
 
 __all__ = ["SMALLEST", "LARGEST", "MARGIN", "inertia_about_cog", "inertia_ratio",
            "admissible_radius", "is_admissible", "with_cog", "check_parameters"]
-
-# The scale of every parameter in SI units: m, g, Ixx, Iyy, Izz in [SMALLEST, LARGEST], drag
-# coefficients in [0, LARGEST]. Far wider than any vehicle (a Crazyflie's Ixx is 1.4e-5 kg m^2),
-# and narrow enough that the model's products and inverses (1 / Izz, c v, m g r_G) stay finite.
-SMALLEST, LARGEST = 1e-9, 1e6
 
 # 1 %: I_G^-1 is then at most 100x I_O^-1, and the admissible radius of the default vehicle
 # shrinks by only 0.5 % (from 10.15 cm to 10.09 cm).
@@ -49,7 +44,28 @@ def inertia_about_cog(p: npt.ArrayLike) -> npt.NDArray[np.float64]:
     -------
     (3, 3) or (..., 3, 3) numpy.ndarray
         I_G in kg m^2, body axes.
+
+    Raises
+    ------
+    ParameterError
+        ``p`` is not an array of finite numbers whose last axis has 14 entries, or I_G
+        overflows the float range (a CoG offset of 1e200 m gave inf).
     """
+    p = array(p, "p", error=ParameterError)
+    if p.ndim == 0 or p.shape[-1] != N_PARAM:
+        fail("p", f"an array of shape ({N_PARAM},) or (..., {N_PARAM})",
+             f"an array of shape {p.shape}", ParameterError)
+    inertia = _inertia_about_cog(p)
+    if not np.isfinite(inertia).all():
+        raise ParameterError(f"p: the inertia about the CoG overflows the float range (largest "
+                             f"|entry| of p: {float(np.abs(p).max()):.3g}); expected a CoG "
+                             f"offset and a mass within the model's scale (docs/model.md sec. "
+                             f"1.4)")
+    return inertia
+
+
+def _inertia_about_cog(p: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """``inertia_about_cog`` unchecked: inf or NaN where the numbers overflow."""
     p = np.asarray(p, dtype=float)
     r = p[..., R_G]
     with np.errstate(over="ignore", invalid="ignore"):
@@ -81,7 +97,7 @@ def inertia_ratio(p: npt.ArrayLike) -> Any:
     p = np.asarray(p, dtype=float)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         scale = 1.0 / np.sqrt(p[..., IDX["Ixx"]:IDX["Izz"] + 1])
-        S = scale[..., :, None] * inertia_about_cog(p) * scale[..., None, :]
+        S = scale[..., :, None] * _inertia_about_cog(p) * scale[..., None, :]
     finite = np.isfinite(S).all(axis=(-2, -1))
     S = np.where(finite[..., None, None], S, 0.0)
     ratio = np.where(finite, np.linalg.eigvalsh(0.5 * (S + np.swapaxes(S, -1, -2)))[..., 0],
@@ -139,9 +155,15 @@ def with_cog(p: npt.ArrayLike, r_G: npt.ArrayLike) -> npt.NDArray[np.float64]:
     -------
     (14,) numpy.ndarray
         A new parameter vector.
+
+    Raises
+    ------
+    InputError
+        ``p`` is not 14 finite numbers or ``r_G`` not 3 (a string or two numbers raised
+        ValueError, NaN was copied in).
     """
-    p = np.array(p, dtype=float)
-    p[R_G] = r_G
+    p = vector(p, "p", N_PARAM)
+    p[R_G] = vector(r_G, "r_G", 3)
     return p
 
 

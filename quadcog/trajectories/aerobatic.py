@@ -110,7 +110,7 @@ class Flip(Trajectory):
         self.yaw = validate.real(self.yaw, "flip yaw", unit="rad")
 
     def _pvaj(self, t):
-        T = self.duration
+        T = np.float64(self.duration)   # numpy's powers: T**3 of 1e308 s is inf, not OverflowError
         s, s1, s2, s3 = septic_step((t - self.start) / T)
         k = 2 * np.pi
         heading = np.cos(self.yaw) * _E1 + np.sin(self.yaw) * _E2
@@ -168,7 +168,7 @@ class BankedCircle(Trajectory):
         return float(np.sqrt(self.g * np.tan(np.radians(self.bank_deg)) / self.radius))
 
     def _pvaj(self, t):
-        w, T = self.rate, self.ramp
+        w, T = self.rate, np.float64(self.ramp)     # numpy's powers (inf, not OverflowError)
         tau = t / T
         sigma, sigma1, sigma2, _ = septic_step(tau)
         c = np.clip(tau, 0.0, 1.0)
