@@ -340,7 +340,7 @@ def export_controller(controller: str | Controller, precision: str = "float32",
     quadcog.errors.InputError
         For an unknown controller name.
     """
-    if not isinstance(out, (str, os.PathLike)):
+    if not isinstance(out, (str, os.PathLike)) or "\0" in os.fspath(out):
         raise ExportError(f"out: expected a folder path (str or os.PathLike), got {out!r} "
                           f"({type(out).__name__})")
     if name is not None:
@@ -362,6 +362,10 @@ def export_controller(controller: str | Controller, precision: str = "float32",
     paths = []
     for fname, text in files.items():
         path = out / fname
-        path.write_text(text)
+        try:
+            path.write_text(text)
+        except OSError as e:
+            raise ExportError(f"{path}: cannot write the exported file ({e.strerror})") \
+                from None
         paths.append(path)
     return paths

@@ -687,8 +687,11 @@ def sweep_path(spec: str | os.PathLike[str]) -> Path:
     Raises
     ------
     quadcog.errors.SweepError
-        When it is neither a file nor a shipped name.
+        When it is neither a file nor a shipped name (or not a str or os.PathLike).
     """
+    if not isinstance(spec, (str, os.PathLike)) or spec == "":
+        raise SweepError(f"sweep: expected a sweep file path or a shipped sweep name "
+                         f"({', '.join(sweep_names())}), got {spec!r} ({type(spec).__name__})")
     return find_file(spec, "sweep")
 
 

@@ -26,7 +26,9 @@ from quadcog.model.conventions import IDX
 from quadcog.studies.analysis.adaptive_design import design_checks, lyapunov_study, plot_lyapunov
 from quadcog.studies.analysis.analysis_files import write_json, write_latex, write_markdown
 from quadcog.studies.analysis.failure_map import (
+    THRESHOLD,
     adaptive_failures_vs_projection,
+    check_arguments,
     failure_map,
     plot_failure_map,
     save_failure_map,
@@ -211,6 +213,8 @@ def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = Tr
         The summary (the numbers of analysis.json, as Python/numpy values; complex
         eigenvalues stay complex).
     """
+    # the failure map's arguments are checked before the first part's minutes of work
+    check_arguments(grid, THRESHOLD, duration, 1.0, THRESHOLD, ("pd", "fl", "adaptive"), None)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

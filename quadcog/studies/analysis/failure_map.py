@@ -8,14 +8,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from quadcog import config
+from quadcog import config, validate
 from quadcog.controllers import AdaptiveFeedbackLinearization, CascadePD, FeedbackLinearization, make_controller
 from quadcog.controllers.adaptive import admissible_estimate_radius
 from quadcog.controllers.base import Controller
-from quadcog.errors import ParameterError
+from quadcog.errors import ParameterError, SizeError
 from quadcog.model.conventions import N_STATE, R_G
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
 from quadcog.sim.flight import RK4_LIMIT
+from quadcog.sweeps.spec import MAX_FLIGHTS
 from quadcog.trajectories.analytic import Hover
 from quadcog.vehicles.vehicle import HUMMINGBIRD, default_parameters
 
@@ -109,6 +110,27 @@ def rk4_stiffness(controller: Controller, params: NDArray[np.float64],
                      range(params.shape[0])]) * dt
 
 
+def check_arguments(grid, half_width, duration, t_step, threshold, controllers, progress):
+    """failure_map's arguments checked (InputError naming the argument), as plain values."""
+    grid = validate.integer(grid, "failure_map: grid (points per axis)", lo=1)
+    half_width = validate.positive(half_width, "failure_map: half_width", unit="m")
+    duration = validate.positive(duration, "failure_map: duration", unit="s")
+    t_step = validate.nonnegative(t_step, "failure_map: t_step", unit="s")
+    threshold = validate.positive(threshold, "failure_map: threshold", unit="m")
+    if isinstance(controllers, (str, bytes)) or not isinstance(controllers, Sequence):
+        validate.fail("failure_map: controllers", "a sequence of controller names such as "
+                      "('pd', 'fl')", controllers)
+    controllers = tuple(controllers)
+    if len(set(map(repr, controllers))) != len(controllers):
+        validate.fail("failure_map: controllers", "distinct controller names", controllers)
+    if progress is not None and not callable(progress):
+        validate.fail("failure_map: progress", "a callable(fraction) or None", progress)
+    if grid * grid * max(len(controllers), 1) > MAX_FLIGHTS:
+        raise SizeError(f"failure_map: grid = {grid}: {grid}^2 offsets x {len(controllers)} "
+                        f"controllers is more than the {MAX_FLIGHTS} flights of one sweep")
+    return grid, half_width, duration, t_step, threshold, controllers
+
+
 def failure_map(grid: int = 41, half_width: float = HUMMINGBIRD.arm_length,
                 duration: float = 20.0, t_step: float = 1.0,
                 controllers: Sequence[str] = ("pd", "fl", "adaptive"),
@@ -153,6 +175,8 @@ def failure_map(grid: int = 41, half_width: float = HUMMINGBIRD.arm_length,
     from quadcog.sweeps.runner import sweep
     from quadcog.sweeps.spec import from_dict, read_sweep_file
     t0 = time.perf_counter()
+    grid, half_width, duration, t_step, threshold, controllers = check_arguments(
+        grid, half_width, duration, t_step, threshold, controllers, progress)
     data, path = read_sweep_file("failure-map")
     data["set"].update({"duration": float(duration), "cog[0].t": float(t_step)})
     data["threshold"] = float(threshold)
