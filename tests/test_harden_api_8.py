@@ -57,6 +57,24 @@ def test_export_refuses_a_null_byte_folder():
 
 def test_export_names_a_file_it_cannot_write(tmp_path):
     (tmp_path / "quadcog_pd.h").mkdir()
-    with pytest.raises(ExportError, match="quadcog_pd.h: cannot write"):
+    with pytest.raises(ExportError, match=r"quadcog_pd\.h: is a folder"):
         export_controller("pd", out=tmp_path)
     assert os.path.isdir(tmp_path / "quadcog_pd.h")
+
+
+def test_export_writes_its_header_and_source_together_or_not_at_all(tmp_path):
+    """A source that cannot be replaced (here a folder) leaves the old header as it was: the
+    export wrote the new header first, then failed on the source, leaving a mismatched pair."""
+    (tmp_path / "quadcog_pd.h").write_text("/* the old header */")
+    (tmp_path / "quadcog_pd.c").mkdir()
+    with pytest.raises(ExportError, match=r"quadcog_pd\.c: is a folder"):
+        export_controller("pd", out=tmp_path)
+    assert (tmp_path / "quadcog_pd.h").read_text() == "/* the old header */"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["quadcog_pd.c", "quadcog_pd.h"]
+
+
+def test_export_refuses_an_empty_folder_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ExportError, match=r"^out: expected a folder path"):
+        export_controller("pd", out="")
+    assert not list(tmp_path.iterdir())

@@ -22,7 +22,8 @@ from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import CONTROLLERS, make_controller
 from quadcog.embedded.c_text import c_identifier, comment_text
 from quadcog.embedded.emit import C_TYPE, PRECISIONS, body, literal
-from quadcog.errors import ExportError
+from quadcog.errors import ExportError, QuadcogError
+from quadcog.files import RunFiles, output_path
 from quadcog.model.conventions import N_STATE, PARAM_NAMES, STATE_NAMES
 from quadcog.trajectories.analytic import REF_SIZE
 
@@ -340,9 +341,9 @@ def export_controller(controller: str | Controller, precision: str = "float32",
     quadcog.errors.InputError
         For an unknown controller name.
     """
-    if not isinstance(out, (str, os.PathLike)) or "\0" in os.fspath(out):
-        raise ExportError(f"out: expected a folder path (str or os.PathLike), got {out!r} "
-                          f"({type(out).__name__})")
+    if not isinstance(out, (str, os.PathLike)) or "\0" in os.fspath(out) or not os.fspath(out):
+        raise ExportError(f"out: expected a folder path (str or os.PathLike; '.' for the "
+                          f"working folder), got {out!r} ({type(out).__name__})")
     if name is not None:
         c_identifier(name, "name")
     if isinstance(controller, str):
@@ -355,17 +356,19 @@ def export_controller(controller: str | Controller, precision: str = "float32",
         controller = make_controller(controller)
     files = render(controller, precision, name, command)
     out = Path(out)
+    # the header and the source are committed together (temporary files, then both renamed):
+    # a failure leaves the old pair or none, never a new header beside an old source
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        with RunFiles(out, owned=()) as pair:
+            for fname, text in files.items():
+                if os.path.lexists(out / fname):     # a folder, link or FIFO is not replaced
+                    output_path(out / fname, "exported file", ExportError)
+                pair.path(fname).write_text(text)
     except OSError as e:
-        raise ExportError(f"out = {str(out)!r}: cannot create the folder ({e.strerror})") from None
-    paths = []
-    for fname, text in files.items():
-        path = out / fname
-        try:
-            path.write_text(text)
-        except OSError as e:
-            raise ExportError(f"{path}: cannot write the exported file ({e.strerror})") \
-                from None
-        paths.append(path)
-    return paths
+        where = e.filename or out
+        raise ExportError(f"{where}: cannot write the exported file ({e.strerror})") from None
+    except QuadcogError as e:
+        if isinstance(e, ExportError):
+            raise
+        raise ExportError(f"out = {str(out)!r}: {e}") from None
+    return [out / fname for fname in files]
