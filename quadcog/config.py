@@ -21,7 +21,10 @@ Keys:
 """
 from typing import Any
 
-__all__ = ["defaults", "reset_defaults", "get"]
+from quadcog import validate
+from quadcog.errors import InputError
+
+__all__ = ["defaults", "reset_defaults", "get", "RANGES"]
 
 _FACTORY: dict[str, Any] = {
     "simulate.dt": 1e-3,
@@ -35,6 +38,18 @@ _FACTORY: dict[str, Any] = {
 }
 
 defaults: dict[str, Any] = dict(_FACTORY)
+
+# What each entry may be, checked where it is read (a caller may have set anything: a NaN
+# tail fraction gave NaN metrics, "a" a raw TypeError): (lo, hi, lo_open, unit)
+RANGES: dict[str, tuple[float, float | None, bool, str | None]] = {
+    "simulate.dt": (0.0, None, True, "s"),
+    "limits.max_position_error": (0.0, None, True, "m"),
+    "limits.max_tilt_deg": (0.0, 180.0, True, "deg"),
+    "metrics.tail_fraction": (0.0, 1.0, True, None),
+    "simulate.max_steps": (1.0, None, False, None),
+    "run.sample_period": (0.0, None, True, "s"),
+    "progress.log_every": (0.0, None, True, "s"),
+}
 
 
 def reset_defaults() -> None:
@@ -50,18 +65,32 @@ def reset_defaults() -> None:
 
 
 def get(key: str, value: Any = None) -> Any:
-    """``value`` when it is given (not None), else ``defaults[key]``.
+    """``value`` when it is given (not None), else ``defaults[key]``, checked.
 
     Parameters
     ----------
     key : str
         An entry of ``defaults``, e.g. ``"simulate.dt"``.
     value : object, optional
-        The value the caller was given; None means "use the default".
+        The value the caller was given (its caller checks it); None means "use the default".
 
     Returns
     -------
     object
-        ``value``, or ``defaults[key]`` when ``value`` is None (read now, at the call).
+        ``value``, or ``defaults[key]`` when ``value`` is None (read now, at the call) as a
+        float within ``RANGES[key]``.
+
+    Raises
+    ------
+    InputError
+        The entry was deleted, or is not a number within ``RANGES[key]``; the message names
+        ``quadcog.config.defaults['key']``.
     """
-    return defaults[key] if value is None else value
+    if value is not None:
+        return value
+    where = f"quadcog.config.defaults[{key!r}]"
+    if key not in defaults:
+        raise InputError(f"{where}: expected an entry (it was deleted; "
+                         "quadcog.config.reset_defaults() restores it), got none")
+    lo, hi, lo_open, unit = RANGES[key]
+    return validate.real(defaults[key], where, lo=lo, hi=hi, lo_open=lo_open, unit=unit)

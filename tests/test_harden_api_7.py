@@ -2,12 +2,14 @@
 controller settings beyond the float range, aerobatic timescales, quadcog.config.defaults.
 
 Each hostile value must give a typed quadcog error (never a raw exception, a NaN or an inf)."""
+import re
+
 import numpy as np
 import pytest
 
 import quadcog
 from quadcog import config
-from quadcog.errors import QuadcogError
+from quadcog.errors import InputError, QuadcogError
 from quadcog.trajectories.aerobatic import BankedCircle, Flip
 
 P = quadcog.HUMMINGBIRD.parameters()
@@ -177,3 +179,17 @@ def test_hostile_config_defaults_named(restore_defaults, key, value, use):
 def test_deleted_config_default_named(restore_defaults, use):
     del config.defaults["simulate.dt"]
     _refused(USES[use], "simulate.dt")
+
+
+@pytest.mark.parametrize("key", ["simulate.dt", "limits.max_tilt_deg", "metrics.tail_fraction",
+                                 "simulate.max_steps", "run.sample_period"])
+def test_every_reader_of_a_default_checks_it(restore_defaults, key):
+    """The check is in quadcog.config.get, which every reader goes through: a scenario file's
+    reader took simulate.dt and the limits from the dict directly (a NaN step was read)."""
+    from quadcog.scenarios.scenario import load_scenario
+    config.defaults[key] = float("nan")
+    with pytest.raises(InputError, match=re.escape(f"quadcog.config.defaults[{key!r}]")):
+        config.get(key)
+    if key not in ("run.sample_period", "metrics.tail_fraction"):     # read by a run, not at load
+        with pytest.raises(InputError, match=re.escape(f"quadcog.config.defaults[{key!r}]")):
+            load_scenario("fig6")

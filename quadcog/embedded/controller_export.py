@@ -148,7 +148,7 @@ def _header(name, controller, precision, command, nc, dt=None):
     N = name.upper()
     c_type = C_TYPE[precision]
     is_float = 1 if precision == "float32" else 0
-    dt = config.defaults["simulate.dt"] if dt is None else dt
+    dt = config.get("simulate.dt", dt)
     p = controller.nominal
     params = [f" *   {n:<8s} = {v:.6g} {PARAM_UNITS[n]}" for n, v in zip(PARAM_NAMES, p)]
     consts = []

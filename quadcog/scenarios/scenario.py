@@ -105,7 +105,7 @@ class Scenario:
     name: str
     controller: str
     duration: float
-    dt: float = field(default_factory=lambda: config.defaults["simulate.dt"])
+    dt: float = field(default_factory=lambda: config.get("simulate.dt"))
     description: str = ""
     path: str = "compiled"
     trajectory: Trajectory = field(default_factory=Hover)
@@ -327,9 +327,9 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
     controller = validate.choice(data["controller"], w("controller"), controller_names(),
                                  ScenarioError)
     duration = validate.positive(data["duration"], w("duration"), "s", ScenarioError)
-    dt = validate.positive(data.get("dt", config.defaults["simulate.dt"]), w("dt"), "s",
+    dt = validate.positive(data.get("dt", config.get("simulate.dt")), w("dt"), "s",
                            ScenarioError)
-    validate.step_count(duration, dt, config.defaults["simulate.max_steps"], source,
+    validate.step_count(duration, dt, int(config.get("simulate.max_steps")), source,
                         ScenarioError)
     validate.choice(data.get("path", "compiled"), w("path"), ("compiled", "python"),
                     ScenarioError)
@@ -365,10 +365,10 @@ def parse(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
         _validate(stack, STACK, source, "stack.")
         validate.choice(stack.get("name"), w("stack.name"), STACKS, ScenarioError)
     max_error = validate.positive(
-        limits.get("max_position_error", config.defaults["limits.max_position_error"]),
+        limits.get("max_position_error", config.get("limits.max_position_error")),
         w("limits.max_position_error"), "m", ScenarioError)
     max_tilt_deg = validate.real(
-        limits.get("max_tilt_deg", config.defaults["limits.max_tilt_deg"]),
+        limits.get("max_tilt_deg", config.get("limits.max_tilt_deg")),
         w("limits.max_tilt_deg"), lo=0.0, lo_open=True, hi=180.0, unit="deg",
         error=ScenarioError)
     offset = [float(v) for v in data.get("initial_offset", (0.0, 0.0, 0.0))]
@@ -685,7 +685,7 @@ def run_file(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = 
     check_outputs([(f"--out (its {name})", out / name) for name in RUN_FILES],
                   inputs)
     if every is None:                       # the command's default: decimated, not every step
-        every = max(1, round(config.defaults["run.sample_period"] / scenario.dt))
+        every = max(1, round(config.get("run.sample_period") / scenario.dt))
     try:
         if scenario.stack:
             if stack_runner is None:

@@ -11,13 +11,12 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from quadcog import validate
+from quadcog import config, validate
 from quadcog.codegen.vector_kernel import VectorKernel, kernel_for
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_STATE, R_G
 from quadcog.model.parameters import MARGIN, check_parameters, inertia_ratio
-from quadcog.sim import defaults
 from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, SLOW_INPUTS, monitored_chunk_function, monitored_step, packed
 from quadcog.sim.divergence import DivergenceCause, Limits, divergence_rule, magnitude
 from quadcog.sim.plant import Actuation, TruthOptions
@@ -323,7 +322,7 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
     progress = validate.user_function(progress, "progress") if progress else None
     threads = validate.integer(threads, "threads", lo=1, hi=1024)
     cog_scale = _cog_scale(cog_shape)
-    dt = defaults.default_dt(dt)
+    dt = config.get("simulate.dt", dt)
     vehicles, params, actuation = _vehicles(vehicles, options)
     if controller_model is None:
         b = _same_but_cog(params)

@@ -8,11 +8,10 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from quadcog import validate
+from quadcog import config, validate
 from quadcog.codegen.fastcall import evaluate
 from quadcog.errors import EulerSingularityError
 from quadcog.model.conventions import N_STATE
-from quadcog.sim import defaults
 
 __all__ = ["Limits", "DivergenceCause", "divergence_code", "divergence_rule", "magnitude",
            "first_divergence", "check_euler_singularity"]
@@ -40,8 +39,10 @@ class Limits:
         A limit that is not a number in its range, or a default in ``quadcog.config.defaults``
         that is not one (named by its key).
     """
-    max_position_error: float = field(default_factory=lambda: defaults.max_position_error())
-    max_tilt: float = field(default_factory=lambda: defaults.max_tilt())
+    max_position_error: float = field(
+        default_factory=lambda: config.get("limits.max_position_error"))
+    max_tilt: float = field(
+        default_factory=lambda: math.radians(config.get("limits.max_tilt_deg")))
 
     def __post_init__(self) -> None:
         # frozen: set the checked floats through object.__setattr__

@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 import numpy.typing as npt
 
-from quadcog import validate
+from quadcog import config, validate
 from quadcog.codegen.fastcall import evaluate
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError, QuadcogWarning
@@ -22,7 +22,6 @@ from quadcog.model.conventions import IDX, N_STATE, R_G, rotation_matrix
 from quadcog.model.inertial_parameters import N_PI, check_physically_consistent
 from quadcog.model.inertial_parameters import is_physically_consistent as consistency_ok
 from quadcog.model.parameters import LARGEST, check_parameters, with_cog
-from quadcog.sim import defaults
 from quadcog.sim.closed_loop import ACCUMULATORS
 from quadcog.sim.divergence import Limits, first_divergence
 from quadcog.sim.plant import PI_INDEX, Actuation, TruthOptions, body_mass_and_cog, initial_rotor_thrusts
@@ -134,7 +133,7 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     """
     options, limits = run_options(truth, limits, progress)
     validate.flag(check_dt, "check_dt")
-    dt = defaults.default_dt(dt)
+    dt = config.get("simulate.dt", dt)
     validate.choice(path, "path", ("compiled", "python"))
     is_law = isinstance(controller, Controller)
     if not is_law and not (path == "python" and callable(controller)):
@@ -244,7 +243,7 @@ def check_time(duration: Any, dt: Any) -> tuple[float, float]:
     duration, dt = positive(duration, "duration", "s"), positive(dt, "dt", "s")
     if dt > duration:
         raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
-    step_count(duration, dt, defaults.max_steps())
+    step_count(duration, dt, int(config.get("simulate.max_steps")))
     return duration, dt
 
 

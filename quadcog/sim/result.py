@@ -6,8 +6,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from quadcog import config, validate
 from quadcog.numerics import row_distances
-from quadcog.sim import defaults
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -246,7 +246,8 @@ def position_metrics(t: npt.NDArray[np.float64], x: npt.NDArray[np.float64],
         rms_position_error, max_position_error, final_position_error and
         rms_position_error_tail (m).
     """
-    tail_fraction = defaults.tail_fraction(tail_fraction)
+    tail_fraction = (config.get("metrics.tail_fraction") if tail_fraction is None else
+                     validate.real(tail_fraction, "tail_fraction", lo=0.0, hi=1.0, lo_open=True))
     m = flight_metrics(position_errors(x, ref), t >= (1 - tail_fraction) * duration - 1e-12)
     return {k: getattr(m, k) for k in ("rms_position_error", "max_position_error",
                                        "final_position_error", "rms_position_error_tail")}

@@ -15,10 +15,10 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from quadcog import config
 from quadcog.model.conventions import R_G
 from quadcog.model.inertial_parameters import N_PI
 from quadcog.numerics import repeated_row
-from quadcog.sim import defaults
 from quadcog.sim.timeline import CogProfile, PayloadProfile, wrench_table
 from quadcog.trajectories.analytic import REF_SIZE, Trajectory
 
@@ -42,7 +42,7 @@ def tail_start(duration: float) -> float:
     float
         The start of the tail (s).
     """
-    return (1 - defaults.tail_fraction()) * duration
+    return (1 - config.get("metrics.tail_fraction")) * duration
 
 
 def cog_at(r_vehicle: Any, cog_scale: Any, cog: Any) -> Any:

@@ -16,10 +16,10 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from quadcog import config
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
-from quadcog.sim import defaults
 from quadcog.sim.batch import BatchResult, batch_metrics, run_kernel, run_map, slow_row_entries
 from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
 from quadcog.sim.divergence import Limits
@@ -156,7 +156,7 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
         raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
                          "map runs in float64), got kernel='casadi'")
     options, limits = run_options(truth, limits, None)
-    dt = defaults.default_dt(dt)
+    dt = config.get("simulate.dt", dt)
     duration, dt = check_time(duration, dt)
     if payloads is None:
         payloads = PayloadProfile([], vehicles[0].payloads)

@@ -228,7 +228,7 @@ def run_paper(out: str | os.PathLike[str], progress: bool = True,
           f"Thresholds: tracks = tail RMS < {100 * TRACKS:.0f} cm; fails = tail RMS > "
           f"{100 * FAILS:.0f} cm or diverged; recovers = tail RMS < {100 * RECOVERS:.0f} cm with "
           "x_G, y_G estimates within 10 % (or 3 mm for a zero component). Tail = last "
-          f"{100 * config.defaults['metrics.tail_fraction']:g} % of the run.", "",
+          f"{100 * config.get('metrics.tail_fraction'):g} % of the run.", "",
           "| figure | claim | controller | RMS (m) | max (m) | tail RMS (m) | diverged | holds | "
           "note |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:

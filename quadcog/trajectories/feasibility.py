@@ -111,7 +111,7 @@ def reference_limits(vehicle: Vehicle, max_tilt: float | None = None) -> Referen
         Thrust per mass (m/s^2), tilt (rad) and thrust-direction rate (rad/s).
     """
     if max_tilt is None:
-        max_tilt = math.radians(config.defaults["limits.max_tilt_deg"])
+        max_tilt = math.radians(config.get("limits.max_tilt_deg"))
     mixer = vehicle.mixer()                     # U = mixer @ f
     lo, hi = vehicle.min_rotor_thrust, vehicle.max_rotor_thrust
     corners = np.array(list(itertools.product((lo, hi), repeat=mixer.shape[1])))

@@ -180,7 +180,7 @@ def _fm_summary(fm, grid):
     p = default_parameters()
     return {"grid": grid, "half_width": float(fm["x_G"][-1]), "duration": fm["duration"],
             "t_step": fm["t_step"], "threshold": fm["threshold"], "n_points": fm["n_points"],
-            "tail_fraction": fm.get("tail_fraction", config.defaults["metrics.tail_fraction"]),
+            "tail_fraction": fm.get("tail_fraction", config.get("metrics.tail_fraction")),
             "n_admissible": fm["n_admissible"],
             "admissible_radius": float(np.sqrt(min(p[IDX["Ixx"]], p[IDX["Iyy"]]) / p[IDX["m"]])),
             "controllers": ctls, "seconds": fm["seconds"],

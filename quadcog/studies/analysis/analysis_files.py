@@ -228,7 +228,7 @@ def markdown(s: dict[str, Any]) -> str:
                f"{fm['n_admissible']} of {fm['n_points']} offsets are admissible (the others make "
                "the inertia about the CoG indefinite: grey, not simulated; boundary |r_G| = "
                f"{fm['admissible_radius']:.4f} m). Failure: tail RMS (last "
-               f"{100 * config.defaults['metrics.tail_fraction']:g} %) > "
+               f"{100 * config.get('metrics.tail_fraction'):g} %) > "
                f"{fm['threshold']:g} m or diverged. `failure_map.png`, raw grid in "
                "`failure_map.npz` / `failure_map.json`.\n")
     rows = []

@@ -205,7 +205,7 @@ def failure_map(grid: int = 41, half_width: float = HUMMINGBIRD.arm_length,
     out = {"x_G": xs, "y_G": ys, "admissible": adm, "lambda_min": lam,
            "n_points": int(adm.size), "n_admissible": int(adm.sum()), "duration": duration,
            "t_step": t_step, "threshold": threshold,
-           "tail_fraction": config.defaults["metrics.tail_fraction"], "controllers": {}}
+           "tail_fraction": config.get("metrics.tail_fraction"), "controllers": {}}
     for k, name in enumerate(controllers):
         tail = cols["rms_position_error_tail"].reshape(shape)[k]
         div = cols["diverged"].reshape(shape)[k]
@@ -349,7 +349,7 @@ def plot_failure_map(fm: dict[str, Any], path: str | os.PathLike[str]) -> None:
     # mesh is set: the loop above runs once per controller, and there is at least one
     cb = fig.colorbar(mesh, cax=cax)  # type: ignore[arg-type]
     cb.set_label(f"tail RMS position error, last "
-                 f"{100 * config.defaults['metrics.tail_fraction']:g} % of "
+                 f"{100 * config.get('metrics.tail_fraction'):g} % of "
                  f"{fm['duration']:g} s (m)")
     fig.suptitle(f"CoG step at hover at t = {fm['t_step']:g} s to ($x_G$, $y_G$, 0): "
                  f"{len(xs)} x {len(ys)} grid, arm = {xs[-1]:.0f} cm", y=0.99)
