@@ -4,8 +4,8 @@
 ``coriolis``, ``damping``, ``gravity``, ``regressor``, ``decoupling``, ``drift``,
 ``linearization``) as fast numpy callables. This package never imports SymPy.
 """
-from quadcog import config
-import quadcog._startup  # noqa: F401  (before the heavy imports: Ctrl-C while starting)
+import quadcog._startup  # noqa: F401, I001  (first, before the heavy imports: Ctrl-C while starting)
+from quadcog import config  # noqa: I001  (config imports validate, hence numpy)
 from quadcog.controllers import (
                                  AdaptiveFeedbackLinearization,
                                  CascadePD,
