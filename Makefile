@@ -68,8 +68,12 @@ targets: compile
 	$(PY) -m quadcog targets --out $(OUT)/targets
 	$(PY) bench/publish.py targets $(OUT)/targets/targets.md
 
+# The suite on every core up to TEST_WORKERS (pytest-xdist), each test file on one worker so
+# that a module's fixture (the paper's flights, a compiled export) is built once.
+# TEST_WORKERS=0 runs it in this process.
+TEST_WORKERS ?= 4
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --maxprocesses $(TEST_WORKERS) --dist loadfile
 
 # The Crazyflie firmware's five controllers against quadcog's laws on the Crazyflie 2.1, and
 # the firmware PID against the CrazyPAD flights (docs/crazyflie.md; under a minute; needs a
