@@ -28,6 +28,7 @@ leaves ``control_t`` alone on the other ticks (the stabilizer's ``control`` is s
 command persists). With ``setpoint->mode.z == modeDisable`` (no position setpoint: the law
 cannot fly manual attitude setpoints) it commands zero thrust and restarts its state.
 """
+from contextlib import ExitStack
 import os
 from pathlib import Path
 
@@ -35,7 +36,8 @@ from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import CONTROLLERS, make_controller
 from quadcog.embedded.c_text import c_identifier, comment_text
 from quadcog.embedded.controller_export import NOTICE, render, short_name
-from quadcog.errors import ExportError
+from quadcog.errors import ExportError, QuadcogError
+from quadcog.files import RunFiles, output_path
 from quadcog.vehicles.vehicle import PRESETS, Vehicle
 
 __all__ = ["DEFAULT_VEHICLE", "RATE", "CONTROL_PERIOD", "resolve_vehicle", "app_files",
@@ -308,9 +310,9 @@ def write_crazyflie_app(controller: str | Controller, out: str | os.PathLike[str
         An unknown controller or vehicle, a name that is not a C identifier, a law that
         depends on t, or a folder that cannot be written.
     """
-    if not isinstance(out, (str, os.PathLike)):
-        raise ExportError(f"out: expected a folder path (str or os.PathLike), got {out!r} "
-                          f"({type(out).__name__})")
+    if not isinstance(out, (str, os.PathLike)) or not os.fspath(out):
+        raise ExportError(f"out: expected a folder path (a non-empty str or os.PathLike), got "
+                          f"{out!r:.60} ({type(out).__name__})")
     given_vehicle = vehicle is not None
     vehicle = resolve_vehicle(vehicle)
     if isinstance(controller, str):
@@ -333,13 +335,24 @@ def write_crazyflie_app(controller: str | Controller, out: str | os.PathLike[str
         f"quadcog.embedded.crazyflie_app.write_crazyflie_app({type(controller).__name__}(...))")
     files = app_files(controller, name, command)
     out = Path(out)
-    paths = []
+    for rel in files:                  # a folder, link, FIFO or device is never written through
+        if os.path.lexists(out / rel):
+            output_path(out / rel, "app file", ExportError)
+    # every file to a temporary name first, then all renamed: a failure or Ctrl-C leaves the
+    # app as it was, never a new Kbuild beside an old source (one RunFiles per folder)
     try:
-        for rel, text in files.items():
-            path = out / rel
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text)
-            paths.append(path)
+        with ExitStack() as stack:
+            folders: dict[Path, RunFiles] = {}
+            for rel, text in files.items():
+                folder = (out / rel).parent
+                if folder not in folders:
+                    folders[folder] = stack.enter_context(RunFiles(folder, owned=()))
+                folders[folder].path(rel).write_text(text)
     except OSError as e:
-        raise ExportError(f"out = {str(out)!r}: cannot write the app ({e.strerror})") from None
-    return paths
+        where = e.filename or out
+        raise ExportError(f"{where}: cannot write the app ({e.strerror})") from None
+    except QuadcogError as e:
+        if isinstance(e, ExportError):
+            raise
+        raise ExportError(f"out = {str(out)!r}: {e}") from None
+    return [out / rel for rel in files]
