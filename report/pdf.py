@@ -10,6 +10,7 @@ any overfull box wider than ``--max-overfull`` pt (10 by default).
     python -m report.pdf --out out/report
 """
 import argparse
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 import re
@@ -25,6 +26,7 @@ DEFAULT_ANALYSIS = ROOT / "out" / "analysis"
 # what the report needs of out/paper and out/analysis: the fragments and the figures (not the
 # trajectories, which would double the size of out/)
 COPIED = (".tex", ".png")
+COPY_MARKER = ".copied-by-report"   # in the copies of results that a build may remove
 JOB = "report"
 MAX_OVERFULL = 10.0        # pt
 APT_INSTALL = ("apt-get update && apt-get install -y --no-install-recommends "
@@ -170,12 +172,34 @@ def _run_pdflatex(pdflatex, folder, timeout):
     return log
 
 
+def _a_copy(folder):
+    """Whether ``folder`` is a copy of results made by ``_copy_results`` (its marker; before
+    the marker, a copy held only .tex and .png files, report_fragment.tex among them)."""
+    if (folder / COPY_MARKER).is_file():
+        return True
+    files = [f for f in folder.rglob("*") if not f.is_dir()]
+    return (folder / "report_fragment.tex").is_file() and all(
+        f.is_file() and not f.is_symlink() and f.suffix in COPIED for f in files)
+
+
 def _copy_results(src, target):
     """Replace folder ``target`` by the .tex and .png files of ``src`` (when ``src`` has a
-    report_fragment.tex); returns whether it did."""
-    if target.is_symlink() or target.is_file():
-        target.unlink()
-    elif target.exists():
+    report_fragment.tex); returns whether it did.
+
+    Only a copy this function made (it holds ``COPY_MARKER``) is ever removed: ``--out out``
+    with the default ``--paper out/paper`` removed the paper's own results, and ``--out ~``
+    would have removed any folder named paper there. ``src`` that is ``target`` is used in
+    place."""
+    if src is not None and Path(src).exists() and Path(src).resolve() == target.resolve():
+        return (target / "report_fragment.tex").is_file()
+    if src is not None and (_inside(target, Path(src)) or _inside(Path(src), target)):
+        raise BuildError(f"the results {src} and their copy {target} overlap: give --out a "
+                         "folder of its own, such as out/report")
+    if os.path.lexists(target):
+        if target.is_symlink() or not target.is_dir() or not _a_copy(target):
+            raise BuildError(f"{target}: exists and is not a copy made by the report; the "
+                             "report copies results there, so give --out a folder of its own, "
+                             "such as out/report")
         shutil.rmtree(target)
     if src is None or not (Path(src) / "report_fragment.tex").is_file():
         return False
@@ -184,6 +208,7 @@ def _copy_results(src, target):
             dest = target / f.relative_to(src)
             dest.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(f, dest)
+    (target / COPY_MARKER).write_text("copied by report/pdf.py; removed by the next build\n")
     return True
 
 
