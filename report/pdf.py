@@ -10,8 +10,8 @@ any overfull box wider than ``--max-overfull`` pt (10 by default).
     python -m report.pdf --out out/report
 """
 import argparse
-import os
 from dataclasses import dataclass, field
+import os
 from pathlib import Path
 import re
 import shutil

@@ -17,7 +17,8 @@ import casadi as ca
 import numpy as np
 
 import quadcog
-from quadcog.files import run_stamp, strict_json
+from quadcog.errors import QuadcogError
+from quadcog.files import atomic_write, output_path, run_stamp, strict_json
 from report.identities import SEED, run
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -104,14 +105,23 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if args.points < 1:
         ap.error("--points must be at least 1")
+    figures = args.out.with_suffix(".json")      # the same figures for the docs (bench/publish.py)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    try:                # before the work: a folder, link, FIFO or device is never written through
+        output_path(args.out, "--out")
+        output_path(figures, "--out's .json")
+    except QuadcogError as e:
+        ap.error(str(e))
     t0 = time.perf_counter()
     model = quadcog.load()
     results = run(args.points, args.seed, model)
     seconds = time.perf_counter() - t0
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(table(results, args.seed, model.backend, seconds))
-    figures = args.out.with_suffix(".json")      # the same figures for the docs (bench/publish.py)
-    figures.write_text(strict_json(summary(results, args.points, args.seed, seconds)))
+    try:                # all or nothing
+        atomic_write(args.out, table(results, args.seed, model.backend, seconds), "--out")
+        atomic_write(figures, strict_json(summary(results, args.points, args.seed, seconds)),
+                     "--out's .json")
+    except QuadcogError as e:
+        ap.error(str(e))
     failed = [r for r in results if not r.ok]
     for r in results:
         status = "skipped" if r.skipped else ("ok" if r.ok else "FAILED")

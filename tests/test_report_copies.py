@@ -2,6 +2,8 @@
 replaces only copies it made: ``python -m report.pdf --out out`` (the paper's default
 ``--paper out/paper``) removed the paper's own results, and any folder named paper or analysis
 in the folder given to --out was removed with them."""
+import os
+
 import pytest
 
 from report.pdf import COPY_MARKER, BuildError, _copy_results
@@ -54,3 +56,24 @@ def test_copies_are_replaced_old_and_new(tmp_path):
     assert _copy_results(paper, old) is True            # a marked copy: replaced
     assert not (old / "fig.png").exists()
     assert _copy_results(None, old) is False and not old.exists()
+
+
+@pytest.mark.parametrize("kind", ["link", "fifo", "folder"])
+def test_verify_never_writes_through_what_is_not_a_regular_file(tmp_path, kind, capsys):
+    """report.verify wrote its table with write_text: through a link into its target, and
+    into a FIFO it blocked; it is refused before the work, with argparse's message."""
+    from report.verify import main
+    victim = tmp_path / "victim.tex"
+    victim.write_text("precious\n")
+    out = tmp_path / "verification.tex"
+    if kind == "link":
+        out.symlink_to(victim)
+    elif kind == "fifo":
+        os.mkfifo(out)
+    else:
+        out.mkdir()
+    with pytest.raises(SystemExit) as e:
+        main(["--out", str(out), "--points", "1"])
+    assert e.value.code == 2
+    assert "--out" in capsys.readouterr().err
+    assert victim.read_text() == "precious\n" and not out.with_suffix(".json").exists()
