@@ -113,3 +113,27 @@ def test_a_reader_that_leaves_the_pipe_early_is_not_an_error(tmp_path):
     p.stdout.close()                                   # `| head -1`
     err = p.stderr.read().decode()
     assert p.wait(timeout=120) == 141 and err == ""
+
+
+def test_nothing_but_quadcog_s_entries_is_listed_or_removed(tmp_path):
+    """QUADCOG_CACHE_DIR set by mistake to a folder of the user's (their home): `quadcog
+    cache --clear` removed every file and every folder's contents there (notes.txt,
+    Documents/thesis/...); only compiled libraries (STEM-KEY.so, KEY of 20 hex digits) and
+    the folders of cache.KINDS are quadcog's."""
+    home = tmp_path / "home"
+    (home / "Documents" / "thesis").mkdir(parents=True)
+    (home / "Documents" / "thesis" / "ch1.tex").write_text("chapter one\n")
+    (home / "notes.txt").write_text("notes\n")
+    (home / "libfoo.so").write_text("a user's library\n")
+    (home / "photos-0123456789abcdef0123.txt").write_text("not a library\n")
+    (home / "plant_step-0123456789abcdef0123.so").write_text("quadcog's\n")
+    (home / "plant_step-0123456789abcdef0123.lock").write_text("")
+    (home / "px4" / "0123abcd").mkdir(parents=True)
+    user_files = sorted(p for p in home.rglob("*") if "plant_step" not in p.name
+                        and "0123abcd" not in str(p))
+    found = cache.entries(home)
+    assert sorted(e.name for e in found) == ["plant_step-0123456789abcdef0123", "px4/0123abcd"]
+    removed, busy = cache.clear(folder=home)
+    assert len(removed) == 2 and busy == []
+    assert sorted(home.rglob("*")) == user_files
+    assert (home / "Documents" / "thesis" / "ch1.tex").read_text() == "chapter one\n"

@@ -10,12 +10,15 @@ held by another process (a build under way) is left alone and reported as busy.
 Entries: a compiled library is its ``STEM-KEY.so`` with its ``.so.sha256`` and ``.lock``
 beside it (kind "libraries"); each folder under a top-level folder (``px4/KEY``,
 ``aqb/KEY``, ``crazyflie/...``, ``stacks/...``, ``vendor/...``) is one entry of that kind.
+Nothing else in the folder is quadcog's: it is neither listed nor removed, so a cache folder
+set by mistake to one of the user's (``QUADCOG_CACHE_DIR=$HOME``) loses nothing of theirs.
 """
 from collections.abc import Iterable
 import dataclasses
 import fcntl
 import os
 from pathlib import Path
+import re
 import shutil
 import stat
 
@@ -25,10 +28,13 @@ from quadcog.paths import cache_dir
 __all__ = ["CacheEntry", "KINDS", "LIBRARIES", "clear", "entries", "human_size"]
 
 LIBRARIES = "libraries"     # the kind of the top-level compiled libraries
-# the kinds quadcog writes (a folder of another name found in the cache is a kind too)
-KINDS = (LIBRARIES, "px4", "aqb", "crazyflie", "stacks", "vendor")
-# a compiled library's files: STEM-KEY.so and, beside it, these
-_SIDECARS = (".so.sha256", ".lock")
+# the kinds quadcog writes: only these folders, and the files of compiled libraries, are
+# ever listed or removed (QUADCOG_CACHE_DIR set to a folder of the user's, their home say,
+# must not lose the user's files to `quadcog cache --clear`)
+KINDS = (LIBRARIES, "px4", "aqb", "crazyflie", "stacks", "vendor", "docs-equations")
+# a compiled library's files: STEM-KEY.so (KEY: 20 hex digits, compiler.library_path) and,
+# beside it, STEM-KEY.so.sha256, STEM-KEY.lock and the STEM-KEY.so.* of a build under way
+_LIBRARY_FILE = re.compile(r"(?P<stem>.+-[0-9a-f]{20})(\.so(\..+)?|\.lock)")
 # the lock files that builds hold while they write an entry (compiler.py, px4/tree.py)
 _LOCK_NAMES = ("lock",)
 
@@ -112,16 +118,15 @@ def entries(folder: str | os.PathLike[str] | None = None) -> list[CacheEntry]:
     folders: list[CacheEntry] = []
     for child in sorted(root.iterdir()):
         if child.is_dir() and not child.is_symlink():
+            if child.name not in KINDS:          # not quadcog's: never listed nor removed
+                continue
             for sub in sorted(child.iterdir()):
                 if sub.name not in _LOCK_NAMES:
                     folders.append(_entry(f"{child.name}/{sub.name}", child.name, [sub]))
             continue
-        stem = child.name
-        for suffix in _SIDECARS + (".so",):
-            if stem.endswith(suffix):
-                stem = stem[:-len(suffix)]
-                break
-        libs.setdefault(stem, []).append(child)
+        library = _LIBRARY_FILE.fullmatch(child.name)
+        if library and not child.is_dir():
+            libs.setdefault(library.group("stem"), []).append(child)
     return [_entry(stem, LIBRARIES, sorted(paths)) for stem, paths in sorted(libs.items())] \
         + folders
 
