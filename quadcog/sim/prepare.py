@@ -18,7 +18,7 @@ from quadcog import config, validate
 from quadcog.codegen.fastcall import evaluate
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError, QuadcogWarning
-from quadcog.model.conventions import IDX, N_STATE, R_G, rotation_matrix
+from quadcog.model.conventions import IDX, N_PARAM, N_STATE, R_G, rotation_matrix
 from quadcog.model.inertial_parameters import N_PI, check_physically_consistent
 from quadcog.model.inertial_parameters import is_physically_consistent as consistency_ok
 from quadcog.model.parameters import LARGEST, check_parameters, with_cog
@@ -26,14 +26,14 @@ from quadcog.sim.closed_loop import ACCUMULATORS
 from quadcog.sim.divergence import Limits, first_divergence
 from quadcog.sim.plant import PI_INDEX, Actuation, TruthOptions, body_mass_and_cog, initial_rotor_thrusts
 from quadcog.sim.result import position_errors
-from quadcog.sim.schedule import Schedule, cog_at, truth_parameters
+from quadcog.sim.schedule import Schedule, check_time, cog_at, truth_parameters
 from quadcog.sim.timeline import CogProfile, PayloadProfile
 from quadcog.sim.user_controller import user_state
-from quadcog.trajectories.analytic import POS, VEL, YAW
+from quadcog.trajectories.analytic import POS, REF_SIZE, VEL, YAW
 from quadcog.trajectories.registry import as_trajectory
-from quadcog.validate import positive, step_count
-from quadcog.vehicles.payload import check_reach
-from quadcog.vehicles.vehicle import HUMMINGBIRD, Vehicle
+from quadcog.validate import positive
+from quadcog.vehicles.payload import check_lift, check_reach
+from quadcog.vehicles.vehicle import HUMMINGBIRD, N_ROTORS, Vehicle
 
 __all__ = ["RK4_LIMIT", "FlightSetup", "prepare_flight", "batch_start", "check_time",
            "run_options", "check_step_size", "start_at_reference", "as_cog_profile",
@@ -137,8 +137,8 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     validate.choice(path, "path", ("compiled", "python"))
     is_law = isinstance(controller, Controller)
     if not is_law and not (path == "python" and callable(controller)):
-        raise InputError("controller must be a quadcog Controller, or a callable "
-                         f"ctrl(t, x, ref, c) with path='python'; got {controller!r}")
+        validate.fail("controller", "a quadcog Controller, or a callable ctrl(t, x, ref, c) "
+                      "with path='python'", controller)
     if vehicle is None:
         vehicle = controller.vehicle if is_law else HUMMINGBIRD
         model_default = vehicle
@@ -148,7 +148,7 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
                          else None)
     for name, v in (("vehicle", vehicle), ("controller_model", controller_model)):
         if v is not None and not isinstance(v, Vehicle):
-            raise InputError(f"{name} must be a quadcog Vehicle, got {v!r}")
+            validate.fail(name, "a quadcog Vehicle", v)      # plain: no numpy repr
     if is_law:
         controller = controller.for_vehicle(controller_model or model_default)
     duration, dt = check_time(duration, dt)
@@ -206,7 +206,18 @@ def batch_start(controller: Controller, actuation: Actuation, P0: npt.NDArray[np
     -------
     (B, 12 + rotor states + controller states + accumulators) numpy.ndarray
         Z, as the monitored step (``quadcog.sim.closed_loop``) takes it.
+
+    Raises
+    ------
+    quadcog.InputError
+        An argument of the wrong kind or shape.
     """
+    if not isinstance(controller, Controller):
+        validate.fail("controller", "a quadcog Controller", controller)
+    if not isinstance(actuation, Actuation):
+        validate.fail("actuation", "a quadcog.sim.plant.Actuation", actuation)
+    P0 = validate.array(P0, "P0", (None, N_PARAM), what=f"an array of shape (B, {N_PARAM})")
+    x0 = validate.vector(x0, "x0", N_STATE)
     nc, nf = controller.n_state, actuation.n_rotor_states
     nX = N_STATE + nf + nc
     Z = np.zeros((P0.shape[0], nX + len(ACCUMULATORS)))
@@ -215,37 +226,6 @@ def batch_start(controller: Controller, actuation: Actuation, P0: npt.NDArray[np
     Z[:, N_STATE + nf:nX] = controller.initial_state()
     Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
     return Z
-
-
-def check_time(duration: Any, dt: Any) -> tuple[float, float]:
-    """The checked duration and step of a run.
-
-    Parameters
-    ----------
-    duration : float
-        The run's duration (s).
-    dt : float
-        The step (s).
-
-    Returns
-    -------
-    duration : float
-        The duration (s).
-    dt : float
-        The step (s).
-
-    Raises
-    ------
-    quadcog.InputError
-        Unless both are positive numbers, dt <= duration and the step count is within
-        ``config.defaults["simulate.max_steps"]``.
-    """
-    duration, dt = positive(duration, "duration", "s"), positive(dt, "dt", "s")
-    if dt > duration:
-        raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
-    step_count(duration, dt, int(config.get("simulate.max_steps")))
-    return duration, dt
-
 
 
 def run_options(truth: TruthOptions | None, limits: Limits | None,
@@ -313,8 +293,15 @@ def check_step_size(controller: Controller | None, x0: npt.NDArray[np.float64],
     Raises
     ------
     quadcog.InputError
-        dt too large for the motor time constant or for the closed loop's fastest eigenvalue.
+        An argument of the wrong kind or shape, or dt too large for the motor time constant
+        or for the closed loop's fastest eigenvalue.
     """
+    if controller is not None and not isinstance(controller, Controller):
+        validate.fail("controller", "None or a quadcog Controller", controller)
+    if not isinstance(actuation, Actuation):
+        validate.fail("actuation", "a quadcog.sim.plant.Actuation", actuation)
+    x0, ref0 = validate.vector(x0, "x0", N_STATE), validate.vector(ref0, "ref0", REF_SIZE)
+    P, dt = validate.vector(P, "P", N_PARAM), positive(dt, "dt", "s")
     if actuation.n_rotor_states and dt / actuation.time_constant > RK4_LIMIT:
         raise InputError(f"dt = {dt} s is too large for the motor time constant "
                          f"{actuation.time_constant} s: RK4 needs dt < "
@@ -342,7 +329,13 @@ def start_at_reference(ref: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     -------
     (12,) numpy.ndarray
         The state [m, rad, m/s, rad/s] (velocity expressed in body axes).
+
+    Raises
+    ------
+    quadcog.InputError
+        ``ref`` not 14 finite numbers.
     """
+    ref = validate.vector(ref, "ref", REF_SIZE)
     x0 = np.zeros(N_STATE)
     x0[:3], x0[5] = ref[POS], ref[YAW]
     x0[6:9] = rotation_matrix(0.0, 0.0, ref[YAW]).T @ ref[VEL]
@@ -397,6 +390,8 @@ def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile,
 
     Raises
     ------
+    quadcog.InputError
+        ``P`` not 14 finite numbers, ``cog`` not a CogProfile, ``duration`` not positive.
     quadcog.ParameterError
         Naming the change whose CoG makes the vehicle inadmissible.
 
@@ -406,6 +401,9 @@ def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile,
         A change that starts after the end of the run (it never happens in it; a shipped
         scenario flown shorter with ``--set duration=...`` is told so, not refused).
     """
+    P = validate.vector(P, "P", N_PARAM)
+    if not isinstance(cog, CogProfile):
+        validate.fail("cog", "a CogProfile (quadcog.sim.prepare.as_cog_profile)", cog)
     if duration is not None:
         duration = positive(duration, "duration", unit="s")
     for i, change in enumerate(cog.changes):
@@ -457,8 +455,9 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
                          duration: float | None = None) -> None:
     """Raise if a payload event cannot happen as written: after the end of the run (it would
     never happen), a payload placed farther from O than ``PAYLOAD_REACH`` arm lengths (not
-    carried on the vehicle), or the airframe with what is on board after an event not
-    physically consistent.
+    carried on the vehicle), an attach the rotors cannot lift with what is on board then
+    (``quadcog.vehicles.payload.check_lift``), or the airframe with what is on board after
+    an event not physically consistent.
 
     Adding a payload of positive mass to a consistent body keeps it consistent wherever the
     payload sits (the pseudo-inertia matrices add, and a payload's is positive semidefinite),
@@ -481,6 +480,8 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
     ------
     quadcog.InputError
         An event after the end of the run, or a payload beyond the vehicle's reach.
+    quadcog.ParameterError
+        An attach of a payload heavier than the rotors lift with what is on board.
     quadcog.PhysicalConsistencyError
         Naming the event after which the whole body is not physically consistent.
     """
@@ -497,7 +498,7 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
     total = vehicle.airframe.inertial_parameters() + sum(
         (pi for _, pi in on_board.values()), np.zeros(N_PI))
     ends: list = []                  # (end time, index, name, target) of sliding moves
-    attached_at: dict[str, float] = {}     # the time each payload was last attached
+    thrust = N_ROTORS * vehicle.max_rotor_thrust
 
     def place(name, payload):
         nonlocal total
@@ -521,17 +522,14 @@ def check_payload_events(vehicle: Vehicle, loads: PayloadProfile,
                              "so it would never happen; expected t <= duration")
         if e.position is not None:
             check_reach(e.position, e.size, vehicle.arm_length, where)
-        if e.action == "drop" and attached_at.get(e.name) == e.t:
-            raise InputError(f"{where}: at the time {e.name!r} is attached, so it is never "
-                             "carried (the drop undoes the attach at once); expected t after "
-                             f"the attach at {e.t:g} s")
         while ends and ends[0][0] <= e.t:
             end, j, name, target = heapq.heappop(ends)
             if name in on_board:
                 place(name, on_board[name][0].moved(target))
                 check(j, loads.events[j], end)
         if e.action == "attach":
-            attached_at[e.name] = e.t
+            # the rotors must lift it with what is on board then (a 1e6 kg parcel flew)
+            check_lift(e.mass, float(total[0]), vehicle.g, thrust, where)
             place(e.name, e.payload())
         elif e.action == "drop":
             place(e.name, None)
@@ -562,8 +560,17 @@ def whole_body(p: npt.NDArray[np.float64], payload: npt.NDArray[np.float64]
     -------
     (14,) or (B, 14) numpy.ndarray
         m and r_G of the whole body, the diagonal of its inertia about O, the rest of ``p``.
+
+    Raises
+    ------
+    quadcog.InputError
+        ``p`` not (14,) or (B, 14) finite numbers, or ``payload`` not 10.
     """
-    out = np.array(p, dtype=float)
+    out = validate.array(p, "p", what=f"an array of shape ({N_PARAM},) or (B, {N_PARAM})")
+    if out.shape[-1:] != (N_PARAM,) or out.ndim > 2:
+        validate.fail("p", f"an array of shape ({N_PARAM},) or (B, {N_PARAM})",
+                      f"an array of shape {out.shape}")
+    payload = validate.vector(payload, "payload", N_PI)
     m, r = body_mass_and_cog(out[..., IDX["m"], None], out[..., R_G], payload[PI_INDEX["m"]],
                              payload[[PI_INDEX[f"m{a}_G"] for a in "xyz"]])
     out[..., IDX["m"]] = m[..., 0]

@@ -9,24 +9,57 @@ never as columns of one table.
 """
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+import operator
 from typing import Any
 
 import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from quadcog import config
+from quadcog import config, validate
+from quadcog.errors import InputError
 from quadcog.model.conventions import R_G
 from quadcog.model.inertial_parameters import N_PI
 from quadcog.numerics import repeated_row
 from quadcog.sim.timeline import CogProfile, PayloadProfile, wrench_table
 from quadcog.trajectories.analytic import REF_SIZE, Trajectory
 
-__all__ = ["STEP_INPUTS", "tail_start", "cog_at", "truth_parameters", "Schedule"]
+__all__ = ["STEP_INPUTS", "tail_start", "cog_at", "truth_parameters", "Schedule", "check_time"]
 
 # (name, rows) of the per-step inputs of the compiled steps, in their order
 STEP_INPUTS = (("t", 1), ("dt", 1), ("ref", REF_SIZE), ("cog", 3), ("cog_scale", 1),
                ("payload", N_PI), ("wrench", 6), ("tail", 1))
+
+
+def check_time(duration: Any, dt: Any) -> tuple[float, float]:
+    """The checked duration and step of a run.
+
+    Parameters
+    ----------
+    duration : float
+        The run's duration (s).
+    dt : float
+        The step (s).
+
+    Returns
+    -------
+    duration : float
+        The duration (s).
+    dt : float
+        The step (s).
+
+    Raises
+    ------
+    quadcog.InputError
+        Unless both are positive numbers, dt <= duration and the step count is within
+        ``config.defaults["simulate.max_steps"]``.
+    """
+    duration = validate.positive(duration, "duration", "s")
+    dt = validate.positive(dt, "dt", "s")
+    if dt > duration:
+        raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
+    validate.step_count(duration, dt, int(config.get("simulate.max_steps")))
+    return duration, dt
 
 
 def tail_start(duration: float) -> float:
@@ -41,8 +74,14 @@ def tail_start(duration: float) -> float:
     -------
     float
         The start of the tail (s).
+
+    Raises
+    ------
+    quadcog.InputError
+        ``duration`` not a positive number (s).
     """
-    return (1 - config.get("metrics.tail_fraction")) * duration
+    return (1 - config.get("metrics.tail_fraction")) * validate.positive(duration, "duration",
+                                                                          "s")
 
 
 def cog_at(r_vehicle: Any, cog_scale: Any, cog: Any) -> Any:
@@ -91,6 +130,24 @@ def truth_parameters(P: Any, cog_scale: Any, cog: Any) -> Any:
         out[R_G] = r
         return out
     return ca.vertcat(P[:R_G.start], r)
+
+
+def _scales(cog_scale: Callable[[float], float], t: npt.NDArray[np.floating[Any]]
+            ) -> npt.NDArray[np.float64]:
+    """``cog_scale(t_k)`` at every sample, each a finite real number (a string or NaN is
+    named with its time). Plain finite floats (what the batch's checked shape gives) are
+    taken at once; anything else is checked value by value."""
+    values = [cog_scale(tk) for tk in t]
+    if not all(type(v) is float for v in values):
+        values = [validate.real(v, f"cog_scale({validate.plain(float(tk))})")
+                  for v, tk in zip(values, t)]
+    scale = np.array(values, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(scale))
+    if bad.size:
+        k = int(bad[0])
+        validate.fail(f"cog_scale({validate.plain(float(t[k]))})", "a finite real number",
+                      values[k])
+    return scale
 
 
 @dataclass(frozen=True)
@@ -160,12 +217,27 @@ class Schedule:
         -------
         Schedule
             The per-step inputs at t_k = k dt, k = 0 .. round(duration / dt).
+
+        Raises
+        ------
+        quadcog.InputError
+            An argument of the wrong kind (``check_time`` for the duration and step), or a
+            ``cog_scale`` value that is not a finite number.
         """
+        if not isinstance(trajectory, Trajectory):
+            validate.fail("trajectory", "a quadcog Trajectory "
+                          "(quadcog.trajectories.registry.as_trajectory)", trajectory)
+        duration, dt = check_time(duration, dt)
+        if cog is not None and not isinstance(cog, CogProfile):
+            validate.fail("cog", "None or a CogProfile", cog)
+        if payloads is not None and not isinstance(payloads, PayloadProfile):
+            validate.fail("payloads", "None or a PayloadProfile", payloads)
+        if cog_scale is not None and not callable(cog_scale):
+            validate.fail("cog_scale", "None or a function of time t (s)", cog_scale)
         n = int(round(duration / dt))
         t = np.arange(n + 1) * dt
         cog = cog if cog is not None else CogProfile()
-        scale = (np.ones(n + 1) if cog_scale is None
-                 else np.array([float(cog_scale(tk)) for tk in t]))
+        scale = np.ones(n + 1) if cog_scale is None else _scales(cog_scale, t)
         arrays = dict(t=t, dt=np.full(n + 1, float(dt)), ref=trajectory.sample(t),
                       cog=cog.sample(t), cog_scale=scale,
                       payload=(payloads.sample(t) if payloads else np.zeros((n + 1, N_PI))),
@@ -191,8 +263,13 @@ class Schedule:
         -------
         (N, 3) numpy.ndarray
             r_G (m) at every sample.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``r_vehicle`` not 3 finite numbers.
         """
-        r = np.asarray(r_vehicle, float)
+        r = validate.vector(r_vehicle, "r_vehicle", 3)
         if (self.cog_scale == 1.0).all():     # a single flight's: 1 * r is r, one pass fewer
             out = repeated_row(r, self.cog.shape[0])    # r + cog, without numpy's per-row loop
             out += self.cog
@@ -214,7 +291,16 @@ class Schedule:
         -------
         Schedule
             This schedule when no padding is needed, else a padded copy.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``multiple`` not an integer in [1, ``config.defaults["simulate.max_steps"]``].
         """
+        # padding adds fewer than `multiple` steps: at most a run's most (a bigger multiple
+        # asked for memory no run has)
+        multiple = validate.integer(multiple, "multiple", lo=1,
+                                    hi=int(config.get("simulate.max_steps")))
         n_pad = -(-self.n_steps // multiple) * multiple - self.n_steps
         if n_pad == 0:
             return self
@@ -244,7 +330,13 @@ class Schedule:
         -------
         (stop - start, n_row) numpy.ndarray
             The per-step inputs side by side in ``STEP_INPUTS`` order, then ``extra``.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``start``, ``stop`` not steps with 0 <= start < stop <= N.
         """
+        start, stop = self._span(start, stop, empty=False)
         parts = [a.reshape(stop - start, -1) for a in self.block(start, stop)]
         parts += [np.asarray(a, dtype=float)[start:stop].reshape(stop - start, -1)
                   for a in extra]
@@ -266,8 +358,28 @@ class Schedule:
         -------
         list of numpy.ndarray
             One (rows, stop - start) matrix per input, in ``STEP_INPUTS`` order.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``start``, ``stop`` not steps with 0 <= start <= stop <= N.
         """
         return [a.T if a.ndim == 2 else a[None, :] for a in self.block(start, stop)]
+
+    def _span(self, start: Any, stop: Any, empty: bool = True) -> tuple[int, int]:
+        """``start``, ``stop`` as ints with 0 <= start <= stop <= N (a slice of the samples;
+        ``start < stop`` unless ``empty``)."""
+        n = self.t.size
+        what = f"steps 0 <= start {'<=' if empty else '<'} stop <= {n}"
+        if isinstance(start, (bool, np.bool_)) or isinstance(stop, (bool, np.bool_)):
+            validate.fail("start, stop", what, (start, stop))
+        try:
+            first, last = operator.index(start), operator.index(stop)
+        except TypeError:
+            validate.fail("start, stop", what, (start, stop))
+        if not (0 <= first <= last <= n and (empty or first < last)):
+            validate.fail("start, stop", what, (start, stop))
+        return first, last
 
     def block(self, start: int, stop: int) -> list[npt.NDArray[np.float64]]:
         """The per-step inputs of steps start .. stop - 1 (views, no copies).
@@ -283,5 +395,11 @@ class Schedule:
         -------
         list of numpy.ndarray
             C-contiguous (stop - start, ...) arrays in ``STEP_INPUTS`` order.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``start``, ``stop`` not steps with 0 <= start <= stop <= N.
         """
+        start, stop = self._span(start, stop)
         return [getattr(self, name)[start:stop] for name, _ in STEP_INPUTS]

@@ -2,7 +2,7 @@
 move, drop) and disturbance pulses."""
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -31,10 +31,34 @@ class CogChange:
         The CoG offset it moves to (m, body frame).
     ramp : float
         Duration of the linear ramp (s; 0: a step).
+
+    Raises
+    ------
+    quadcog.InputError
+        ``t`` or ``ramp`` not a number >= 0 (s), a ramp that ends past the float range, or
+        ``r`` not 3 finite numbers (m).
     """
     t: float
     r: tuple
     ramp: float = 0.0
+
+    def __post_init__(self) -> None:
+        # checked here too, not only in CogProfile: CogChange(b"abc", "xyz") was kept as is
+        t, r, ramp = _checked_change(self.t, self.r, self.ramp, "CogChange")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "r", r)
+        object.__setattr__(self, "ramp", ramp)
+
+
+def _checked_change(t: Any, r: Any, ramp: Any, where: str) -> tuple[float, tuple, float]:
+    """(t, r, ramp) of a CoG change checked: t, ramp >= 0 (s) ending at a finite time, r 3
+    finite numbers (m); errors name ``where``."""
+    r = tuple(validate.array(r, f"{where}: r", (3,), what="3 finite numbers (m)").tolist())
+    t = validate.nonnegative(t, f"{where}: t", "s")
+    ramp = validate.nonnegative(ramp, f"{where}: ramp", "s")
+    if not np.isfinite(t + ramp):
+        validate.fail(f"{where}: ramp", f"a ramp that ends at a finite time (t = {t:g} s)", ramp)
+    return t, r, ramp
 
 
 @dataclass
@@ -50,32 +74,38 @@ class CogProfile:
     Raises
     ------
     quadcog.InputError
-        A change that is not one of those, or changes out of time order.
+        A change that is not one of those, changes out of time order, a ramp that ends past
+        the float range, or a step at the instant of the previous step (which is then never
+        held).
     """
     changes: list = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        clean, last = [], -np.inf
-        if isinstance(self.changes, (str, bytes, dict)) or not hasattr(self.changes, "__iter__"):
+        clean: list[CogChange] = []
+        last = -np.inf
+        if isinstance(self.changes, (str, bytes, dict, np.ndarray)) or not hasattr(
+                self.changes, "__iter__"):
             validate.fail("cog", "a CogProfile or a list of changes (t, r[, ramp])", self.changes)
         for i, c in enumerate(self.changes):
             where = f"cog change {i}"
-            if not isinstance(c, CogChange):
+            if not isinstance(c, CogChange):     # checked under this change's name
                 if isinstance(c, (tuple, list)) and 2 <= len(c) <= 3:
-                    c = CogChange(*c)
+                    fields = (*c, 0.0)[:3]
+                elif isinstance(c, dict) and {"t", "r"} <= set(c) <= {"t", "r", "ramp"}:
+                    fields = (c["t"], c["r"], c.get("ramp", 0.0))
                 elif isinstance(c, dict):
-                    try:
-                        c = CogChange(**c)
-                    except TypeError:
-                        validate.fail(where, "a table with keys t, r and ramp", c)
+                    validate.fail(where, "a table with keys t, r and ramp", c)
                 else:
                     validate.fail(where, "a CogChange or a tuple (t, r[, ramp])", c)
-            r = validate.array(c.r, f"{where}: r", (3,), what="3 finite numbers (m)")
-            c = CogChange(validate.nonnegative(c.t, f"{where}: t", "s"), tuple(r.tolist()),
-                          validate.nonnegative(c.ramp, f"{where}: ramp", "s"))
+                c = CogChange(*_checked_change(fields[0], fields[1], fields[2], where))
             if c.t < last:
                 raise InputError(f"cog change {i}: t = {c.t} s comes before the previous "
                                  f"change's end ({last} s); expected changes in time order")
+            if clean and c.ramp == 0 and clean[-1].ramp == 0 and c.t == clean[-1].t:
+                raise InputError(f"cog change {i}: t = {c.t:g} s is the time of the step of "
+                                 f"change {i - 1} to r = {list(clean[-1].r)} m, which is then "
+                                 f"never held (this step replaces it at once); expected t after "
+                                 f"{c.t:g} s, or a ramp")
             last = c.t + c.ramp
             clean.append(c)
         self.changes = clean
@@ -95,8 +125,14 @@ class CogProfile:
         -------
         CogProfile
             One change, without a ramp.
+
+        Raises
+        ------
+        quadcog.InputError
+            ``t`` not a number >= 0 (s) or ``r`` not 3 finite numbers (m).
         """
-        return cls([CogChange(t, tuple(r), 0.0)])
+        # checked by the profile, as any change (tuple(r) of a number was a raw TypeError)
+        return cls([CogChange(t, cast(tuple, r), 0.0)])
 
     def sample(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """The CoG offset at given times.
@@ -110,9 +146,16 @@ class CogProfile:
         -------
         (N, 3) numpy.ndarray
             r_G (m, body frame).
+
+        Raises
+        ------
+        quadcog.InputError
+            A time that is not a finite real number (``sample_times``).
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = sample_times(t)
         r = np.zeros((t.size, 3))
+        if t.size < 2 or (np.diff(t) >= 0).all():
+            return self._sampled_in_order(t, r)
         prev = np.zeros(3)
         for c in self.changes:
             target = np.array(c.r)
@@ -124,6 +167,26 @@ class CogProfile:
                 fill_rows(r[active], prev + 1.0 * (target - prev))
             else:
                 r[active] = prev + 1.0 * (target - prev)
+            prev = target
+        return r
+
+
+    def _sampled_in_order(self, t: npt.NDArray[np.float64],
+                          r: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """``sample`` at times in order: each change writes only the samples up to the next
+        change's start (the next one writes the rest), the same numbers as writing every
+        sample from its start on, in time linear in the changes and the samples (that cost
+        changes x samples)."""
+        starts = np.searchsorted(t, [c.t for c in self.changes], side="left").tolist()
+        prev = np.zeros(3)
+        for i, c in enumerate(self.changes):
+            target = np.array(c.r)
+            a, b = starts[i], (starts[i + 1] if i + 1 < len(starts) else t.size)
+            if b > a and c.ramp > 0:
+                s = np.clip((t[a:b] - c.t) / c.ramp, 0.0, 1.0)
+                r[a:b] = prev + s[:, None] * (target - prev)
+            elif b > a:
+                fill_rows(r[a:b], prev + 1.0 * (target - prev))
             prev = target
         return r
 
@@ -189,12 +252,42 @@ def wrench_table(disturbances: Any, t: npt.ArrayLike) -> npt.NDArray[np.float64]
     -------
     (N, 6) numpy.ndarray
         Force (N, ground axes) and moment (N m, body axes).
+
+    Raises
+    ------
+    quadcog.InputError
+        A pulse that is none (``as_disturbances``) or a time that is not a finite real
+        number (``sample_times``).
     """
-    t = np.atleast_1d(np.asarray(t, dtype=float))
+    t = sample_times(t)
+    pulses = as_disturbances(disturbances)
     w = np.zeros((t.size, 6))
-    for d in as_disturbances(disturbances):
-        on = (t >= d.t) & (t < d.t + d.duration)
-        w[on] += np.concatenate([d.force, d.moment])
+    if t.size > 1 and not (np.diff(t) >= 0).all():     # times in any order: pulse by pulse
+        for d in pulses:
+            on = (t >= d.t) & (t < d.t + d.duration)
+            w[on] += np.concatenate([d.force, d.moment])
+        return w
+    # times in order (a run's grid): the table is constant between the samples where a pulse
+    # starts or ends, so each stretch is filled once with the sum of the pulses on in it, in
+    # their order (the bits of adding them pulse by pulse). The cost is linear in the pulses
+    # and the samples; a mask per pulse over every sample cost pulses x samples.
+    first = np.searchsorted(t, [d.t for d in pulses], side="left")       # first t >= start
+    stop = np.searchsorted(t, [d.t + d.duration for d in pulses], side="left")
+    edges: dict[int, list[tuple[int, int]]] = {}
+    for i, (a, b) in enumerate(zip(first.tolist(), stop.tolist())):
+        if a < b:
+            edges.setdefault(a, []).append((1, i))
+            edges.setdefault(b, []).append((-1, i))
+    active: set[int] = set()
+    marks = sorted(edges)
+    for k, mark in enumerate(marks):
+        for sign, i in edges[mark]:
+            (active.add if sign > 0 else active.discard)(i)
+        if active and k + 1 < len(marks):
+            total = np.zeros(6)
+            for i in sorted(active):
+                total += np.concatenate([pulses[i].force, pulses[i].moment])
+            fill_rows(w[mark:marks[k + 1]], total)
     return w
 
 
@@ -219,7 +312,7 @@ def as_disturbances(disturbances: Any) -> list[Disturbance]:
     """
     if disturbances is None:
         return []
-    if isinstance(disturbances, (Disturbance, dict, str, bytes)) or not hasattr(
+    if isinstance(disturbances, (Disturbance, dict, str, bytes, np.ndarray)) or not hasattr(
             disturbances, "__iter__"):
         validate.fail("disturbances", "a list of Disturbance pulses", disturbances)
     out = []
@@ -367,14 +460,16 @@ class PayloadProfile:
     ------
     quadcog.InputError
         ``carried`` not a list of payloads of different names, an event out of time order,
-        an attach of a name already on board, a move or drop of a name not on board, or an
-        event that starts inside another's ramp of the same payload.
+        an attach of a name already on board, a move or drop of a name not on board, an
+        event that starts inside another's ramp of the same payload, or a drop or instant move
+        at the instant the payload was attached or moved (which is then never held).
     """
     events: list = field(default_factory=list)
     carried: tuple = ()
 
     def __post_init__(self) -> None:
-        if isinstance(self.events, (str, bytes, dict)) or not hasattr(self.events, "__iter__"):
+        if isinstance(self.events, (str, bytes, dict, np.ndarray)) or not hasattr(
+                self.events, "__iter__"):
             validate.fail("payload", "a list of payload events (attach, move, drop)", self.events)
         if not isinstance(self.carried, (list, tuple)):
             validate.fail("carried", "a list of the Payloads on board at t = 0", self.carried)
@@ -385,6 +480,7 @@ class PayloadProfile:
             validate.fail("carried", "payloads of different names", names)
         clean: list[PayloadEvent] = []
         last, busy = -np.inf, dict[str, float]()
+        placed: dict[str, PayloadEvent] = {}    # a payload's last instant attach or move
         for i, e in enumerate(self.events):
             e = _as_event(e, f"payload[{i}]")
             where = f"payload[{i}] ({e.action} {e.name!r} at t = {e.t:g} s)"
@@ -394,6 +490,23 @@ class PayloadProfile:
             if e.t < busy.get(e.name, -np.inf):
                 raise InputError(f"{where}: starts while its previous move still slides (until "
                                  f"t = {busy[e.name]:g} s)")
+            before = placed.get(e.name)
+            if before is not None and before.t == e.t and e.action in ("drop", "move") and \
+                    e.ramp == 0:
+                # what happened to it at this instant is undone at once: never held
+                if before.action == "attach" and e.action == "drop":
+                    raise InputError(f"{where}: at the time {e.name!r} is attached, so it is "
+                                     "never carried (the drop undoes the attach at once); "
+                                     f"expected t after the attach at {e.t:g} s")
+                raise InputError(f"{where}: at the time {e.name!r} is "
+                                 f"{'attached at' if before.action == 'attach' else 'moved to'} "
+                                 f"{list(before.position or ())} m, which is then never held "
+                                 f"(this {e.action} replaces it at once); expected t after "
+                                 f"{e.t:g} s, or a move with a ramp")
+            if e.action == "drop" or e.ramp > 0:
+                placed.pop(e.name, None)
+            else:
+                placed[e.name] = e
             if e.action == "attach" and e.name in on_board:
                 raise InputError(f"{where}: a payload named {e.name!r} is already on board; "
                                  "expected a new name (or move it)")

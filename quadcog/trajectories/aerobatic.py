@@ -18,8 +18,9 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
+from quadcog.errors import InputError
 from quadcog.kinds import Number, Vec3
-from quadcog.trajectories.analytic import Trajectory
+from quadcog.trajectories.analytic import REFERENCE_LIMIT, Trajectory
 
 __all__ = ["Flip", "BankedCircle", "septic_step"]
 
@@ -38,8 +39,13 @@ def septic_step(tau: npt.ArrayLike) -> tuple[_Array, _Array, _Array, _Array]:
     -------
     s, s1, s2, s3 : numpy.ndarray
         s(tau) and its derivatives (zero outside [0, 1]).
+
+    Raises
+    ------
+    InputError
+        ``tau`` not finite real numbers (NaN gave a NaN step).
     """
-    t = np.asarray(tau, dtype=float)
+    t = validate.array(tau, "septic_step: tau", what="normalized times: finite real numbers")
     inside = (t > 0) & (t < 1)
     t = np.clip(t, 0.0, 1.0)
     s = 35 * t**4 - 84 * t**5 + 70 * t**6 - 20 * t**7
@@ -47,6 +53,32 @@ def septic_step(tau: npt.ArrayLike) -> tuple[_Array, _Array, _Array, _Array]:
     s2 = np.where(inside, 420 * t**2 - 1680 * t**3 + 2100 * t**4 - 840 * t**5, 0.0)
     s3 = np.where(inside, 840 * t - 5040 * t**2 + 8400 * t**3 - 4200 * t**4, 0.0)
     return s, s1, s2, s3
+
+
+# The largest |s1|, |s2|, |s3| of the septic step's derivatives on [0, 1] (35/16, about 7.51
+# and 52.5)
+_PEAKS = tuple(float(np.abs(d).max()) for d in septic_step(np.linspace(0.0, 1.0, 10001))[1:])
+
+
+def _check_peaks(where, radius, rates, settings):
+    """Refuse a motion on a circle whose velocity, acceleration or jerk can exceed
+    ``REFERENCE_LIMIT`` somewhere: ``rates`` bound the angle's first three derivatives
+    (w1, w2, w3) over the motion, and ``|v| = r w1``, ``|a| <= r (w2 + w1^2)``,
+    ``|j| <= r (w3 + w1^3 + 3 w1 w2)``. Checked when the trajectory is made: sampled at a
+    flight's steps only, a loop flown in a nanosecond fell between two samples and the
+    reference stayed a hover."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        w1, w2, w3 = (np.float64(x) for x in rates)
+        peaks = {"velocity": radius * w1, "acceleration": radius * (w2 + w1 * w1),
+                 "jerk": radius * (w3 + w1 * w1 * w1 + 3 * w1 * w2)}
+    worst = next((k for k, v in peaks.items() if not v <= REFERENCE_LIMIT), None)
+    if worst is not None:
+        unit = {"velocity": "m/s", "acceleration": "m/s^2", "jerk": "m/s^3"}[worst]
+        raise InputError(f"{where}: expected settings whose reference stays within "
+                         f"+-{REFERENCE_LIMIT:g} (SI units), got {settings}, which ask for "
+                         + (f"up to {float(peaks[worst]):.3g} {unit}" if np.isfinite(peaks[worst])
+                            else "more than a float holds")
+                         + f" of {worst}")
 
 
 def _point(where, value):
@@ -108,6 +140,11 @@ class Flip(Trajectory):
         self.start = validate.nonnegative(self.start, "flip start", "s")
         self.duration = validate.positive(self.duration, "flip duration", "s")
         self.yaw = validate.real(self.yaw, "flip yaw", unit="rad")
+        k, T = 2 * np.pi, np.float64(self.duration)
+        with np.errstate(over="ignore", divide="ignore"):
+            rates = (k * _PEAKS[0] / T, k * _PEAKS[1] / T**2, k * _PEAKS[2] / T**3)
+        _check_peaks("flip", self.radius, rates, f"radius {validate.plain(self.radius)} m "
+                     f"and duration {validate.plain(self.duration)} s")
 
     def _pvaj(self, t):
         T = np.float64(self.duration)   # numpy's powers: T**3 of 1e308 s is inf, not OverflowError
@@ -161,6 +198,13 @@ class BankedCircle(Trajectory):
         self.ramp = validate.positive(self.ramp, "banked_circle ramp", "s")
         self.g = validate.positive(self.g, "banked_circle g", "m/s^2")
         self.yaw = validate.real(self.yaw, "banked_circle yaw", unit="rad")
+        with np.errstate(over="ignore", divide="ignore"):
+            w, T = np.sqrt(self.g * np.tan(np.radians(self.bank_deg)) / self.radius), \
+                np.float64(self.ramp)
+            rates = (w, w * _PEAKS[0] / T, w * _PEAKS[1] / T**2)
+        _check_peaks("banked_circle", self.radius, rates, f"radius {validate.plain(self.radius)} "
+                     f"m, bank_deg {validate.plain(self.bank_deg)}, ramp "
+                     f"{validate.plain(self.ramp)} s and g {validate.plain(self.g)} m/s^2")
 
     @property
     def rate(self) -> float:

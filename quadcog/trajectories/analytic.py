@@ -412,11 +412,11 @@ class FromCallable(Trajectory):
         Raises
         ------
         InputError
-            When the function raises, returns something of another shape, or a row is not
-            finite or beyond REFERENCE_LIMIT.
+            When ``t`` is not finite times (``sample_times``), the function raises, returns
+            something of another shape, or a row is not finite or beyond REFERENCE_LIMIT.
         """
         rows = []
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = sample_times(t)             # NaN, strings, 2-D arrays: named, not raw or NaN rows
         for tk in t:
             got = self._eval(tk)
             if not isinstance(got, list):

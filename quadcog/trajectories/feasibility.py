@@ -19,9 +19,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from quadcog import config
+from quadcog import config, validate
+from quadcog.errors import InputError
 from quadcog.numerics import row_norms
-from quadcog.trajectories.analytic import ACC, JERK
+from quadcog.trajectories.analytic import ACC, JERK, REF_SIZE
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["ReferenceLimits", "ReferenceCheck", "reference_limits", "check_reference"]
@@ -109,9 +110,18 @@ def reference_limits(vehicle: Vehicle, max_tilt: float | None = None) -> Referen
     -------
     ReferenceLimits
         Thrust per mass (m/s^2), tilt (rad) and thrust-direction rate (rad/s).
+
+    Raises
+    ------
+    InputError
+        ``vehicle`` not a Vehicle, or ``max_tilt`` not a number in (0, pi] rad.
     """
+    if not isinstance(vehicle, Vehicle):
+        validate.fail("vehicle", "a quadcog Vehicle", vehicle)
     if max_tilt is None:
         max_tilt = math.radians(config.get("limits.max_tilt_deg"))
+    # the divergence limit's range (quadcog.config: max_tilt_deg in (0, 180])
+    max_tilt = validate.real(max_tilt, "max_tilt", lo=0.0, hi=math.pi, lo_open=True, unit="rad")
     mixer = vehicle.mixer()                     # U = mixer @ f
     lo, hi = vehicle.min_rotor_thrust, vehicle.max_rotor_thrust
     corners = np.array(list(itertools.product((lo, hi), repeat=mixer.shape[1])))
@@ -144,7 +154,15 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
     -------
     ReferenceCheck
         The worst demands, whether they are feasible, and the first time they are not.
+
+    Raises
+    ------
+    InputError
+        ``t`` not (N,) finite times, ``ref`` not (N, 14) finite rows (N >= 1), ``constant`` not
+        a bool, or what ``reference_limits`` raises.
     """
+    t, ref = _rows(t, ref)
+    constant = validate.flag(constant, "constant")
     limits = reference_limits(vehicle, max_tilt)
     a, j = ref[:, ACC], ref[:, JERK]
     if constant:        # every row the same (a hover): the first says it all
@@ -184,3 +202,23 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
         max_specific_thrust=float(size.max()), min_vertical_thrust=float(f[:, 2].min()),
         max_tilt_deg=float(np.degrees(tilt.max())), max_rate=float(rate.max()),
         limits=limits, first_violation_t=first, reason=reason)
+
+
+def _rows(t, ref):
+    """``t`` (N,) and ``ref`` (N, 14) as float arrays of finite numbers, N >= 1. A run's own
+    float64 arrays are taken as they are (no copy of a long run's rows); their finiteness is
+    read from their extremes (NaN and inf carry through min and max), the rest converted and
+    checked by ``quadcog.validate.array``."""
+    def checked(value, where, shape, what):
+        if isinstance(value, np.ndarray) and value.dtype == np.float64 and \
+                value.ndim == len(shape) and value.size and \
+                all(d is None or d == n for d, n in zip(shape, value.shape)) and \
+                np.isfinite(value.min()) and np.isfinite(value.max()):
+            return value
+        return validate.array(value, where, shape, what=what)
+    t = checked(t, "t", (None,), "(N,) finite times (s)")
+    ref = checked(ref, "ref", (None, REF_SIZE), f"(N, {REF_SIZE}) finite reference rows")
+    if not (t.size and ref.shape[0] == t.size):
+        raise InputError(f"t, ref: expected one time per reference row and at least one row, "
+                         f"got {t.size} times and {ref.shape[0]} rows")
+    return t, ref

@@ -6,6 +6,7 @@ The scenario schema (``[trajectory] kind = ...``), ``--set trajectory.*``, sweep
 import inspect
 
 from quadcog import validate
+from quadcog.errors import InputError
 from quadcog.kinds import Kind, settings_of
 from quadcog.trajectories.aerobatic import BankedCircle, Flip
 from quadcog.trajectories.analytic import Circle, Figure8, FromCallable, Helix, Hover, Trajectory
@@ -94,8 +95,18 @@ def make_trajectory(kind: str, **settings: object) -> Trajectory:
     -------
     quadcog.Trajectory
         The reference, a callable of time (s) returning its 14-entry row.
+
+    Raises
+    ------
+    quadcog.InputError
+        An unknown kind or setting, or a setting the constructor refuses.
     """
     validate.choice(kind, "trajectory kind", trajectory_kinds())
+    known = tuple(inspect.signature(TRAJECTORIES[kind]).parameters)
+    unknown = sorted(set(settings) - set(known))
+    if unknown:         # the constructor's TypeError named its own internals
+        raise InputError(f"trajectory {kind!r}: expected settings among {', '.join(known)}, "
+                         f"got unknown {', '.join(map(repr, unknown))}")
     return TRAJECTORIES[kind](**settings)
 
 

@@ -41,7 +41,8 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import validate
-from quadcog.trajectories.analytic import REF_SIZE, Trajectory
+from quadcog.model.parameters import LARGEST
+from quadcog.trajectories.analytic import REF_SIZE, Trajectory, sample_times
 
 __all__ = ["TrajectoryProtocol", "VerticalSine"]
 
@@ -113,14 +114,17 @@ class VerticalSine:
     Raises
     ------
     InputError
-        When a setting is not finite, or the period not > 0.
+        When a setting is not finite, the amplitude beyond +-LARGEST m or the period below
+        2 pi / LARGEST s (``quadcog.model.parameters``: the rows then stay finite).
     """
 
     def __init__(self, position: npt.ArrayLike = (0.0, 0.0, 1.0), amplitude: float = 0.1,
                  period: float = 5.0, yaw: float = 0.0) -> None:
         self.position = validate.array(position, "position", (3,))          # (3,) m
-        self.amplitude = validate.real(amplitude, "amplitude", unit="m")    # m
-        self.period = validate.positive(period, "period", "s")              # s
+        self.amplitude = validate.real(amplitude, "amplitude", lo=-LARGEST, hi=LARGEST,
+                                       unit="m")                            # m
+        # at least 2 pi / LARGEST s: w^3 A stays finite (a period of 1e-320 s gave NaN rows)
+        self.period = validate.real(period, "period", lo=2 * np.pi / LARGEST, unit="s")
         self.yaw = validate.real(yaw, "yaw", unit="rad")                    # rad
 
     def sample(self, t: npt.ArrayLike) -> Array:
@@ -135,8 +139,13 @@ class VerticalSine:
         -------
         (N, 14) numpy.ndarray
             [p (m), v (m/s), a (m/s^2), j (m/s^3), yaw (rad), yaw_rate (rad/s)] per time.
+
+        Raises
+        ------
+        InputError
+            When ``t`` is not finite times (``quadcog.trajectories.analytic.sample_times``).
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))                # (N,) s
+        t = sample_times(t)                                          # (N,) s, finite
         w = 2.0 * np.pi / self.period                                # rad/s
         A = self.amplitude                                           # m
         ref = np.zeros((t.size, REF_SIZE))                           # (N, 14)

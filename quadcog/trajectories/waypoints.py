@@ -37,11 +37,24 @@ MAX_SEGMENT_TIME = 1e6
 
 
 def _derivative_row(tau, order):
-    """Row of d^order/dtau^order [1, tau, ..., tau^7] at tau."""
+    """Row of d^order/dtau^order [1, tau, ..., tau^7] at tau (one row, written out: the
+    tests' dense system is built from it)."""
     row = np.zeros(N_COEF)
     for k in range(order, N_COEF):
         row[k] = np.prod(np.arange(k - order + 1, k + 1)) * tau ** (k - order)
     return row
+
+
+def _derivative_rows(tau, order):
+    """Rows (m, 8) of d^order/dtau^order [1, tau, ..., tau^7] at each tau (m,)."""
+    tau = np.asarray(tau, dtype=float)
+    powers = np.ones((tau.size, N_COEF))          # 1, tau, ..., tau^7 by products
+    powers[:, 1:] = tau[:, None]
+    np.cumprod(powers, axis=1, out=powers)
+    rows = np.zeros((tau.size, N_COEF))
+    for k in range(order, N_COEF):
+        rows[:, k] = np.prod(np.arange(k - order + 1, k + 1)) * powers[:, k - order]
+    return rows
 
 
 def allocate_times(points: npt.ArrayLike, max_speed: float = 1.0,
@@ -64,6 +77,12 @@ def allocate_times(points: npt.ArrayLike, max_speed: float = 1.0,
     -------
     (n,) numpy.ndarray
         Duration of each segment (s).
+
+    Raises
+    ------
+    InputError
+        ``points`` not at least 2 rows of 3 finite numbers, a limit not a positive number, or
+        a segment whose time overflows (a speed of 1e-320 m/s).
     """
     what = "at least 2 rows of 3 finite numbers (m)"
     pts = validate.array(points, "points", (None, 3), what=what)
@@ -72,10 +91,17 @@ def allocate_times(points: npt.ArrayLike, max_speed: float = 1.0,
     v = validate.positive(max_speed, "max_speed", unit="m/s")
     a = validate.positive(max_acceleration, "max_acceleration", unit="m/s^2")
     min_segment_time = validate.nonnegative(min_segment_time, "min_segment_time", unit="s")
-    d = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    full = d >= v * v / a
-    T = np.where(full, d / v + v / a, 2 * np.sqrt(d / a))
-    return np.maximum(T, min_segment_time)
+    with np.errstate(over="ignore", invalid="ignore"):     # refused below, by name
+        d = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+        full = d >= v * v / a
+        T = np.maximum(np.where(full, d / v + v / a, 2 * np.sqrt(d / a)), min_segment_time)
+    if not np.isfinite(T).all():
+        k = int(np.argmax(~np.isfinite(T)))
+        raise InputError(f"max_speed = {validate.plain(v)} m/s, max_acceleration = "
+                         f"{validate.plain(a)} m/s^2: segment {k} ({validate.plain(float(d[k]))} "
+                         "m) would take longer than a float can hold; expected a speed and an "
+                         "acceleration that cross it in finite time")
+    return T
 
 
 class MinimumSnap(Trajectory):
@@ -123,7 +149,7 @@ class MinimumSnap(Trajectory):
         yaw = validate.real(yaw, "yaw", unit="rad")
         if times is None:
             T = allocate_times(pts, max_speed, max_acceleration)
-            if not (np.isfinite(T).all() and T.max() <= MAX_SEGMENT_TIME):
+            if not T.max() <= MAX_SEGMENT_TIME:
                 raise InputError(f"max_speed = {max_speed!r} m/s, max_acceleration = "
                                  f"{max_acceleration!r} m/s^2: a segment would take "
                                  f"{float(T.max()):.3g} s; expected speeds and accelerations "
@@ -132,8 +158,9 @@ class MinimumSnap(Trajectory):
         times = validate.array(times, "times", what=f"{len(pts)} increasing finite numbers (s)")
         if times.shape != (len(pts),) or not np.isfinite(times).all() or np.any(
                 np.diff(times) <= 0):
+            # plain: a list of 10,000 times is named by its shape, not printed
             raise InputError(f"times: expected {len(pts)} increasing finite numbers (s), one "
-                             f"per waypoint, got {np.asarray(times).tolist()!r}")
+                             f"per waypoint, got {validate.plain(times)}")
         T = np.diff(times)
         if T.min() < MIN_SEGMENT_TIME or T.max() > MAX_SEGMENT_TIME:
             k = int(np.argmin(T)) if T.min() < MIN_SEGMENT_TIME else int(np.argmax(T))
@@ -149,44 +176,43 @@ class MinimumSnap(Trajectory):
         return float(self.times[-1] - self.times[0])
 
     def _solve(self):
-        # The system is sparse (each row touches one or two segments): built as triplets and
-        # solved by sparse LU, its cost grows linearly with the waypoints (a dense solve of the
-        # 8n x 8n matrix grows as n^3, and its memory as n^2: 1 GB at 1,600 waypoints)
-        from scipy.sparse import csc_matrix  # here: slow to import
-        from scipy.sparse.linalg import spsolve
+        # The system is banded: with the rows in segment order (the start's rest, then each
+        # segment's two passes and the six joins to the next, the end's rest last), row
+        # 3 + 8 i + k touches only the 16 coefficients of segments i and i + 1. LAPACK's
+        # banded LU (partial pivoting, as a dense solve) then costs time and memory linear in
+        # the waypoints: a dense solve of the 8n x 8n matrix grows as n^3 (1 GB at 1,600
+        # waypoints), SuperLU's sparse one as n^1.4, and a Python call per row took 13 s for
+        # 10,000 waypoints.
+        from scipy.linalg import LinAlgError, solve_banded  # here: slow to import
         n = len(self.waypoints) - 1
         T = np.diff(self.times)
-        rows: list[int] = []
-        cols: list[int] = []
-        vals: list[np.ndarray] = []
-        rhs = np.zeros((N_COEF * n, 3))
-        row = 0
-        span = np.arange(N_COEF)
+        seg = np.arange(n)
+        base = 3 + N_COEF * seg                  # the first row of segment i's block
+        rows, cols, vals, rhs = [], [], [], np.zeros((N_COEF * n, 3))
 
-        def put(seg, tau, order, value=None, sign=1.0):
-            rows.extend([row] * N_COEF)
-            cols.extend((N_COEF * seg + span).tolist())
-            vals.append(sign * _derivative_row(tau, order))
-            if value is not None:
-                rhs[row] = value
+        def put(row, segs, tau, order, sign=1.0):
+            """Rows ``row`` (m,) hold d^order/dtau^order of segment ``segs`` (m,) at ``tau``."""
+            rows.append(np.repeat(row, N_COEF))
+            cols.append((N_COEF * segs[:, None] + np.arange(N_COEF)).ravel())
+            vals.append((sign * _derivative_rows(tau, order)).ravel())
 
-        for i in range(n):                       # each piece passes through both its ends
-            put(i, 0.0, 0, self.waypoints[i])
-            row += 1
-            put(i, T[i], 0, self.waypoints[i + 1])
-            row += 1
         for order in (1, 2, 3):                  # at rest at both ends
-            put(0, 0.0, order, 0.0)
-            row += 1
-            put(n - 1, T[-1], order, 0.0)
-            row += 1
-        for i in range(n - 1):                   # interior joins: derivatives 1..6 continuous
-            for order in range(1, 7):
-                put(i, T[i], order)
-                put(i + 1, 0.0, order, 0.0, sign=-1.0)
-                row += 1
-        M = csc_matrix((np.concatenate(vals), (rows, cols)), shape=(N_COEF * n, N_COEF * n))
-        coef = np.column_stack([spsolve(M, rhs[:, k]) for k in range(3)])
+            put(np.array([order - 1]), seg[:1], np.zeros(1), order)
+            put(base[-1:] + 1 + order, seg[-1:], T[-1:], order)
+        put(base, seg, np.zeros(n), 0)           # each piece passes through both its ends
+        put(base + 1, seg, T, 0)
+        rhs[base], rhs[base + 1] = self.waypoints[:-1], self.waypoints[1:]
+        for order in range(1, 7):                # interior joins: derivatives 1..6 continuous
+            put(base[:-1] + 1 + order, seg[:-1], T[:-1], order)
+            put(base[:-1] + 1 + order, seg[1:], np.zeros(n - 1), order, sign=-1.0)
+        r, c, v = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+        lower, upper = int((r - c).max()), int((c - r).max())
+        band = np.zeros((lower + upper + 1, N_COEF * n))
+        band[upper + r - c, c] = v
+        try:
+            coef = solve_banded((lower, upper), band, rhs, check_finite=False)
+        except LinAlgError:                      # an exactly singular system
+            coef = np.full((N_COEF * n, 3), np.nan)
         if not np.isfinite(coef).all():
             raise InputError(f"waypoints: the minimum-snap system of {len(self.waypoints)} "
                              "waypoints and their times is singular (no finite polynomial "

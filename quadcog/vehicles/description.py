@@ -32,10 +32,13 @@ The functions here return the ``Vehicle`` fields (this module sits below ``vehic
 ``Vehicle.from_urdf``, ``Vehicle.from_sdf`` and ``Vehicle.from_file`` make the vehicle.
 
 A needed value that is missing, not a number or out of its range raises ``VehicleFileError``
-naming the value (its element path) and the file; so does a URDF whose links are not one tree
-of uniquely named links, and an SDF whose ``<include>`` s loop or copy more than
-``MAX_INCLUDED_ELEMENTS`` elements. A read costs time linear in the files' size: each file is
-parsed once, each URDF joint read once.
+naming the value (its element path) and the file (lengths, masses and inertias beyond the
+model's scale ``LARGEST`` too: their sums overflowed to a NaN that named no value); so does a
+URDF whose links are not one tree of uniquely named links, an SDF whose ``<include>`` s loop
+or copy more than ``MAX_INCLUDED_ELEMENTS`` elements, and links whose mass lies farther than
+``PAYLOAD_REACH`` arm lengths from their CoG (root mean square: an inertia in the wrong
+unit). A read costs time linear in the files' size: each file is parsed once, each URDF joint
+read once.
 """
 from dataclasses import dataclass, field
 import math
@@ -48,7 +51,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import numpy.typing as npt
 
-from quadcog.errors import VehicleFileError
+from quadcog.errors import InputError, VehicleFileError
 from quadcog.files import input_file
 from quadcog.model.inertial_parameters import check_physically_consistent, inertial_parameters
 from quadcog.model.parameters import LARGEST, SMALLEST
@@ -56,7 +59,8 @@ from quadcog.validate import fail, flag, plain, real
 
 __all__ = ["urdf_fields", "sdf_fields", "file_fields", "GYM_PYBULLET_DIRECTIONS",
            "RPM_PER_RAD_S", "GAZEBO_PATH_VARIABLES", "MAX_INCLUDE_DEPTH", "MAX_INCLUDED_ELEMENTS",
-           "THRUST_TO_WEIGHT", "MAX_MOMENT_CONSTANT", "MAX_MOTOR_TIME_CONSTANT"]
+           "THRUST_TO_WEIGHT", "MAX_MOMENT_CONSTANT", "MAX_MOTOR_TIME_CONSTANT", "PAYLOAD_REACH",
+           "check_options"]
 
 # gym-pybullet-drones, BaseAviary._physics: z_torque = -t0 + t1 - t2 + t3 with t_i = KM rpm_i^2,
 # and the torques negated for DroneModel.RACE (whose URDF is racer.urdf); the file has no
@@ -81,6 +85,12 @@ MAX_MOMENT_CONSTANT = 1.0
 # A motor's spin-up time constant (s): real ones take 0.01 to 0.1 s; a motor much slower
 # than 10 s cannot hold a quadrotor's attitude at all.
 MAX_MOTOR_TIME_CONSTANT = 10.0
+# What a vehicle carries is on it: a payload's centre at most this many arm lengths from O (a
+# sling load hangs a few arm lengths below; 100 km away is a typing error, refused;
+# quadcog.vehicles.payload.check_reach), and a file's links' mass within as many arm lengths
+# of their CoG (root mean square: an inertia in g mm^2 read as kg m^2 puts a Crazyflie's 27 g
+# 30 m out).
+PAYLOAD_REACH = 10.0
 
 
 # -- XML reading -----------------------------------------------------------------------------
@@ -93,6 +103,33 @@ def _file_path(path: object, where: str) -> Path:
         fail(where, "a vehicle file's path (a str or os.PathLike, .urdf or .sdf)", path,
              VehicleFileError)
     return input_file(path, "a vehicle file (.urdf or .sdf)", VehicleFileError, where)
+
+
+def check_options(reader: Any, options: dict[str, Any], where: str) -> None:
+    """Refuse keyword options that a vehicle-file reader does not take, before the file is
+    read (Python's own TypeError named the function's internals).
+
+    Parameters
+    ----------
+    reader : callable
+        ``urdf_fields`` or ``sdf_fields``: its keyword-only parameters are the options.
+    options : dict of str to Any
+        The options given (``Vehicle.from_urdf(path, **options)``).
+    where : str
+        The start of the message (the method called).
+
+    Raises
+    ------
+    quadcog.InputError
+        Naming the unknown options and the ones the reader takes.
+    """
+    import inspect
+    known = [n for n, q in inspect.signature(reader).parameters.items()
+             if q.kind is inspect.Parameter.KEYWORD_ONLY]
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise InputError(f"{where}: expected options among {', '.join(known)}, got unknown "
+                         f"{', '.join(map(repr, unknown))}")
 
 
 def _parse(path: Path) -> ET.Element:
@@ -110,7 +147,11 @@ def _parse(path: Path) -> ET.Element:
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 
-def _numbers(text: str | None, what: str, path: Path, n: int) -> npt.NDArray[np.float64]:
+def _numbers(text: str | None, what: str, path: Path, n: int,
+             scale: bool = False) -> npt.NDArray[np.float64]:
+    """``n`` finite numbers; with ``scale`` each within +-LARGEST (the model's scale in SI
+    units: a length, a mass or an inertia beyond it overflows the sums of the parallel-axis
+    theorem, and a NaN named no value of the file)."""
     if text is None:
         raise VehicleFileError(f"{path}: {what} is missing; expected {n} number(s)")
     words = text.split()
@@ -119,11 +160,24 @@ def _numbers(text: str | None, what: str, path: Path, n: int) -> npt.NDArray[np.
     if values.shape != (n,) or not np.isfinite(values).all():
         raise VehicleFileError(f"{path}: {what} = {plain(text.strip())}; expected {n} finite "
                                "number(s)")
+    if scale and not np.abs(values).max() <= LARGEST:
+        raise VehicleFileError(f"{path}: {what} = {plain(text.strip())}; expected {n} "
+                               f"number(s) within +-{LARGEST:g} (SI units, the model's scale)")
     return values
 
 
-def _number(text: str | None, what: str, path: Path) -> float:
-    return float(_numbers(text, what, path, 1)[0])
+def _number(text: str | None, what: str, path: Path, scale: bool = False) -> float:
+    return float(_numbers(text, what, path, 1, scale)[0])
+
+
+def _within_scale(pose: "_Pose", what: str, path: Path) -> npt.NDArray[np.float64]:
+    """The translation of a composed pose (a link's frame down a chain of joints), refused
+    beyond LARGEST m from the model's origin (each offset is within it, their sum need not)."""
+    if not np.abs(pose.t).max() <= LARGEST:
+        raise VehicleFileError(f"{path}: {what} is at {plain(pose.t.tolist())} m from the "
+                               f"model's origin; expected within +-{LARGEST:g} m (the model's "
+                               "scale)")
+    return pose.t
 
 
 def _bounded(value: float, what: str, path: Path, lo: float, hi: float, unit: str,
@@ -175,6 +229,10 @@ def _sdf_pose(element: ET.Element | None, what: str, path: Path) -> _Pose:
     if node is None or not (node.text or "").strip():
         return _IDENTITY
     v = _numbers(node.text, f"{what}/pose", path, 6)
+    if not np.abs(v[:3]).max() <= LARGEST:
+        raise VehicleFileError(f"{path}: {what}/pose = {plain((node.text or '').strip())}; expected "
+                               f"x y z within +-{LARGEST:g} m (the model's scale) and roll "
+                               "pitch yaw")
     rpy = np.radians(v[3:]) if node.get("degrees", "false").lower() == "true" else v[3:]
     return _Pose(_rotation(rpy), v[:3])
 
@@ -183,7 +241,7 @@ def _urdf_origin(element: ET.Element | None, what: str, path: Path) -> _Pose:
     node = None if element is None else element.find("origin")
     if node is None:
         return _IDENTITY
-    xyz = _numbers(node.get("xyz", "0 0 0"), f"{what}/origin@xyz", path, 3)
+    xyz = _numbers(node.get("xyz", "0 0 0"), f"{what}/origin@xyz", path, 3, scale=True)
     rpy = _numbers(node.get("rpy", "0 0 0"), f"{what}/origin@rpy", path, 3)
     return _Pose(_rotation(rpy), xyz)
 
@@ -212,7 +270,7 @@ def _body(m: float, where: _Pose, I_G: npt.NDArray[np.float64], what: str, path:
     I_model = where.R @ I_G @ where.R.T
     check_physically_consistent(inertial_parameters(m, np.zeros(3), I_model, what),
                                 f"{path}: {what}")
-    return _Body(m, where.t, I_model)
+    return _Body(m, _within_scale(where, f"{what}: its CoG", path), I_model)
 
 
 def _whole(bodies: list[_Body], path: Path) -> tuple[float, npt.NDArray[np.float64],
@@ -243,6 +301,16 @@ def _assemble(path: Path, name: str, bodies: list[_Body],
                                "vehicle's body")
     m, cog, I_G = _whole(bodies, path)
     centre = rotors[:, :2].mean(axis=0)
+    arm = float(np.max(np.hypot(*(rotors[:, :2] - centre).T)))
+    spread = math.sqrt(float(np.trace(I_G)) / (2.0 * m))    # rms distance of the mass from the CoG
+    if arm > 0 and not spread <= PAYLOAD_REACH * arm:     # arm 0: Vehicle names the mixer
+        raise VehicleFileError(
+            f"{path}: the links' inertia about their CoG (trace {float(np.trace(I_G)):.4g} kg "
+            f"m^2 for {m:.4g} kg) puts their mass {spread:.3g} m from the CoG (root mean square), "
+            f"beyond {PAYLOAD_REACH:g} arm lengths ({PAYLOAD_REACH * arm:.3g} m) of a vehicle "
+            "whose rotors are "
+            f"{arm:.3g} m from its axis; expected inertias in kg m^2 and masses in kg (not g "
+            "mm^2, kg cm^2 or g)")
     r_G = np.array([cog[0] - centre[0], cog[1] - centre[1], 0.0])
     I_O = I_G + m * (float(r_G @ r_G) * np.eye(3) - np.outer(r_G, r_G))
     return dict(
@@ -302,14 +370,22 @@ def urdf_fields(path: str | os.PathLike[str], *,
         drag moment per thrust ``km / kf`` above ``MAX_MOMENT_CONSTANT``, ``thrust2weight``
         outside ``THRUST_TO_WEIGHT`` (at most 1: the rotors cannot lift the vehicle), a link
         or joint without a name or named twice, a joint naming a link that does not exist, a
-        link with two parents, several root links, or joints that loop (named with the file).
+        link with two parents, several root links, joints that loop, a length, mass or
+        inertia beyond +-LARGEST, or links whose mass lies farther than ``PAYLOAD_REACH`` arm
+        lengths from their CoG (named with the file).
     InputError
-        ``g`` not a number in [SMALLEST, LARGEST] m/s^2 (``quadcog.model.parameters``).
+        ``g`` not a number in [SMALLEST, LARGEST] m/s^2 (``quadcog.model.parameters``), or
+        ``rotor_directions`` not None or a tuple.
     PhysicalConsistencyError
         A link whose mass and inertia no rigid body has.
     """
     path = _file_path(path, "path (Vehicle.from_urdf)")
     g = real(g, "g (Vehicle.from_urdf)", lo=SMALLEST, hi=LARGEST, unit="m/s^2")
+    if rotor_directions is not None and not isinstance(rotor_directions,
+                                                       (list, tuple, np.ndarray)):
+        # the signs themselves are checked by Vehicle; tuple(5) was a raw TypeError
+        fail("rotor_directions (Vehicle.from_urdf)", "None or 4 signs +1 or -1 (a tuple)",
+             rotor_directions)
     root = _parse(path)
     if root.tag != "robot":
         raise VehicleFileError(f"{path}: the root element is <{root.tag}>; expected <robot> "
@@ -323,7 +399,8 @@ def urdf_fields(path: str | os.PathLike[str], *,
             continue
         what = f"link {link_name!r} <inertial>"
         mass = inertial.find("mass")
-        m = _number(None if mass is None else mass.get("value"), f"{what}/mass@value", path)
+        m = _number(None if mass is None else mass.get("value"), f"{what}/mass@value", path,
+                    scale=True)
         if m == 0.0:
             continue
         node = inertial.find("inertia")
@@ -331,7 +408,7 @@ def urdf_fields(path: str | os.PathLike[str], *,
             raise VehicleFileError(f"{path}: {what}/inertia is missing; expected ixx, iyy, "
                                    f"izz (kg m^2) of a link of mass {m:g} kg")
         values = {k: _number(node.get(k, "0" if k[1] != k[2] else None),
-                             f"{what}/inertia@{k}", path) for k in _INERTIA_KEYS}
+                             f"{what}/inertia@{k}", path, scale=True) for k in _INERTIA_KEYS}
         where = link_pose[link_name].then(_urdf_origin(inertial, what, path))
         bodies.append(_body(m, where, _inertia_matrix(values), what, path))
 
@@ -341,9 +418,9 @@ def urdf_fields(path: str | os.PathLike[str], *,
         if link_name not in links:
             raise VehicleFileError(f"{path}: link {link_name!r} is missing; expected the four "
                                    "rotor links prop0_link .. prop3_link (gym-pybullet-drones)")
-        rotors.append(link_pose[link_name].then(
+        rotors.append(_within_scale(link_pose[link_name].then(
             _urdf_origin(links[link_name].find("inertial"), f"link {link_name!r} <inertial>",
-                         path)).t)
+                         path)), f"rotor link {link_name!r}", path))
     props = root.find("properties")
     if props is None:
         raise VehicleFileError(f"{path}: <properties> is missing; expected kf, km and "
@@ -603,8 +680,9 @@ def sdf_fields(path: str | os.PathLike[str], *,
         z, a ``motorNumber`` that is not one of 0..3 or is given twice, a constant out of its
         range (``motorConstant``, ``maxRotVelocity`` > 0, ``momentConstant`` in (0,
         ``MAX_MOMENT_CONSTANT``] m, ``timeConstantUp`` in [0, ``MAX_MOTOR_TIME_CONSTANT``] s),
-        or a largest thrust whose ratio to the weight is outside ``THRUST_TO_WEIGHT`` (named
-        with the file).
+        a largest thrust whose ratio to the weight is outside ``THRUST_TO_WEIGHT``, a length,
+        mass or inertia beyond +-LARGEST, or links whose mass lies farther than
+        ``PAYLOAD_REACH`` arm lengths from their CoG (named with the file).
     InputError
         ``g`` not a number in [SMALLEST, LARGEST] m/s^2 (``quadcog.model.parameters``),
         ``model_paths`` not a tuple of paths, ``rotor_links`` not a bool.
@@ -676,7 +754,7 @@ def sdf_fields(path: str | os.PathLike[str], *,
             raise VehicleFileError(f"{path}: {what}: linkName {link_name!r} names more than "
                                    "one link (the model's and its includes'); expected one")
         rotor_names.add(link_name)
-        rotors.append(poses[link_name].t)
+        rotors.append(_within_scale(poses[link_name], f"{what}: link {link_name!r}", path))
         joint = joint_of.get((text(plugin, "jointName") or "").strip())
         if joint is not None and joint.find("axis/xyz") is not None:
             axis = _numbers(joint.findtext("axis/xyz"), f"joint {joint.get('name')!r} "
@@ -702,7 +780,7 @@ def sdf_fields(path: str | os.PathLike[str], *,
         if inertial is None or (not rotor_links and link_name in rotor_names):
             continue
         what = f"link {link_name!r} <inertial>"
-        m = _number(inertial.findtext("mass"), f"{what}/mass", path)
+        m = _number(inertial.findtext("mass"), f"{what}/mass", path, scale=True)
         if m == 0.0:
             continue
         node = inertial.find("inertia")
@@ -710,7 +788,7 @@ def sdf_fields(path: str | os.PathLike[str], *,
             raise VehicleFileError(f"{path}: {what}/inertia is missing; expected ixx, iyy, "
                                    f"izz (kg m^2) of a link of mass {m:g} kg")
         inertia = {k: _number(node.findtext(k) or ("0" if k[1] != k[2] else None),
-                             f"{what}/inertia/{k}", path) for k in _INERTIA_KEYS}
+                             f"{what}/inertia/{k}", path, scale=True) for k in _INERTIA_KEYS}
         where = pose.then(_sdf_pose(inertial, what, path))
         bodies.append(_body(m, where, _inertia_matrix(inertia), what, path))
     c = {k: v[0] for k, v in constants.items()}
@@ -743,11 +821,15 @@ def file_fields(path: str | os.PathLike[str], **options: Any) -> dict[str, Any]:
     ------
     VehicleFileError
         A suffix other than ``.urdf`` or ``.sdf``, or what the reader raises.
+    InputError
+        An option the reader does not take (``check_options``).
     """
     path = _file_path(path, "path (Vehicle.from_file)")
     if path.suffix.lower() == ".urdf":
+        check_options(urdf_fields, options, "Vehicle.from_file (a .urdf file)")
         return urdf_fields(path, **options)
     if path.suffix.lower() == ".sdf":
+        check_options(sdf_fields, options, "Vehicle.from_file (an .sdf file)")
         return sdf_fields(path, **options)
     raise VehicleFileError(f"{path}: suffix {path.suffix!r}; expected a .urdf or .sdf vehicle "
                            "file")

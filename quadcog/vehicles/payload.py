@@ -7,6 +7,7 @@ are integrals over the body, a vehicle carrying payloads has the sum of their pi
 (``Vehicle.with_payload``), and the truth model flies that sum.
 """
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, cast
 
 import numpy as np
@@ -16,12 +17,12 @@ from quadcog import validate
 from quadcog.errors import InputError, ParameterError
 from quadcog.model.inertial_parameters import placed
 from quadcog.model.parameters import LARGEST
+from quadcog.vehicles.description import PAYLOAD_REACH, THRUST_TO_WEIGHT
 
-__all__ = ["Payload", "as_payload", "PAYLOAD_REACH", "check_reach"]
+__all__ = ["Payload", "as_payload", "PAYLOAD_REACH", "check_reach", "check_lift"]
+# PAYLOAD_REACH (10 arm lengths) is defined with the vehicle files' bounds, which hold a
+# file's own links to it too (quadcog.vehicles.description)
 
-# A payload is carried on the vehicle: its centre at most this many arm lengths from O (a
-# sling load hangs a few arm lengths below; 100 km away is a typing error, refused)
-PAYLOAD_REACH = 10.0
 
 
 def check_reach(position: npt.ArrayLike, size: npt.ArrayLike | None, arm: float,
@@ -64,6 +65,44 @@ def check_reach(position: npt.ArrayLike, size: npt.ArrayLike | None, arm: float,
                          f"({reach:.3g} m); a payload is carried on the vehicle")
 
 
+def check_lift(mass: float, on_board: float, g: float, max_thrust: float, where: str) -> None:
+    """Refuse a payload that the vehicle cannot carry: with it on board, the rotors' largest
+    total thrust must exceed the weight (a thrust-to-weight ratio above
+    ``quadcog.vehicles.description.THRUST_TO_WEIGHT[0]``, 1: else the vehicle cannot even
+    hover with it).
+
+    Parameters
+    ----------
+    mass : float
+        The payload's mass (kg), checked (> 0).
+    on_board : float
+        The mass already carried without it: the airframe's and the other payloads' (kg).
+    g : float
+        Gravitational acceleration (m/s^2), > 0.
+    max_thrust : float
+        The rotors' largest total thrust (N): ``N_ROTORS * max_rotor_thrust``.
+    where : str
+        The start of the message (the vehicle and the payload, or the event).
+
+    Raises
+    ------
+    quadcog.ParameterError
+        Naming the payload's mass, the most the rotors lift beyond what is on board, and
+        what that was computed from.
+    """
+    lo = THRUST_TO_WEIGHT[0]
+    if (on_board + mass) * g * lo < max_thrust:     # NaN and inf fail (none reach here)
+        return
+    capacity = max_thrust / (lo * g) - on_board
+    lift = (f"the rotors' largest total thrust {max_thrust:.4g} N at g = {g:g} m/s^2 "
+            f"(a thrust-to-weight ratio above {lo:g})")
+    what = (f"a mass below {capacity:.4g} kg, what {lift} lifts beyond the {on_board:.4g} kg "
+            "already on board (the airframe and the other payloads)" if capacity > 0 else
+            f"no payload: {lift} does not lift even the {on_board:.4g} kg already on board "
+            "(the airframe and the other payloads)")
+    validate.fail(f"{where}: mass", what, mass, ParameterError)
+
+
 @dataclass(frozen=True)
 class Payload:
     """A rigid body carried by the vehicle. Units SI.
@@ -94,7 +133,7 @@ class Payload:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
-            raise InputError(f"payload name must be a non-empty string, got {self.name!r}")
+            validate.fail("payload name", "a non-empty string", self.name)
         # a str subclass (numpy.str_) is kept as the plain str that JSON and TOML write
         object.__setattr__(self, "name", str(self.name))
         where = f"payload {self.name!r}"
@@ -150,7 +189,7 @@ class Payload:
             A position beyond the model's scale (``LARGEST`` m), where pi would overflow.
         """
         if positions is None:
-            return placed(self.mass, self.inertia_about_centre(), [self.position])[0]
+            return self._pi.copy()
         where = f"payload {self.name!r}: positions"
         r = validate.array(positions, where, (None, 3),
                            what="an (N, 3) array of finite positions (m, body axes)")
@@ -160,6 +199,12 @@ class Payload:
             validate.fail(where, f"entries within +-{LARGEST:g} m", float(np.abs(r).max()),
                           ParameterError)
         return placed(self.mass, self.inertia_about_centre(), r)
+
+    @cached_property
+    def _pi(self) -> npt.NDArray[np.float64]:
+        """Its pi at its own position, computed once: a vehicle carrying thousands of
+        payloads sums them without placing each again (``Vehicle.with_payload``)."""
+        return placed(self.mass, self.inertia_about_centre(), [self.position])[0]
 
     def moved(self, position: npt.ArrayLike) -> "Payload":
         """The same payload at another position.

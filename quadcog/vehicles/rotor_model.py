@@ -20,7 +20,7 @@ reads (``quadcog.logs`` standard names: ``"motor_pwm"`` or ``"motor_command"``) 
 ``uses_voltage`` whether it needs ``"battery_voltage"``.
 """
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -108,6 +108,22 @@ class RotorModel:
                           "3 c3 c1 > c2^2, so it has one inverse)", c.tolist())
         if not isinstance(self.source, str) or not self.source.strip():
             validate.fail(f"{where}: source", "the citation of the numbers", self.source)
+        # the largest thrust any output (0..1) and battery voltage (up to
+        # MAX_BATTERY_VOLTAGE) can give: a map that overflows there returned inf thrust
+        with np.errstate(over="ignore", invalid="ignore"):
+            if self.kind == "polynomial":
+                top = abs(c[0]) + abs(c[1]) * self.scale + abs(c[2]) * self.scale * self.scale
+            elif self.kind == "voltage_cubic":
+                v = MAX_BATTERY_VOLTAGE
+                top = abs(c[0]) + v * (abs(c[1]) + v * (abs(c[2]) + v * abs(c[3])))
+            elif self.kind == "voltage":
+                top = float(self._thrust(np.ones((1, 4)), np.array([[MAX_BATTERY_VOLTAGE]]))[0, 0])
+            else:
+                top = self.max_thrust
+        if not np.isfinite(top):
+            validate.fail(f"{where}: coefficients", "a map whose thrust stays within the float "
+                          f"range for outputs in 0..1 and voltages up to {MAX_BATTERY_VOLTAGE:g} V",
+                          c.tolist())
 
     @property
     def uses_voltage(self) -> bool:
@@ -185,18 +201,23 @@ class RotorModel:
         """
         # checked before the clip, which would turn inf into full output
         u = self._per_rotor(u, "motor outputs u").clip(0.0, 1.0)
-        volts = self._voltage(voltage, u.shape)
+        return self._thrust(u, self._voltage(voltage, u.shape))
+
+    def _thrust(self, u: npt.NDArray[np.float64],
+                volts: npt.NDArray[np.float64] | None) -> npt.NDArray[np.float64]:
+        """``thrust`` of checked outputs in 0..1 and checked voltages (..., 1)."""
         c = self.coefficients
+        assert volts is not None or not self.uses_voltage      # _voltage gives them
         if self.kind == "polynomial":
             s = self.scale * u
             f = c[0] + c[1] * s + c[2] * s * s
         elif self.kind == "thr_mdl_fac":
             f = self.max_thrust * ((1.0 - c[0]) * u + c[0] * u * u)
         elif self.kind == "voltage_cubic":
-            v = u * volts
+            v = u * cast(npt.NDArray[np.float64], volts)
             f = c[0] + v * (c[1] + v * (c[2] + v * c[3]))
         else:
-            across = u * volts - c[0]
+            across = u * cast(npt.NDArray[np.float64], volts) - c[0]
             if c[2] < 0:        # beyond the parabola's vertex the fit means nothing: saturate
                 across = np.minimum(across, c[1] ** 2 / (-4.0 * c[2]))
             f = self.thrust_unit * _quadratic_root(c[2], c[1], -np.maximum(across, 0.0))
@@ -297,9 +318,19 @@ def cubic_voltage(c: tuple[float, ...], f: npt.ArrayLike) -> npt.NDArray[np.floa
     -------
     numpy.ndarray, shape of f
         Motor voltages (V).
+
+    Raises
+    ------
+    InputError
+        ``c`` not 4 finite numbers of a rising cubic, or ``f`` not finite real numbers.
     """
-    c0, c1, c2, c3 = c
-    f = np.asarray(f, dtype=float)
+    coef = validate.array(c, "cubic_voltage: c", (4,), what="4 finite coefficients (c0, c1, c2, "
+                          "c3) in N, N/V, N/V^2, N/V^3")
+    c0, c1, c2, c3 = (float(x) for x in coef)
+    if not (c3 > 0 and 3 * c3 * c1 > c2 * c2):
+        validate.fail("cubic_voltage: c", "a cubic that rises everywhere (c3 > 0 and 3 c3 c1 > "
+                      "c2^2, so it has one inverse)", coef.tolist())
+    f = validate.array(f, "cubic_voltage: f", what="thrusts (N): finite real numbers")
     p, r = -c2 / (3 * c3), c1 / (3 * c3)
     q = p ** 3 + (c2 * c1 - 3 * c3 * (c0 - f)) / (6 * c3 * c3)
     s = np.sqrt(q * q + (r - p * p) ** 3)
@@ -425,14 +456,23 @@ def px4_thrust_curve_from_log(log: Any, max_thrust: float) -> RotorModel:
     Raises
     ------
     InputError
-        The log has no THR_MDL_FAC parameter, or it is not a number.
+        ``max_thrust`` is not a positive number, ``log`` is not a flight log, it has no
+        THR_MDL_FAC parameter, or it is not a number.
     """
-    text = log.meta.get("param.THR_MDL_FAC")
+    # checked first: it is written into the source with :g (a string raised ValueError)
+    max_thrust = validate.positive(max_thrust, "px4_thrust_curve_from_log: max_thrust", "N")
+    meta = getattr(log, "meta", None)
+    if not isinstance(meta, dict):
+        validate.fail("px4_thrust_curve_from_log: log", "a flight log read by "
+                      "quadcog.logs.read_log (a FlightLog with its meta)", log)
+    text: Any = meta.get("param.THR_MDL_FAC")
     try:
         k = float(text)
     except (TypeError, ValueError):
-        raise InputError(f"{log.source}: no numeric THR_MDL_FAC parameter in the log (got "
-                         f"{text!r}); pass px4_thrust_curve(max_thrust, thr_mdl_fac)") from None
+        raise InputError(f"{getattr(log, 'source', 'the log')}: no numeric THR_MDL_FAC "
+                         f"parameter in the log (got {validate.plain(text)}); pass "
+                         "px4_thrust_curve(max_thrust, thr_mdl_fac)") from None
     return px4_thrust_curve(max_thrust, k, name=f"px4 (THR_MDL_FAC {k:g})",
-                            source=f"PX4 THR_MDL_FAC = {k:g} from {log.source}; "
+                            source=f"PX4 THR_MDL_FAC = {k:g} from "
+                                   f"{getattr(log, 'source', 'the log')}; "
                                    f"T_max = {max_thrust:g} N per rotor given")

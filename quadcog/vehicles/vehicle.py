@@ -18,7 +18,9 @@ adds ``y_i f_i`` to the roll moment U2 and ``-x_i f_i`` to the pitch moment U3. 
 +1 for a rotor turning clockwise seen from above (its reaction turns the body
 counter-clockwise), -1 for counter-clockwise.
 """
+import copy
 from dataclasses import asdict, dataclass, fields, replace
+from functools import cached_property
 import os
 from typing import Any
 
@@ -27,12 +29,24 @@ import numpy.typing as npt
 
 from quadcog.errors import InputError, ParameterError
 from quadcog.model.conventions import IDX, PARAM_NAMES, R_G, hover_trim
-from quadcog.model.inertial_parameters import check_physically_consistent, from_inertial_parameters, inertial_parameters
-from quadcog.model.parameters import check_parameters
+from quadcog.model.inertial_parameters import (
+    check_physically_consistent,
+    from_inertial_parameters,
+    inertial_parameters,
+    is_physically_consistent,
+)
+from quadcog.model.parameters import LARGEST, SMALLEST, check_parameters
 from quadcog.numerics import exact_inverse
-from quadcog.validate import array, plain, real, vector
-from quadcog.vehicles.description import file_fields, sdf_fields, urdf_fields
-from quadcog.vehicles.payload import Payload, as_payload, check_reach
+from quadcog.validate import array, fail, plain, real, vector
+from quadcog.vehicles.description import (
+    MAX_MOMENT_CONSTANT,
+    MAX_MOTOR_TIME_CONSTANT,
+    check_options,
+    file_fields,
+    sdf_fields,
+    urdf_fields,
+)
+from quadcog.vehicles.payload import Payload, as_payload, check_lift, check_reach
 from quadcog.vehicles.rotor_model import CRAZYFLIE_21_PLUS_CUBIC, CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "CRAZYFLIE_21", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
@@ -49,14 +63,14 @@ def plus_layout(arm: float) -> Layout:
     Parameters
     ----------
     arm : float
-        Arm length, centre to rotor (m), finite and > 0.
+        Arm length, centre to rotor (m), in (0, LARGEST] (``quadcog.model.parameters``).
 
     Returns
     -------
     tuple of 4 (x, y) pairs of float
         Rotor positions (m) in the body frame, for ``Vehicle.rotor_positions``.
     """
-    a = real(arm, "arm", lo=0, lo_open=True, unit="m")
+    a = real(arm, "arm", lo=0, lo_open=True, hi=LARGEST, unit="m")
     return ((a, 0.0), (0.0, a), (-a, 0.0), (0.0, -a))
 
 
@@ -67,14 +81,14 @@ def x_layout(arm: float) -> Layout:
     Parameters
     ----------
     arm : float
-        Arm length, centre to rotor (m), finite and > 0.
+        Arm length, centre to rotor (m), in (0, LARGEST] (``quadcog.model.parameters``).
 
     Returns
     -------
     tuple of 4 (x, y) pairs of float
         Rotor positions (m) in the body frame, for ``Vehicle.rotor_positions``.
     """
-    h = real(arm, "arm", lo=0, lo_open=True, unit="m") / np.sqrt(2.0)
+    h = real(arm, "arm", lo=0, lo_open=True, hi=LARGEST, unit="m") / np.sqrt(2.0)
     return ((h, -h), (-h, -h), (-h, h), (h, h))     # the Crazyflie firmware's M1..M4
 
 
@@ -180,7 +194,9 @@ class Vehicle:
     payloads: tuple[Payload, ...] = ()
 
     def __post_init__(self) -> None:
-        where = lambda f: f"vehicle {self.name!r}: {f}"
+        # a name that is not a string (refused below) is written plainly, never as a numpy repr
+        shown = repr(self.name) if isinstance(self.name, str) else plain(self.name)
+        where = lambda f: f"vehicle {shown}: {f}"
         for f in fields(self):
             if f.name in ("rotor_positions", "rotor_directions", "name", "rotor_model", "payloads"):
                 continue
@@ -193,18 +209,17 @@ class Vehicle:
                 raise ParameterError(where(f"{f.name} = {plain(v)} is beyond the range of "
                                            f"a float")) from None
             if not np.isfinite(x):
-                raise ParameterError(where(f"{f.name} = {v} is not finite"))
+                raise ParameterError(where(f"{f.name} = {plain(v)} is not finite"))
             object.__setattr__(self, f.name, x)
         if not isinstance(self.name, str):
             raise InputError(where(f"name must be a string, got {plain(self.name)}"))
-        try:
-            pos = (None if isinstance(self.rotor_positions, (str, bytes)) else
-                   np.asarray(self.rotor_positions, dtype=float))
-        except (TypeError, ValueError, OverflowError):
-            pos = None
-        if pos is None or pos.shape != (N_ROTORS, 2) or not np.isfinite(pos).all():
-            raise InputError(where(f"rotor_positions must be {N_ROTORS} pairs (x, y) of finite "
-                                   f"numbers (m), got {self.rotor_positions!r}"))
+        # real numbers only (validate.array): numpy's float() cast took '0.1' and True as
+        # numbers and dropped the imaginary part of complex ones
+        pos = array(self.rotor_positions, where("rotor_positions"), (N_ROTORS, 2),
+                    what=f"{N_ROTORS} pairs (x, y) of finite numbers (m)")
+        if not np.abs(pos).max() <= LARGEST:
+            fail(where("rotor_positions"), f"{N_ROTORS} pairs (x, y) within +-{LARGEST:g} m "
+                 "(the model's scale)", pos.tolist(), ParameterError)
         object.__setattr__(self, "rotor_positions", tuple(tuple(map(float, r)) for r in pos))
         try:         # np.ndim of a ragged list raises ValueError
             flat = not isinstance(self.rotor_directions, (str, bytes)) and \
@@ -213,18 +228,31 @@ class Vehicle:
             flat = False
         dirs = tuple(self.rotor_directions) if flat else None
         if dirs is None or len(dirs) != N_ROTORS or any(
-                isinstance(d, bool) or d not in (1, -1) for d in dirs):
+                isinstance(d, (bool, np.bool_)) or d not in (1, -1) for d in dirs):
             raise InputError(where(f"rotor_directions must be {N_ROTORS} numbers, each +1 or -1, "
-                                   f"got {self.rotor_directions!r}"))
+                                   f"got {plain(self.rotor_directions)}"))
         object.__setattr__(self, "rotor_directions", tuple(int(d) for d in dirs))
         if isinstance(self.rotor_model, str) and self.rotor_model in ROTOR_MODELS:
             object.__setattr__(self, "rotor_model", ROTOR_MODELS[self.rotor_model])
         if self.rotor_model is not None and not isinstance(self.rotor_model, RotorModel):
             raise InputError(where(f"rotor_model must be a quadcog RotorModel, a name of "
-                                   f"{tuple(ROTOR_MODELS)} or None, got {self.rotor_model!r}"))
+                                   f"{tuple(ROTOR_MODELS)} or None, got "
+                                   f"{plain(self.rotor_model)}"))
         for name in ("thrust_constant", "moment_constant", "max_rotor_thrust"):
             if getattr(self, name) <= 0:
                 raise ParameterError(where(f"{name} = {getattr(self, name)} must be > 0"))
+        # the scale of each rotor constant: the model's (LARGEST), and what a propeller and a
+        # motor can be (the readers of vehicle files hold files to the same bounds)
+        for name, hi, unit, why in (
+                ("thrust_constant", LARGEST, "N/(rad/s)^2", "the model's scale"),
+                ("max_rotor_thrust", LARGEST, "N", "the model's scale"),
+                ("moment_constant", MAX_MOMENT_CONSTANT, "m", "a propeller's drag moment per "
+                 "thrust"),
+                ("motor_time_constant", MAX_MOTOR_TIME_CONSTANT, "s", "a motor that can hold "
+                 "a quadrotor's attitude")):
+            if not getattr(self, name) <= hi:
+                fail(where(name), f"a number <= {hi:g} ({unit}, {why})", getattr(self, name),
+                     ParameterError)
         if self.min_rotor_thrust < 0:
             raise ParameterError(where(f"min_rotor_thrust = {self.min_rotor_thrust} N must be "
                                        ">= 0 (a rotor only pushes)"))
@@ -248,6 +276,19 @@ class Vehicle:
                          where("parameters"))
         _check_payloads(self, where)
         _check_rigid_body(self, where)
+
+    @cached_property
+    def _whole_pi(self) -> npt.NDArray[np.float64]:
+        """pi of the whole body, computed once (``inertial_parameters`` hands out copies)."""
+        pi = inertial_parameters(self.m, self.r_G, np.diag([self.Ixx, self.Iyy, self.Izz]),
+                                 f"vehicle {self.name!r}")
+        for payload in self.payloads:
+            pi = pi + payload.inertial_parameters()
+        return pi
+
+    @cached_property
+    def _payload_names(self) -> frozenset[str]:
+        return frozenset(p.name for p in self.payloads)
 
     # -- from the files users have -------------------------------------------------------
     @classmethod
@@ -278,9 +319,12 @@ class Vehicle:
             A missing file, a needed value missing, not a number or out of its range, or links
             that are not one tree of uniquely named links (named with the file;
             ``quadcog.vehicles.description.urdf_fields``).
+        InputError
+            An unknown option, or ``drag`` not None or a table of the six drag coefficients.
         PhysicalConsistencyError
             A link whose mass and inertia no rigid body has.
         """
+        check_options(urdf_fields, options, "Vehicle.from_urdf")
         return cls._from_fields(urdf_fields(path, **options), drag)
 
     @classmethod
@@ -310,9 +354,12 @@ class Vehicle:
             A missing file or included model, includes that loop or copy too much, or a
             needed value missing, not a number or out of its range
             (``quadcog.vehicles.description.sdf_fields``).
+        InputError
+            An unknown option, or ``drag`` not None or a table of the six drag coefficients.
         PhysicalConsistencyError
             A link whose mass and inertia no rigid body has.
         """
+        check_options(sdf_fields, options, "Vehicle.from_sdf")
         return cls._from_fields(sdf_fields(path, **options), drag)
 
     @classmethod
@@ -338,12 +385,22 @@ class Vehicle:
         ------
         VehicleFileError
             Another suffix, or what ``from_urdf`` or ``from_sdf`` raises.
+        InputError
+            An unknown option, or ``drag`` not None or a table of the six drag coefficients.
         """
         return cls._from_fields(file_fields(path, **options), drag)
 
     @classmethod
     def _from_fields(cls, fields_: dict[str, Any], drag: dict[str, float] | None) -> "Vehicle":
-        drag = drag if drag is not None else preset_drag(fields_["m"], fields_["Ixx"])
+        names = tuple(preset_drag(1.0, 1.0))            # the six drag fields, in order
+        if drag is None:
+            drag = preset_drag(fields_["m"], fields_["Ixx"])
+        elif not isinstance(drag, dict) or set(drag) != set(names):
+            # a partial or misspelt table was a raw TypeError of the constructor
+            got = (f"a table with keys {sorted(map(str, drag))}" if isinstance(drag, dict)
+                   else plain(drag))
+            raise InputError(f"drag: expected None or a table of the six drag coefficients "
+                             f"{', '.join(names)} (N s/m, N m s/rad), got {got}")
         return cls(**{**fields_, **drag})
 
     # -- what the generated functions and the plant need --------------------------------
@@ -379,11 +436,7 @@ class Vehicle:
             ``[m, m x_G, m y_G, m z_G, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` (kg, kg m, kg m^2),
             the order of ``quadcog.model.inertial_parameters.PI_NAMES``.
         """
-        pi = inertial_parameters(self.m, self.r_G, np.diag([self.Ixx, self.Iyy, self.Izz]),
-                                 f"vehicle {self.name!r}")
-        for payload in self.payloads:
-            pi = pi + payload.inertial_parameters()
-        return pi
+        return self._whole_pi.copy()
 
     @property
     def airframe(self) -> "Vehicle":
@@ -392,6 +445,10 @@ class Vehicle:
 
     def with_payload(self, payload: Payload | dict[str, Any]) -> "Vehicle":
         """A copy that carries one more payload (parallel-axis theorem: the pi add up).
+
+        Only the new payload is checked (the rest of the vehicle was when it was made), and
+        the whole body's pi is this one's plus the payload's: loading N payloads one by one
+        costs time linear in N.
 
         Parameters
         ----------
@@ -406,11 +463,26 @@ class Vehicle:
         Raises
         ------
         InputError
-            When ``payload`` is not a payload, or one of that name is already carried.
+            When ``payload`` is not a payload, one of that name is already carried, or it
+            sits farther from O than ``PAYLOAD_REACH`` arm lengths.
+        ParameterError
+            When the rotors cannot lift the vehicle with it (``check_lift``).
         PhysicalConsistencyError
             When the airframe with the payload is not physically consistent.
         """
-        return replace(self, payloads=self.payloads + (as_payload(payload, "payload"),))
+        shown = f"vehicle {self.name!r}"
+        load = as_payload(payload, "payload")
+        _check_carried(self, load, self._payload_names, float(self._whole_pi[0]),
+                       lambda f: f"{shown}: {f}")
+        total = self._whole_pi + load.inertial_parameters()
+        if not is_physically_consistent(total):
+            names = [p.name for p in self.payloads] + [load.name]
+            check_physically_consistent(total, f"{shown}: airframe with payloads {names}: pi")
+        loaded = copy.copy(self)        # the fields are checked: only the payloads change
+        object.__setattr__(loaded, "payloads", self.payloads + (load,))
+        loaded.__dict__["_whole_pi"] = total
+        loaded.__dict__["_payload_names"] = self._payload_names | {load.name}
+        return loaded
 
     def without_payload(self, name: str) -> "Vehicle":
         """A copy without the payload of that name.
@@ -431,8 +503,9 @@ class Vehicle:
             When no payload of that name is carried.
         """
         names = [p.name for p in self.payloads]
-        if name not in names:
-            raise InputError(f"vehicle {self.name!r}: no payload named {name!r} to remove; it "
+        if not isinstance(name, str) or name not in names:
+            shown = repr(name) if isinstance(name, str) else plain(name)
+            raise InputError(f"vehicle {self.name!r}: no payload named {shown} to remove; it "
                              f"carries {names or 'none'}")
         return replace(self, payloads=tuple(p for p in self.payloads if p.name != name))
 
@@ -632,25 +705,39 @@ FIELD_NAMES = tuple(f.name for f in fields(Vehicle))
 
 
 def _check_payloads(vehicle, where):
-    """Turn the payloads into a tuple of Payload (names unique) and check the whole body."""
+    """Turn the payloads into a tuple of Payload (names unique, each carried on the vehicle
+    and lifted by its rotors) and check the whole body."""
     loads = vehicle.payloads
-    if isinstance(loads, (str, bytes, dict, Payload)) or not hasattr(loads, "__iter__"):
-        raise InputError(where(f"payloads must be a sequence of Payload, got {loads!r}"))
+    if isinstance(loads, (str, bytes, dict, Payload, np.ndarray)) or not hasattr(loads,
+                                                                                  "__iter__"):
+        raise InputError(where(f"payloads must be a sequence of Payload, got {plain(loads)}"))
     loads = tuple(as_payload(p, where(f"payloads[{k}]")) for k, p in enumerate(loads))
-    names = [p.name for p in loads]
-    seen: set[str] = set()
+    object.__setattr__(vehicle, "payloads", ())     # the airframe's pi, then each payload's
+    pi = vehicle._whole_pi
+    names: set[str] = set()
     for p in loads:
-        if p.name in seen:
-            raise InputError(where(f"payloads: two payloads are named {p.name!r}; expected "
-                                   "unique names"))
-        seen.add(p.name)
-    arm = max(float(np.hypot(x, y)) for x, y in vehicle.rotor_positions)
-    for p in loads:
-        check_reach(p.position, p.size, arm, where(f"payload {p.name!r}"))
+        _check_carried(vehicle, p, names, float(pi[0]), where)
+        names.add(p.name)
+        pi = pi + p.inertial_parameters()
     object.__setattr__(vehicle, "payloads", loads)
+    vehicle.__dict__["_whole_pi"] = pi
+    vehicle.__dict__.pop("_payload_names", None)
     if loads:
-        check_physically_consistent(vehicle.inertial_parameters(),
-                                    where(f"airframe with payloads {names}: pi"))
+        check_physically_consistent(pi, where(f"airframe with payloads "
+                                              f"{[p.name for p in loads]}: pi"))
+
+
+def _check_carried(vehicle, payload, names, on_board, where):
+    """Refuse ``payload`` on ``vehicle`` if its name is taken (``names``), it sits beyond
+    ``PAYLOAD_REACH`` arm lengths, or the rotors do not lift it with the ``on_board`` kg
+    already carried (``check_lift``)."""
+    if payload.name in names:
+        raise InputError(where(f"payloads: two payloads are named {payload.name!r}; expected "
+                               "unique names"))
+    check_reach(payload.position, payload.size, vehicle.arm_length,
+                where(f"payload {payload.name!r}"))
+    check_lift(payload.mass, on_board, vehicle.g, N_ROTORS * vehicle.max_rotor_thrust,
+               where(f"payload {payload.name!r}"))
 
 
 def _check_rigid_body(vehicle, where):
@@ -750,7 +837,14 @@ def preset_drag(m: float, Ixx: float) -> dict[str, float]:
     dict of str to float
         ``c_x = c_y = c_z = (c_x / m)_Hummingbird m`` (N s/m) and ``c_phi = c_theta = c_psi =
         (c_phi / Ixx)_Hummingbird Ixx`` (N m s/rad), by field name.
+
+    Raises
+    ------
+    InputError
+        ``m`` or ``Ixx`` not a number in [SMALLEST, LARGEST] (``quadcog.model.parameters``).
     """
+    m = real(m, "preset_drag: m", lo=SMALLEST, hi=LARGEST, unit="kg")
+    Ixx = real(Ixx, "preset_drag: Ixx", lo=SMALLEST, hi=LARGEST, unit="kg m^2")
     linear, rate = _DRAG_PER_MASS * m, _RATE_DRAG_PER_INERTIA * Ixx
     return {"c_x": linear, "c_y": linear, "c_z": linear, "c_phi": rate, "c_theta": rate,
             "c_psi": rate}
