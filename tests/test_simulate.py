@@ -224,7 +224,7 @@ def test_batch_reports_divergence():
     (dict(dt=0.5, duration=2.0), r"dt = 0.5 s is too large: .* RK4 needs dt < "),
     (dict(x0=np.zeros(5)), r"x0: expected an array of shape \(12,\), got shape \(5,\)"),
     (dict(x0=np.full(12, np.nan)), r"x0\[0\]: expected a finite number, got nan"),
-    (dict(vehicle=np.ones(14)), "vehicle must be a quadcog Vehicle"),
+    (dict(vehicle=np.ones(14)), "vehicle: expected a quadcog Vehicle"),
     (dict(trajectory="spiral"), "trajectory: expected one of 'hover', .*, got 'spiral'"),
     (dict(path="fast"), "path: expected one of 'compiled', 'python', got 'fast'"),
     (dict(cog=[(1.0, (0.02, 0, 0), 0.0), (0.5, (0.0, 0, 0), 0.0)]), "expected changes in time order"),

@@ -22,6 +22,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from quadcog import validate
 from quadcog.codegen.compiled import compile_function
 from quadcog.codegen.fastcall import FastCall
 from quadcog.errors import InputError
@@ -119,11 +120,15 @@ class Controller:
         InputError
             When ``vehicle`` is not a quadcog Vehicle.
         """
-        self.model = model or load()
+        if model is not None and not isinstance(model, Model):
+            # was taken as is (a falsy one replaced by load() in silence), failing at first use
+            raise InputError(f"model: expected a quadcog Model (quadcog.load()) or None, got "
+                             f"{validate.plain(model)}")
+        self.model = load() if model is None else model
         vehicle = HUMMINGBIRD if vehicle is None else vehicle
         if not isinstance(vehicle, Vehicle):
-            raise InputError(f"vehicle must be a quadcog Vehicle (the controller's model), got "
-                             f"{vehicle!r}")
+            raise InputError(f"vehicle: expected a quadcog Vehicle (the controller's model of "
+                             f"the vehicle) or None, got {validate.plain(vehicle)}")
         self.vehicle = vehicle
         # the model's parameter vector p (14,); a loaded vehicle's p is the paper's model of
         # the whole body (diagonal I_O), which must itself be admissible to design with

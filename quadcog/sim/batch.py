@@ -331,7 +331,8 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
                              "pass controller_model (what the controller believes)")
         controller_model = vehicles[0].airframe.with_cog(np.zeros(3))
     elif not isinstance(controller_model, Vehicle):
-        raise InputError(f"controller_model must be a quadcog Vehicle, got {controller_model!r}")
+        raise InputError(f"controller_model: expected a quadcog Vehicle or None, got "
+                         f"{validate.plain(controller_model)}")
     controller = controller.for_vehicle(controller_model)
     duration, dt = check_time(duration, dt)
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
