@@ -15,6 +15,7 @@ import contextlib
 import os
 from pathlib import Path
 import sys
+from typing import NoReturn
 import warnings
 
 from quadcog.errors import QuadcogError
@@ -23,7 +24,7 @@ __all__ = ["SUBCOMMANDS", "parser", "main",
            "add_tour", "cmd_tour", "add_scenarios", "cmd_scenarios", "add_run", "cmd_run",
            "add_animate", "cmd_animate", "add_paper", "cmd_paper", "add_analyze", "cmd_analyze",
            "add_export", "cmd_export", "add_sweep", "cmd_sweep", "add_identify", "cmd_identify",
-           "add_targets", "cmd_targets"]
+           "add_targets", "cmd_targets", "export_names"]
 __all__ += ["add_px4", "cmd_px4"]
 
 _Subparsers = argparse._SubParsersAction  # the type of ``add_subparsers()``: for the hints
@@ -62,6 +63,21 @@ def _path(text: str) -> Path:
     if not text:
         raise argparse.ArgumentTypeError("expected a path, got an empty string")
     return Path(text)
+
+
+_SET_PATHS = ("A file path (vehicle.file, vehicle.identified and the same keys of "
+              "controller_model) given with --set is relative to the current folder; in the "
+              "scenario file it is relative to that file's folder; a file that does not "
+              "exist is refused.")
+
+
+def _file_path(text: str) -> Path:
+    """An output file's path: an empty one is refused, and so is one that ends in "/" (Path()
+    drops it, but "x.gif/" names a folder, never the file x.gif), as --json refuses it."""
+    if text.endswith(("/", os.sep)):
+        raise argparse.ArgumentTypeError(f"expected a file name, not a folder path, got "
+                                         f"{text!r}")
+    return _path(text)
 
 
 def _positive_int(text: str) -> int:
@@ -191,7 +207,7 @@ def add_run(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                    metavar="KEY=VALUE",
                    help="override a scenario key (dotted: vehicle.m=0.8, controller=adaptive, "
                         "controller_params.gamma=0.02; VALUE in TOML syntax); repeatable; "
-                        "validated like the file")
+                        "validated like the file. " + _SET_PATHS)
     p.add_argument("--plot", action=argparse.BooleanOptionalAction, default=True,
                    help="draw flight.png (default: yes)")
     p.add_argument("--animate", action="store_true",
@@ -232,7 +248,9 @@ def cmd_run(args: argparse.Namespace) -> None:
     """
     import json
 
+    from quadcog.scenarios.lookup import scenario_path
     from quadcog.scenarios.scenario import default_out, run_file
+    scenario_path(args.scenario)    # a name that is no scenario, before the --out it implies
     # made only when the results are written (quadcog.files.RunFiles): a refused scenario
     # leaves no folder
     out = _check_out_dir(args.out if args.out is not None else default_out(args.scenario))
@@ -249,8 +267,9 @@ def cmd_run(args: argparse.Namespace) -> None:
         args.overrides = list(args.overrides) + [f"stack.name={json.dumps(args.stack)}"]
     if args.stack_controller is not None:
         if args.stack is None:
-            raise SystemExit("quadcog run: --controller names a flight stack's controller; give "
-                             "--stack too (a quadcog law is --set controller=NAME)")
+            raise QuadcogError(f"--controller {args.stack_controller}: names a flight stack's "
+                               "controller; give --stack too (a quadcog law is --set "
+                               "controller=NAME)")
         args.overrides = list(args.overrides) + [
             f"stack.controller={json.dumps(args.stack_controller)}"]
     from quadcog.crazyflie.scenario import run_scenario
@@ -272,7 +291,7 @@ def add_animate(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                                    "the flight in 3D: body axes, rotors, the CoG offset to scale, "
                                    "the trail and the reference, with the time.")
     p.add_argument("run_dir", type=_path, help="folder written by `quadcog run`")
-    p.add_argument("--out", "--output", dest="out", type=_path, default=None,
+    p.add_argument("--out", "--output", dest="out", type=_file_path, default=None,
                    help="GIF to write (default: RUN_DIR/flight.gif; --output is the old name)")
     p.add_argument("--fps", type=_positive_int, default=15, help="frames per second (default 15)")
     p.add_argument("--speed", type=float, default=1.0,
@@ -386,7 +405,7 @@ def add_export(sub: _Subparsers[argparse.ArgumentParser]) -> None:
                             "controller_params, designed for its controller model (your own "
                             "vehicle or gains; --set changes keys as for `quadcog run`)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="with --scenario: override a scenario key (repeatable)")
+                   help="with --scenario: override a scenario key (repeatable). " + _SET_PATHS)
     p.add_argument("--precision", default="float32", choices=("float32", "double"),
                    help="float32 (default) or double")
     p.add_argument("--out", type=_path, required=True, help="folder for the .h and .c")
@@ -438,11 +457,43 @@ def cmd_export(args: argparse.Namespace) -> None:
         command = " ".join(["quadcog export --scenario", str(args.scenario)]
                            + [f"--set {o}" for o in args.overrides]
                            + [f"--precision {args.precision} --out DIR"])
+        _check_export_outputs("c", Path(args.out), scenario)
         with _out_dir(args.out) as out:
             paths = export_controller(law, args.precision, out, name=scenario.controller,
                                       command=command)
     for path in paths:
         print(f"wrote {path}")
+
+
+def export_names(target: str, name: str) -> list[str]:
+    """The files `quadcog export` writes for a law named ``name``, relative to --out
+    (``quadcog.embedded.controller_export.file_names``, ``crazyflie_app.app_file_names``).
+
+    Parameters
+    ----------
+    target : str
+        "c" or "crazyflie".
+    name : str
+        The law's C name part (the controller's short name).
+
+    Returns
+    -------
+    list of str
+        Paths relative to the output folder.
+    """
+    from quadcog.embedded.controller_export import file_names
+    from quadcog.embedded.crazyflie_app import app_file_names
+    return list(file_names(name)) if target == "c" else app_file_names(name)
+
+
+def _check_export_outputs(target: str, out: Path, scenario: object) -> None:
+    """Refuse, before anything is written, an export whose files would replace one that the
+    scenario reads (``--scenario DIR/quadcog_fl.c --out DIR`` overwrote the scenario)."""
+    from quadcog.files import check_outputs
+    inputs = list(getattr(scenario, "inputs", ()))
+    name = str(getattr(scenario, "controller", ""))
+    check_outputs([(f"--out (its {rel})", out / rel) for rel in export_names(target, name)],
+                  inputs, QuadcogError)
 
 
 def _export_crazyflie(args: argparse.Namespace) -> None:
@@ -466,6 +517,7 @@ def _export_crazyflie(args: argparse.Namespace) -> None:
     else:
         from quadcog.scenarios.scenario import load_scenario
         scenario = load_scenario(args.scenario, args.overrides)
+        _check_export_outputs("crazyflie", Path(args.out), scenario)
         law = scenario.make_controller()
         law, name = getattr(law, "inner", law), scenario.controller
         which = [f"--scenario {args.scenario}"] + [f"--set {o}" for o in args.overrides]
@@ -521,7 +573,8 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     import quadcog.crazyflie  # noqa: F401  (registers the flight stack for [stack] flights)
     from quadcog.sweeps.runner import run_cli
     # the folder is made by the sweep once the file validates: a rejected file leaves none
-    run_cli(args.sweep, args.out, workers=args.workers, scheduler=args.scheduler)
+    run_cli(args.sweep, _check_out_dir(args.out), workers=args.workers,
+            scheduler=args.scheduler)
 
 
 def add_identify(sub: _Subparsers[argparse.ArgumentParser]) -> None:
@@ -647,8 +700,13 @@ def cmd_targets(args: argparse.Namespace) -> None:
     args : argparse.Namespace
         The parsed command line.
     """
-    from quadcog.studies.targets import CASES, markdown_table, run_targets, write_targets
+    from quadcog.files import check_outputs
+    from quadcog.studies.targets import CASES, TARGET_FILES, markdown_table, run_targets, write_targets
     cases = None if args.cases is None else [c for c in CASES if c.name in args.cases]
+    # before the minutes of flights: a folder that can be made, files that can be replaced
+    out = _check_out_dir(args.out)
+    check_outputs([(f"--out (its {name})", out / name) for name in TARGET_FILES],
+                  error=QuadcogError)
     rows = run_targets(args.vehicles, args.laws, cases, progress=print)
     print()
     print(markdown_table(rows), end="")
@@ -677,7 +735,8 @@ def add_px4(sub: _Subparsers[argparse.ArgumentParser]) -> None:
     p.add_argument("--out", type=_path, default=None,
                    help="folder for the results (default: out/<scenario>-px4)")
     p.add_argument("--set", dest="overrides", action="append", default=[],
-                   metavar="KEY=VALUE", help="override a scenario key (as for `quadcog run`)")
+                   metavar="KEY=VALUE", help="override a scenario key (as for `quadcog run`). "
+                                             + _SET_PATHS)
     p.add_argument("--no-build", action="store_true",
                    help="fail instead of building PX4 when the cache has no build")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -778,6 +837,15 @@ def _version() -> str:
     return f"quadcog {__version__}"
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, whose usage errors are one line like every other error (argparse
+    repeats the value given: a name of thousands of characters, a newline)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.print_usage(sys.stderr)
+        self.exit(2, f"{self.prog}: error: {_line(message)}\n")
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of the `quadcog` command.
 
@@ -786,9 +854,9 @@ def parser() -> argparse.ArgumentParser:
     argparse.ArgumentParser
         With every subcommand of ``SUBCOMMANDS``.
     """
-    ap = argparse.ArgumentParser(prog="quadcog",
-                                 description="Quadrotor with a moving centre of gravity: "
-                                             "simulate, reproduce the paper, analyse.")
+    ap: argparse.ArgumentParser = _Parser(
+        prog="quadcog", description="Quadrotor with a moving centre of gravity: simulate, "
+                                    "reproduce the paper, analyse.")
     ap.add_argument("--version", action="version", version=_version())
     sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for add in SUBCOMMANDS:
@@ -796,9 +864,25 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
+MAX_WARNINGS = 20
+"""Warnings a command prints; the rest are counted in one last line (a scenario of 20000 CoG
+changes after its end gave 20000 lines)."""
+_warned = [0]
+
+
 def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
                   file: object = None, line: str | None = None) -> None:
-    print(f"quadcog: warning: {_line(message)}", file=sys.stderr)
+    _warned[0] += 1
+    if _warned[0] <= MAX_WARNINGS:
+        print(f"quadcog: warning: {_line(message)}", file=sys.stderr)
+
+
+def _more_warnings() -> None:
+    """The line that counts the warnings beyond MAX_WARNINGS, if any."""
+    if _warned[0] > MAX_WARNINGS:
+        print(f"quadcog: warning: {_warned[0] - MAX_WARNINGS} more warnings not shown",
+              file=sys.stderr)
+    _warned[0] = 0
 
 
 def _line(message: object) -> str:
@@ -852,7 +936,11 @@ def _main(argv):
         args = parser().parse_args(argv)
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning      # one line, no source location
-            args.func(args)
+            _warned[0] = 0
+            try:
+                args.func(args)
+            finally:
+                _more_warnings()
     except Interrupted as e:        # files being written were not committed
         print("quadcog: interrupted", file=sys.stderr)
         return e.status             # 128 + the signal, as shells report it: 130, 143

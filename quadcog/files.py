@@ -381,10 +381,12 @@ def remove_made(folders: Sequence[Path]) -> None:
             return
 
 
-def one_line(text: object, digits: int = 30) -> str:
+def one_line(text: object, digits: int = 30, word: int = 300) -> str:
     """``text`` as one printable line: control and other unprintable characters (a newline
-    in a file name) escaped as ``repr`` would, and integers of more than ``digits`` digits
-    shortened to their first digits and their length.
+    in a file name) escaped as ``repr`` would, integers of more than ``digits`` digits
+    shortened to their first digits and their length, and any other run of more than
+    ``word`` characters without a space (a name or path of thousands of characters given on
+    the command line) shortened to its start, its length and its end.
 
     Parameters
     ----------
@@ -392,6 +394,8 @@ def one_line(text: object, digits: int = 30) -> str:
         A message or a value (converted with ``str``).
     digits : int
         The longest run of digits kept as it is.
+    word : int
+        The longest run of characters without a space kept as it is (at least 40).
 
     Returns
     -------
@@ -400,8 +404,12 @@ def one_line(text: object, digits: int = 30) -> str:
     """
     line = "".join(ch if ch.isprintable() or ch == " " else repr(ch)[1:-1]
                    for ch in str(text))
-    return re.sub(r"\d{%d,}" % (digits + 1),
+    line = re.sub(r"\d{%d,}" % (digits + 1),
                   lambda m: f"{m.group()[:12]}...({len(m.group())} digits)", line)
+    keep = max(int(word), 40)
+    return re.sub(r"\S{%d,}" % (keep + 1),
+                  lambda m: f"{m.group()[:keep * 2 // 3]}...({len(m.group())} characters)..."
+                            f"{m.group()[-(keep // 4):]}", line)
 
 
 def _describe(path: str | os.PathLike[str]) -> str:

@@ -15,6 +15,7 @@ from typing import Any
 
 from quadcog.errors import InputError, ScenarioError, SweepError
 from quadcog.files import one_line, path_kind
+from quadcog.validate import plain
 
 __all__ = ["SUFFIX", "SHIPPED", "shipped_folder", "shipped_names", "find_file", "read_toml",
            "scenario_names", "scenario_path", "shipped_scenarios", "display_name",
@@ -83,18 +84,31 @@ def find_file(spec: str | os.PathLike[str], kind: str) -> Path:
         When ``spec`` is neither an existing path nor a shipped name; the message lists the
         shipped names.
     """
+    error = SHIPPED[kind][1]
+    if isinstance(spec, bytes) or not isinstance(spec, (str, os.PathLike)) \
+            or not os.fspath(spec).strip():     # Path("") is the current folder
+        raise error(f"{kind}: expected a {kind} file or the name of a shipped {kind} "
+                    f"(`quadcog {kind}s` lists them), got {plain(spec)}")
     path = Path(spec)
-    if path.is_file():
-        return path
+    try:
+        if path.is_file():
+            return path
+    except OSError as e:            # a name too long for the file system
+        raise error(f"{_shown(spec)}: no such {kind} file ({e.strerror}), and no shipped "
+                    f"{kind} of that name (`quadcog {kind}s` lists them)") from None
     if path.name == str(spec):                       # a bare name, no folder part
         name = path.name[:-len(SUFFIX)] if path.name.endswith(SUFFIX) else path.name
         if name in shipped_names(kind):
             return shipped_folder(kind) / f"{name}{SUFFIX}"
     if os.path.lexists(path):       # a link that loops or leads nowhere too: read_toml says so
         return path
-    error = SHIPPED[kind][1]
-    raise error(f"{spec}: no such {kind} file, and no shipped {kind} of that name "
+    raise error(f"{_shown(spec)}: no such {kind} file, and no shipped {kind} of that name "
                 f"(shipped: {', '.join(shipped_names(kind))}; `quadcog {kind}s` lists them)")
+
+
+def _shown(spec: str | os.PathLike[str]) -> str:
+    """A path or name given by the user, for a message: one line, a long one shortened."""
+    return one_line(os.fspath(spec), word=120)
 
 
 def read_toml(path: str | os.PathLike[str],

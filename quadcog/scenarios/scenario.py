@@ -49,7 +49,63 @@ from quadcog.vehicles.vehicle import HUMMINGBIRD, PRESETS, Vehicle
 from quadcog.viz.progress import ProgressBar
 
 __all__ = ["Scenario", "parse", "load_scenario", "write_table", "output_files", "write_outputs",
-           "run_with_progress", "run_file", "default_out"]
+           "run_with_progress", "run_file", "default_out", "FILE_KEYS", "resolve_paths"]
+
+FILE_KEYS = ("file", "identified")
+"""The keys of ``[vehicle]`` and ``[controller_model]`` that name a file: relative to the
+scenario file's folder in a file, to the current folder in a ``--set`` (``resolve_paths``)."""
+_FILE_TABLES = ("vehicle", "controller_model")
+
+
+def resolve_paths(data: dict[str, Any], folder: str | os.PathLike[str]) -> dict[str, Any]:
+    """Make the relative file paths of a parsed scenario absolute, relative to ``folder``.
+
+    The keys of ``FILE_KEYS`` in ``[vehicle]`` and ``[controller_model]`` are changed in
+    place; an absolute path, or a value that is not a non-empty string (the validation
+    reports it), is left as it is. ``load_scenario`` calls it with the scenario file's folder
+    before the ``--set`` texts are applied and with the current folder after them, so that a
+    path in the file is relative to the file and one in a ``--set`` to where the command
+    runs; a sweep file's ``set`` and dimension values are relative to the sweep file.
+
+    Parameters
+    ----------
+    data : dict
+        A parsed scenario (changed in place).
+    folder : str or os.PathLike
+        The folder the relative paths are relative to.
+
+    Returns
+    -------
+    dict
+        ``data``.
+    """
+    base = Path(folder).absolute()
+    for table in _FILE_TABLES:
+        entries = data.get(table) if isinstance(data, dict) else None
+        if not isinstance(entries, dict):
+            continue
+        for key in FILE_KEYS:
+            value = entries.get(key)
+            if isinstance(value, str) and value.strip() and not Path(value).is_absolute():
+                entries[key] = str(base / value)
+    return data
+
+
+def _file_path(value, where, what):
+    """The path of a file key (made absolute by ``resolve_paths``), refused when it is empty
+    or names nothing: ScenarioError naming the key, the path and how relative paths are read."""
+    if not value.strip():
+        validate.fail(where, f"the path of {what}", value, ScenarioError)
+    path = Path(value)
+    try:
+        exists = os.path.lexists(path)
+    except (OSError, ValueError):       # a name too long, a null byte
+        exists = False
+    if not exists:
+        raise ScenarioError(f"{where}: {one_line(path, word=200)}: no such file; expected "
+                            f"{what} (a path in a scenario file is relative to its folder, "
+                            "one given with --set to the current folder)")
+    return path
 
 
 @dataclass
@@ -406,19 +462,30 @@ def _vehicle(data, key, base, source, inputs):
     if preset is not None:
         base = PRESETS[validate.choice(preset, f"{source}: key '{key}.preset'", tuple(PRESETS),
                                        ScenarioError)]
+    # relative paths: to the scenario file's folder (resolve_paths made them absolute when
+    # the scenario came from a file; a dict given to parse reads them from source's folder)
+    if file is not None:
+        file = _file_path(file, f"{source}: key '{key}.file'", "a URDF or SDF vehicle file")
+    if identified is not None:
+        identified = _file_path(identified, f"{source}: key '{key}.identified'",
+                                "the JSON file of `quadcog identify --json`")
+    where = key                         # the key the error names: the file's, or the table
     try:
-        if file is not None:                # a URDF or SDF file, relative to the scenario file
+        if file is not None:                # a URDF or SDF file
+            where = f"{key}.file"
             inputs.append((f"key '{key}.file'", Path(source).parent / file))
             base = Vehicle.from_file(Path(source).parent / file)
+        where = key
         vehicle = (base or HUMMINGBIRD).replace(**table)
         if identified is not None:
             from quadcog.identification.identified import identified_cog
-            path = Path(source).parent / identified        # relative to the scenario file
+            where = f"{key}.identified"
+            path = Path(source).parent / identified
             inputs.append((f"key '{key}.identified'", path))
             vehicle = vehicle.with_cog(identified_cog(path))
         return vehicle
     except InputError as e:
-        raise ScenarioError(f"{source}: key {key!r}: {e}") from None
+        raise ScenarioError(f"{source}: key {where!r}: {e}") from None
 
 
 def load_scenario(path: str | os.PathLike[str],
@@ -432,7 +499,8 @@ def load_scenario(path: str | os.PathLike[str],
         ``quadcog.scenarios.lookup.scenario_path``).
     overrides : sequence of str
         ``--set`` texts ("vehicle.m=0.8", see ``quadcog.scenarios.keys``), applied before the
-        validation, which then names them.
+        validation, which then names them. A file path in the scenario file is relative to
+        the file's folder, one in a ``--set`` to the current folder (``resolve_paths``).
 
     Returns
     -------
@@ -448,15 +516,18 @@ def load_scenario(path: str | os.PathLike[str],
         For a malformed ``--set`` text.
     """
     path = scenario_path(path)
-    data = read_toml(path, ScenarioError)
+    data = resolve_paths(read_toml(path, ScenarioError), path.parent)   # relative to the file
     label = display_name(path, "scenario")      # a shipped file by its name, not a site-packages path
     source = label
     if overrides:
         from quadcog.scenarios.keys import apply_overrides
         data, notes = apply_overrides(data, overrides)
+        resolve_paths(data, ".")                # a --set path: relative to the current folder
         for note in notes:
             warnings.warn(f"{label}: {note}", stacklevel=2)
-        source = f"{label} with " + " ".join(f"--set {o}" for o in overrides)
+        # each text shortened: the messages name the source, and a --set may be megabytes
+        source = f"{label} with " + " ".join(f"--set {one_line(o, word=80)}"
+                                              for o in overrides)
     scenario = parse(data, source)
     scenario.inputs = (("the scenario file", path),) + scenario.inputs
     return scenario

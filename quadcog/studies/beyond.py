@@ -21,7 +21,7 @@ from quadcog.scenarios.scenario import Scenario, load_scenario, run_with_progres
 from quadcog.sim.result import SimulationResult
 from quadcog.trajectories.registry import make_trajectory
 
-__all__ = ["SCENARIOS", "CONTROLLERS", "SHARED_KEYS", "CONVERGED", "TARGETS", "DIAGNOSTICS",
+__all__ = ["BEYOND_FILES", "SCENARIOS", "CONTROLLERS", "SHARED_KEYS", "CONVERGED", "TARGETS", "DIAGNOSTICS",
            "Z_G_STEP", "Z_G_TRAJECTORIES", "STABILITY_TEX", "Z_G_WHY", "diagnostic", "variant",
            "convergence_time", "last_change_end", "measure", "z_g_study", "table_lines",
            "run_beyond"]
@@ -337,6 +337,10 @@ forgetting keep bounded.
 """
 
 
+BEYOND_FILES = ("beyond.png", "beyond.md", "beyond_fragment.tex", "beyond.json")
+"""The files ``run_beyond`` writes into its folder, together (``quadcog.files.RunFiles``)."""
+
+
 def run_beyond(out: str | os.PathLike[str], progress: bool = True
                ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], list[dict[str, Any]]]:
     """Fly every CoG scenario with the three controllers and the z_G study.
@@ -355,8 +359,13 @@ def run_beyond(out: str | os.PathLike[str], progress: bool = True
         (rows of ``measure`` per scenario and controller, the targets with ``met``, the rows
         of ``z_g_study``).
     """
+    from quadcog.errors import InputError
+    from quadcog.files import RunFiles, check_outputs, creatable_folder
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    # before the minutes of flights: a file that could not be replaced (a folder, a link,
+    # a FIFO in the place of one) or a folder that cannot be made
+    creatable_folder(out, "out", InputError)
+    check_outputs([(f"out (its {name})", out / name) for name in BEYOND_FILES])
     rows, flights = [], {}
     for name in SCENARIOS:
         base = load_scenario(name)
@@ -378,9 +387,6 @@ def run_beyond(out: str | os.PathLike[str], progress: bool = True
         res = run_with_progress(sc, f"beyond  {name:<10s} {kind}, {text}", progress)
         why.append(dict(scenario=name, controller=kind, change=text, **measure(sc, res)))
     z_rows = z_g_study(progress)
-    _plot(flights, z_rows, out / "beyond.png")
-    (out / "beyond.json").write_text(json.dumps(dict(rows=rows, targets=targets, why=why,
-                                                     z_G=z_rows), indent=2) + "\n")
     md = ["# Beyond the paper", "",
           "Max excursion: largest position error of the run; tail: RMS over the last 25 %; "
           "x_G, y_G within 5 %: seconds after the last CoG change is complete from which both "
@@ -401,8 +407,12 @@ def run_beyond(out: str | os.PathLike[str], progress: bool = True
     after = lambda z: ("not in the run" if z["z_G_converged_after"] is None
                        else "%.1f s after the step" % z["z_G_converged_after"])
     md += [f"| {z['trajectory']} | {z['r_hat_final_cm']} | {after(z)} |" for z in z_rows]
-    (out / "beyond.md").write_text("\n".join(md) + "\n")
-    (out / "beyond_fragment.tex").write_text(_fragment(rows, targets, why, z_rows))
+    with RunFiles(out, owned=BEYOND_FILES) as files:    # all four or none, beyond.json last
+        _plot(flights, z_rows, files.path("beyond.png"))
+        files.path("beyond.md").write_text("\n".join(md) + "\n")
+        files.path("beyond_fragment.tex").write_text(_fragment(rows, targets, why, z_rows))
+        files.path("beyond.json").write_text(json.dumps(
+            dict(rows=rows, targets=targets, why=why, z_G=z_rows), indent=2) + "\n")
     print("\n".join(table_lines(rows)))
     return rows, targets, z_rows
 

@@ -12,7 +12,7 @@ from quadcog.scenarios.lookup import scenario_path
 from quadcog.scenarios.scenario import load_scenario, run_with_progress, write_outputs
 
 __all__ = ["TRACKS", "FAILS", "RECOVERS", "ESTIMATE", "ESTIMATE_FLOOR", "CSV_EVERY", "Claim",
-           "CLAIMS", "verdict", "readme_table", "run_paper"]
+           "CLAIMS", "verdict", "readme_table", "PAPER_FILES", "run_paper"]
 
 TRACKS = 0.05        # m: tail RMS under which a balanced run "tracks" (Fig. 3)
 FAILS = 0.50         # m: tail RMS over which (or diverged) a controller "fails" (Figs. 4, 5)
@@ -184,6 +184,12 @@ def readme_table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+PAPER_FILES = ("cog_step_comparison.png", "summary.md", "report_fragment.tex",
+               "readme_table.md", "summary.json")
+"""The files ``run_paper`` writes into its folder besides the scenarios' folders and
+``beyond/``, together (``quadcog.files.RunFiles``)."""
+
+
 def run_paper(out: str | os.PathLike[str], progress: bool = True,
               beyond: bool = True) -> list[dict[str, Any]]:
     """Run the built-in scenarios, draw the figures, write the summaries.
@@ -205,8 +211,18 @@ def run_paper(out: str | os.PathLike[str], progress: bool = True,
         The summary rows, one per claim: figure, scenario, claim, controller, holds, note
         and the run's metrics (m, s).
     """
+    from quadcog.errors import InputError
+    from quadcog.files import RUN_FILES, RunFiles, check_outputs, creatable_folder
+    from quadcog.studies.beyond import BEYOND_FILES
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    # before the minutes of flights: every file the command replaces can be replaced (no
+    # folder, link or FIFO in its place) and the folder can be made
+    creatable_folder(out, "out", InputError)
+    check_outputs([(f"out (its {name})", out / name) for name in PAPER_FILES]
+                  + [(f"out (its {c.scenario}/{name})", out / c.scenario / name)
+                     for c in CLAIMS for name in RUN_FILES]
+                  + ([(f"out (its beyond/{name})", out / "beyond" / name)
+                      for name in BEYOND_FILES] if beyond else []))
     rows, results = [], {}
     for claim in CLAIMS:
         scenario = load_scenario(scenario_path(claim.scenario))
@@ -222,8 +238,6 @@ def run_paper(out: str | os.PathLike[str], progress: bool = True,
                                               "diverged", "diverged_at", "diverged_cause",
                                               "diverged_reason", "r_hat_final", "r_G_final")}))
         print(f"  {claim.figure:<9s} holds: {holds:<6s} {note}")
-    _comparison_plot(results, out / "cog_step_comparison.png")
-    (out / "summary.json").write_text(json.dumps(rows, indent=2) + "\n")
     md = ["# The paper's claims, reproduced", "",
           f"Thresholds: tracks = tail RMS < {100 * TRACKS:.0f} cm; fails = tail RMS > "
           f"{100 * FAILS:.0f} cm or diverged; recovers = tail RMS < {100 * RECOVERS:.0f} cm with "
@@ -238,7 +252,6 @@ def run_paper(out: str | os.PathLike[str], progress: bool = True,
                   f"{'at %.2f s' % r['diverged_at'] if r['diverged'] else 'no'} | "
                   f"**{r['holds']}** | {r['note']} |")
     md += ["", "Figures: `<scenario>/flight.png` for each row, `cog_step_comparison.png`."]
-    (out / "summary.md").write_text("\n".join(md) + "\n")
     fragment = _fragment(rows)
     if beyond:
         from quadcog.studies.beyond import run_beyond
@@ -246,9 +259,13 @@ def run_paper(out: str | os.PathLike[str], progress: bool = True,
         fragment += (out / "beyond" / "beyond_fragment.tex").read_text()
         md += ["", "Beyond the paper: `beyond/beyond.md` (the paper's law, FL with integral "
                "action and the composite law on every CoG scenario, ideal and real)."]
-        (out / "summary.md").write_text("\n".join(md) + "\n")
-    (out / "report_fragment.tex").write_text(fragment)
-    (out / "readme_table.md").write_text(readme_table(rows) + "\n")
+    # the summaries together or not at all (Ctrl-C included), summary.json last
+    with RunFiles(out, owned=PAPER_FILES) as files:
+        _comparison_plot(results, files.path("cog_step_comparison.png"))
+        files.path("summary.md").write_text("\n".join(md) + "\n")
+        files.path("report_fragment.tex").write_text(fragment)
+        files.path("readme_table.md").write_text(readme_table(rows) + "\n")
+        files.path("summary.json").write_text(json.dumps(rows, indent=2) + "\n")
     print(f"wrote {out}/summary.md, summary.json, report_fragment.tex, readme_table.md and the "
           "figures")
     return rows

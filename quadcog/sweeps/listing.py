@@ -1,6 +1,8 @@
 """The shipped sweep files by name (``quadcog sweeps``), and any shipped file's text
 (``quadcog scenarios --show NAME``, ``quadcog sweeps --show NAME``)."""
+from quadcog.files import one_line
 from quadcog.scenarios.lookup import SHIPPED, SUFFIX, read_toml, shipped_folder, shipped_names
+from quadcog.validate import plain
 
 __all__ = ["shipped_sweeps", "shipped_text"]
 
@@ -40,8 +42,9 @@ def shipped_text(name: str, kind: str) -> str:
         When ``name`` is not a shipped name of ``kind``; the message lists them.
     """
     error = SHIPPED[kind][1]
-    stem = name.removesuffix(SUFFIX)
-    if stem not in shipped_names(kind):
-        raise error(f"{name}: no shipped {kind} of that name (shipped: "
+    stem = name.removesuffix(SUFFIX) if isinstance(name, str) else None
+    if stem not in shipped_names(kind):     # the name as given, shortened (it may be anything)
+        shown = one_line(name, word=60) if isinstance(name, str) else plain(name)
+        raise error(f"{shown}: no shipped {kind} of that name (shipped: "
                     f"{', '.join(shipped_names(kind))})")
     return (shipped_folder(kind) / f"{stem}{SUFFIX}").read_text(encoding="utf-8-sig")

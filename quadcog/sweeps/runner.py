@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from quadcog import validate
 from quadcog.errors import QuadcogError, SchedulerError, SizeError
-from quadcog.files import atomic_write, check_outputs
+from quadcog.files import atomic_write, check_outputs, one_line
 from quadcog.interrupts import children_without_sigint, die_with_parent
 from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.flights import make_job, run_chunk
@@ -338,8 +338,9 @@ def sweep(spec: str | os.PathLike[str] | dict[str, Any] | Sweep,
         s = from_dict(dict(spec, **settings), source, progress=progress is True)
     else:
         s = load_sweep(spec, progress=progress is True, **settings)
-    say = (lambda text: print(f"sweep {s.name}: {text}", file=sys.stderr)) if progress \
-        else (lambda text: None)
+    def say(text: str) -> None:
+        if progress:            # the name from the file: one line, shortened
+            print(one_line(f"sweep {s.name}: {text}", word=120), file=sys.stderr)
     if scheduler is not None:           # before any folder is made: it answers, or an error
         scheduler = probe_scheduler(scheduler)
     if out is None:
@@ -436,8 +437,9 @@ def _run(s, out, workers, scheduler, progress, plots, say, t0):
     elif progress:
         report = ProgressCounter(f"sweep {s.name}", len(s.flights), done_flights)
         if done_flights:
-            print(f"sweep {s.name}: resuming, {len(chunks) - len(pending)} of {len(chunks)} "
-                  f"chunks already in {out} (verified)", file=sys.stderr)
+            print(one_line(f"sweep {s.name}: resuming, {len(chunks) - len(pending)} of "
+                           f"{len(chunks)} chunks already in {out} (verified)", word=120),
+                  file=sys.stderr)
     else:
         report = None
 

@@ -24,14 +24,15 @@ import numpy as np
 from quadcog.errors import ParameterError, SizeError, SweepError
 from quadcog.model.parameters import admissible_radius
 from quadcog.scenarios.keys import KEY_EXAMPLE, parse_key, set_key
-from quadcog.scenarios.lookup import find_file, read_toml, scenario_path, shipped_names
-from quadcog.scenarios.scenario import Scenario, ScenarioError, parse
+from quadcog.scenarios.lookup import display_name, find_file, read_toml, scenario_path, shipped_names
+from quadcog.scenarios.scenario import Scenario, ScenarioError, parse, resolve_paths
 from quadcog.sim.flight import check_cog_changes
 from quadcog.sim.prepare import check_payload_events
 from quadcog.sweeps.groups import CONTROLLERS_BY_GROUP, group_key
 from quadcog.validate import plain
 
-__all__ = ["MODES", "TOP", "SOURCES", "DEFAULT_CHUNK", "DEFAULT_THRESHOLD", "Dimension",
+__all__ = ["MODES", "TOP", "SOURCES", "DEFAULT_CHUNK", "DEFAULT_THRESHOLD", "MAX_CHUNK",
+           "MAX_THRESHOLD", "Dimension",
            "Flight", "Sweep", "cog_admissible", "from_dict", "sweep_names", "sweep_path",
            "read_sweep_file", "load_sweep"]
 
@@ -43,6 +44,9 @@ DEFAULT_CHUNK = 64          # flights per chunk: the unit of scheduling, retry a
 DEFAULT_THRESHOLD = 0.5     # m: tail RMS above this (or a diverged run) counts as failed
 MAX_FLIGHTS = 1_000_000     # flights of one sweep (and values of one dimension): each is
                             # validated before any flies, so more would not even start
+MAX_CHUNK = 10_000          # flights per chunk: a chunk is one batch in one process, and the
+                            # unit of retry and resume; more only loses work on a failure
+MAX_THRESHOLD = 1e6         # m: a tail RMS error this large is a divergence long before
 
 
 def _plain(v):
@@ -473,7 +477,10 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     source : str
         What error messages name.
     folder : str or os.PathLike, optional
-        Resolves a relative base-scenario path (default: the current folder).
+        The sweep file's folder (default: the current folder): a relative base-scenario path
+        and the relative file paths of ``set`` and of the dimensions' values
+        (``vehicle.file``, ``vehicle.identified``) are read from it; those of the base
+        scenario file from the base scenario's folder.
     progress : bool
         Show on stderr how far the validation of a large sweep (``VALIDATE_PROGRESS_AT``
         flights or more) got.
@@ -509,14 +516,18 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
             raise _err(source, k, f"expected a whole number{' >= 1' if k != 'seed' else ''}, "
                        f"got {v!r}")
         ints[k] = v
+    if ints["chunk"] > MAX_CHUNK:
+        raise SizeError(f"{source}: key 'chunk': expected a whole number in [1, {MAX_CHUNK}] "
+                        f"(flights per chunk, flown as one batch in one process), got "
+                        f"{plain(ints['chunk'])}")
     if mode == "monte-carlo" and ints["samples"] is None:
         raise _err(source, "samples", "missing: mode = \"monte-carlo\" needs the flight count")
     if mode == "grid" and ints["samples"] is not None:
         raise _err(source, "samples", "only used with mode = \"monte-carlo\"")
     threshold = data.get("threshold", DEFAULT_THRESHOLD)
-    if not _number(threshold) or threshold <= 0:
-        raise _err(source, "threshold", f"expected a positive number of metres, got "
-                   f"{threshold!r}")
+    if not _number(threshold) or not 0 < threshold <= MAX_THRESHOLD:
+        raise _err(source, "threshold", f"expected a positive number of metres up to "
+                   f"{MAX_THRESHOLD:g}, got {plain(threshold)}")
     inadmissible = data.get("inadmissible", "error")
     if inadmissible not in ("error", "skip"):
         raise _err(source, "inadmissible", f"expected \"error\" or \"skip\", got "
@@ -531,7 +542,8 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     candidate = Path(folder or ".") / spec
     try:
         base_path = candidate if candidate.is_file() else scenario_path(spec)
-        base = read_toml(Path(base_path), ScenarioError)
+        # the base scenario's file paths are relative to its own folder
+        base = resolve_paths(read_toml(Path(base_path), ScenarioError), Path(base_path).parent)
     except ScenarioError as e:
         raise _err(source, "scenario", str(e)) from None
     base_source = str(base_path)
@@ -540,8 +552,11 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
         raise _err(source, "set", f"expected a table of scenario keys, got {fixed!r}")
     for key, value in fixed.items():
         set_key(base, key, value, error=SweepError, where=f"{source}: key {'set.' + key!r}")
+    resolve_paths(base, folder or ".")      # those of [set]: relative to the sweep file
     try:
-        inputs = [("the base scenario", Path(base_path)), *parse(base, base_source).inputs]
+        # a shipped base by its name in the messages, not its path in site-packages
+        inputs = [("the base scenario", Path(base_path)),
+                  *parse(base, display_name(base_path, "scenario")).inputs]
     except ScenarioError as e:
         raise _err(source, "set", f"the base scenario with these settings is not valid: "
                    f"{e}") from None
@@ -550,6 +565,9 @@ def from_dict(data: dict[str, Any], source: str = "<sweep>",
     if not isinstance(raw, list) or not raw:
         raise _err(source, "dimension", "expected at least one [[dimension]] table")
     dims = [_dimension(i, d, source, mode) for i, d in enumerate(raw)]
+    for d in dims:              # file paths among the values: relative to the sweep file
+        if d.values is not None:
+            d.values = [_resolve_value(d.key, v, folder or ".") for v in d.values]
     keys = [d.key for d in dims]
     if len(set(keys)) != len(keys):
         dup = next(k for k in keys if keys.count(k) > 1)
@@ -627,6 +645,20 @@ def _validate_flights(sweep, combos, skip, progress=False):
                 raise _err(sweep.source, key, f"flight {index} ({_describe(values)}) has an "
                            f"inadmissible CoG: {reason}; {hint}")
         sweep.flights.append(Flight(index, values, admissible))
+
+
+def _resolve_value(key, value, folder):
+    """A dimension's value with a relative file path (``vehicle.file``, or a ``vehicle``
+    table with a ``file``) made absolute, relative to ``folder`` (``resolve_paths``)."""
+    tokens = parse_key(key)
+    if not tokens or tokens[0] not in ("vehicle", "controller_model") or len(tokens) > 2 \
+            or any(isinstance(t, int) for t in tokens):
+        return value
+    holder: dict[str, Any] = {}
+    set_key(holder, key, copy.deepcopy(value))
+    resolve_paths(holder, folder)
+    table = holder[tokens[0]]
+    return table[tokens[1]] if len(tokens) == 2 else table
 
 
 def _check_overlaps(source, keys):

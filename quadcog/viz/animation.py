@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from quadcog import validate
 from quadcog.errors import InputError
-from quadcog.files import path_kind, read_json
+from quadcog.files import one_line, path_kind, read_json
 from quadcog.model import columns as col
 from quadcog.model.conventions import rotation_matrix
 
@@ -234,13 +234,26 @@ def check_output(output: "str | Path") -> Path:
     if isinstance(output, bytes) or not isinstance(output, (str, os.PathLike)) \
             or not str(output):
         validate.fail("output", "the path of a file ending in .gif", output)
-    output = Path(output)
+    text = os.fspath(output)
+    shown = one_line(repr(text))
+    # Path() drops a trailing "/": "x.gif/" names a folder, never the file x.gif
+    if text.endswith(("/", os.sep)) or Path(text).name in ("", ".", ".."):
+        raise InputError(f"output {shown}: expected a file name ending in .gif, not a folder "
+                         "path")
+    output = Path(text)
     if output.suffix.lower() != ".gif":
-        raise InputError(f"output {str(output)!r}: expected a file name ending in .gif (the "
-                         f"animation is written as a GIF), got suffix "
-                         f"{output.suffix or 'none'!r}")
-    if output.is_dir():
-        raise InputError(f"output {str(output)!r}: is a folder; give a file name ending in .gif")
+        raise InputError(f"output {shown}: expected a file name ending in .gif (the "
+                         f"animation is written as a GIF), got "
+                         + (f"suffix {output.suffix!r}" if output.suffix else
+                            "a name without a stem (.gif alone)" if output.name.lower() == ".gif"
+                            else "no suffix"))
+    kind = path_kind(output) if os.path.lexists(output) else None
+    if kind == "a folder":
+        raise InputError(f"output {shown}: is a folder; give a file name ending in .gif")
+    if os.path.islink(output) or kind is not None:  # only a regular file is ever replaced
+        raise InputError(f"output {shown}: is {'a symbolic link' if os.path.islink(output) else kind}"
+                         "; quadcog replaces only regular files (give the name of a new or "
+                         "regular file)")
     return output
 
 
@@ -267,9 +280,11 @@ def frame_times(t: npt.NDArray[np.float64], fps: float, speed: float, max_frames
     (F,) numpy.ndarray
         The frames' times (s).
     """
+    if max_frames <= 1:                     # one frame: the end of the run
+        return np.array([t[-1]])
     step = speed / fps
     span = t[-1] - t[0]
-    if span / step + 1 > max_frames:
+    if span > step * (max_frames - 1):      # (not span / step: 1e-308 s per s overflows it)
         step = span / max(max_frames - 1, 1)
     times = np.arange(t[0], t[-1], step) if span > 0 else np.array([t[0]])
     return np.append(times, t[-1]) if times[-1] < t[-1] else times

@@ -11,6 +11,7 @@ import time
 from typing import TextIO
 
 from quadcog import config
+from quadcog.files import one_line
 from quadcog.validate import positive
 
 __all__ = ["ProgressBar", "ProgressCounter"]
@@ -37,6 +38,7 @@ class _Printer:
 
     def _show(self, text: str, now: float, final: bool) -> None:
         self._last = now
+        text = one_line(text, word=120)     # a label from a file: a newline, 5000 characters
         if self._live:
             self.stream.write("\r" + text + ("\n" if final else ""))
         else:

@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from quadcog import config
-from quadcog.files import run_stamp
+from quadcog import config, validate
+from quadcog.errors import InputError
+from quadcog.files import RunFiles, check_outputs, creatable_folder, run_stamp
 from quadcog.model.conventions import IDX
 from quadcog.studies.analysis.adaptive_design import design_checks, lyapunov_study, plot_lyapunov
 from quadcog.studies.analysis.analysis_files import write_json, write_latex, write_markdown
@@ -187,6 +188,14 @@ def _fm_summary(fm, grid):
             "adaptive_vs_projection": fm.get("adaptive_vs_projection")}
 
 
+MAP_STEP_TIME = 1.0
+"""When the CoG steps in the failure map's flights (s): ``quadcog analyze`` flies longer."""
+ANALYSIS_FILES = ("pd_sigma.png", "zero_dynamics.png", "lyapunov.png", "failure_map.npz",
+                  "failure_map.json", "failure_map.png", "analysis.md", "report_fragment.tex",
+                  "analysis.json")
+"""The files ``analyze`` writes, together (``quadcog.files.RunFiles``)."""
+
+
 def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = True,
             duration: float = 20.0) -> dict[str, Any]:
     """Run the whole analysis and write it to ``out_dir`` (created if needed).
@@ -213,30 +222,35 @@ def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = Tr
         The summary (the numbers of analysis.json, as Python/numpy values; complex
         eigenvalues stay complex).
     """
-    # the failure map's arguments are checked before the first part's minutes of work
-    check_arguments(grid, THRESHOLD, duration, 1.0, THRESHOLD, ("pd", "fl", "adaptive"), None)
+    # the failure map's arguments are checked before the first part's minutes of work: the
+    # CoG steps at MAP_STEP_TIME, so a flight must last longer (it never happened before)
+    if validate.positive(duration, "failure_map: duration", unit="s") <= MAP_STEP_TIME:
+        validate.fail("failure_map: duration", f"a number > {MAP_STEP_TIME:g} (s): the CoG "
+                      f"steps at t = {MAP_STEP_TIME:g} s", duration)
+    check_arguments(grid, THRESHOLD, duration, MAP_STEP_TIME, THRESHOLD,
+                    ("pd", "fl", "adaptive"), None)
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    # and the files: none may be a folder, a link or a FIFO (never replaced), written at the
+    # end all together (quadcog.files.RunFiles), analysis.json last
+    creatable_folder(out, "out_dir", InputError)
+    check_outputs([(f"out_dir (its {name})", out / name) for name in ANALYSIS_FILES])
     t0 = time.perf_counter()
     timing = {}
 
     _say(progress, "analysis: PD design")
     t = time.perf_counter()
     pd = pd_design()
-    plot_sigma(pd, out / "pd_sigma.png")
     timing["pd_design"] = time.perf_counter() - t
 
     _say(progress, "analysis: zero dynamics")
     t = time.perf_counter()
     zd = zero_dynamics_study()
-    plot_zero_dynamics(zd, out / "zero_dynamics.png")
     timing["zero_dynamics"] = time.perf_counter() - t
 
     _say(progress, "analysis: adaptive design and Lyapunov function")
     t = time.perf_counter()
     design = design_checks()
     study = lyapunov_study()
-    plot_lyapunov(study, out / "lyapunov.png")
     timing["adaptive"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -247,8 +261,6 @@ def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = Tr
         if bar:
             bar.close()
     fm["adaptive_vs_projection"] = adaptive_failures_vs_projection(fm)
-    save_failure_map(fm, out / "failure_map.npz", out / "failure_map.json")
-    plot_failure_map(fm, out / "failure_map.png")
     timing["failure_map"] = time.perf_counter() - t
 
     summary = {
@@ -259,10 +271,16 @@ def analyze(out_dir: str | os.PathLike[str], grid: int = 41, progress: bool = Tr
         "figures": ["pd_sigma.png", "zero_dynamics.png", "lyapunov.png", "failure_map.png"],
         "timing": timing,
     }
-    summary["seconds"] = time.perf_counter() - t0
-    summary["machine"] = f"run {run_stamp()}"          # the timings above came from it
-    write_json(summary, out / "analysis.json")
-    write_markdown(summary, out / "analysis.md")
-    write_latex(summary, out / "report_fragment.tex")
+    with RunFiles(out, owned=ANALYSIS_FILES) as files:  # all or none, analysis.json last
+        plot_sigma(pd, files.path("pd_sigma.png"))
+        plot_zero_dynamics(zd, files.path("zero_dynamics.png"))
+        plot_lyapunov(study, files.path("lyapunov.png"))
+        save_failure_map(fm, files.path("failure_map.npz"), files.path("failure_map.json"))
+        plot_failure_map(fm, files.path("failure_map.png"))
+        summary["seconds"] = time.perf_counter() - t0
+        summary["machine"] = f"run {run_stamp()}"      # the timings above came from it
+        write_markdown(summary, files.path("analysis.md"))
+        write_latex(summary, files.path("report_fragment.tex"))
+        write_json(summary, files.path("analysis.json"))
     _say(progress, f"analysis: wrote {out} in {summary['seconds']:.1f} s")
     return summary

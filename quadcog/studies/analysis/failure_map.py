@@ -13,10 +13,10 @@ from quadcog.controllers import AdaptiveFeedbackLinearization, CascadePD, Feedba
 from quadcog.controllers.adaptive import admissible_estimate_radius
 from quadcog.controllers.base import Controller
 from quadcog.errors import ParameterError, SizeError
-from quadcog.model.conventions import N_STATE, R_G
+from quadcog.model.conventions import N_PARAM, N_STATE, R_G
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
 from quadcog.sim.flight import RK4_LIMIT
-from quadcog.sweeps.spec import MAX_FLIGHTS
+from quadcog.sweeps.spec import MAX_FLIGHTS, MAX_THRESHOLD
 from quadcog.trajectories.analytic import Hover
 from quadcog.vehicles.vehicle import HUMMINGBIRD, default_parameters
 
@@ -63,8 +63,24 @@ def admissibility(x_G: Sequence[float] | NDArray[np.float64],
         admissible (ny, nx) bool: whether quadcog.check_parameters accepts the base vehicle
         with r_G = (x_G, y_G, z_G); lambda_min (ny, nx) [kg m^2], the smallest eigenvalue of
         the inertia about the CoG (<= 0 where it is not admissible).
+
+    Raises
+    ------
+    quadcog.errors.InputError
+        For offsets that are not 1-D arrays of finite numbers, a z_G that is not a finite
+        number, a ``base`` that is not 14 finite numbers (an offset beyond the model's scale
+        is a quadcog.errors.ParameterError).
+    quadcog.errors.SizeError
+        For more than ``MAX_FLIGHTS`` grid points.
     """
-    base = default_parameters() if base is None else base
+    x_G = validate.array(x_G, "admissibility: x_G", (None,), what="a 1-D array of offsets (m)")
+    y_G = validate.array(y_G, "admissibility: y_G", (None,), what="a 1-D array of offsets (m)")
+    z_G = validate.real(z_G, "admissibility: z_G", unit="m")
+    base = default_parameters() if base is None else validate.vector(
+        base, "admissibility: base", N_PARAM)
+    if x_G.size * y_G.size > MAX_FLIGHTS:
+        raise SizeError(f"admissibility: {y_G.size} x {x_G.size} grid points; expected at most "
+                        f"{MAX_FLIGHTS} (the points of one failure map)")
     adm = np.zeros((len(y_G), len(x_G)), dtype=bool)
     lam = np.zeros_like(adm, dtype=float)
     for i, yg in enumerate(y_G):
@@ -110,13 +126,36 @@ def rk4_stiffness(controller: Controller, params: NDArray[np.float64],
                      range(params.shape[0])]) * dt
 
 
+def _flight_dt():
+    """The step of the failure map's flights: the shipped sweep's, else its base scenario's,
+    else the configured default (s)."""
+    from quadcog.scenarios.lookup import read_toml, scenario_path
+    from quadcog.sweeps.spec import read_sweep_file
+    data, _ = read_sweep_file("failure-map")
+    fixed = data.get("set", {})
+    if "dt" in fixed:
+        return fixed["dt"]
+    return read_toml(scenario_path(data["scenario"])).get("dt", config.get("simulate.dt"))
+
+
 def check_arguments(grid, half_width, duration, t_step, threshold, controllers, progress):
-    """failure_map's arguments checked (InputError naming the argument), as plain values."""
+    """failure_map's arguments checked (InputError naming the argument), as plain values:
+    the duration at least one step and at most ``simulate.max_steps`` of them, the step time
+    within the run."""
     grid = validate.integer(grid, "failure_map: grid (points per axis)", lo=1)
     half_width = validate.positive(half_width, "failure_map: half_width", unit="m")
     duration = validate.positive(duration, "failure_map: duration", unit="s")
-    t_step = validate.nonnegative(t_step, "failure_map: t_step", unit="s")
-    threshold = validate.positive(threshold, "failure_map: threshold", unit="m")
+    dt = validate.positive(_flight_dt(), "failure_map: dt of the sweep failure-map", unit="s")
+    if duration < dt:
+        validate.fail("failure_map: duration", f"at least one step of the flights, dt = "
+                      f"{dt:g} s", duration)
+    validate.step_count(duration, dt, int(config.get("simulate.max_steps")),
+                        "failure_map: duration", SizeError)
+    # a step at or after the end never happens: every flight would hover with r_G = 0
+    t_step = validate.real(t_step, "failure_map: t_step", lo=0.0, hi=duration, hi_open=True,
+                           unit="s, a time within the run: 0 <= t_step < duration")
+    threshold = validate.real(threshold, "failure_map: threshold", lo=0.0, lo_open=True,
+                              hi=MAX_THRESHOLD, unit="m")
     if isinstance(controllers, (str, bytes)) or not isinstance(controllers, Sequence):
         validate.fail("failure_map: controllers", "a sequence of controller names such as "
                       "('pd', 'fl')", controllers)
