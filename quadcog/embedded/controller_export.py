@@ -27,7 +27,7 @@ from quadcog.files import RunFiles, output_path
 from quadcog.model.conventions import N_STATE, PARAM_NAMES, STATE_NAMES
 from quadcog.trajectories.analytic import REF_SIZE
 
-__all__ = ["NOTICE", "PARAM_UNITS", "short_name", "step_function", "documented_constants",
+__all__ = ["NOTICE", "PARAM_UNITS", "file_names", "short_name", "step_function", "documented_constants",
            "render", "export_controller"]
 
 # {command}: what wrote the file (`make embedded`, the `quadcog export` line, the Python call)
@@ -303,9 +303,25 @@ def render(controller: Controller, precision: str = "float32", name: str | None 
         f"quadcog.embedded.export_controller({type(controller).__name__}(...), "
         f"precision={precision!r})")
     fn = step_function(controller)
-    return {f"quadcog_{name}.h": _header(name, controller, precision, command,
-                                         int(controller.n_state), dt),
-            f"quadcog_{name}.c": _source(name, controller, precision, command, fn)}
+    header, source = file_names(name)
+    return {header: _header(name, controller, precision, command, int(controller.n_state), dt),
+            source: _source(name, controller, precision, command, fn)}
+
+
+def file_names(name: str) -> tuple[str, str]:
+    """The names of the header and the source exported for a law named ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The law's C name part (``<name>`` of ``quadcog_<name>_step``).
+
+    Returns
+    -------
+    (str, str)
+        ``quadcog_<name>.h`` and ``quadcog_<name>.c``.
+    """
+    return f"quadcog_{name}.h", f"quadcog_{name}.c"
 
 
 def export_controller(controller: str | Controller, precision: str = "float32",

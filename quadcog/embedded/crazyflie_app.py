@@ -35,12 +35,12 @@ from pathlib import Path
 from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import CONTROLLERS, make_controller
 from quadcog.embedded.c_text import c_identifier, comment_text
-from quadcog.embedded.controller_export import NOTICE, render, short_name
+from quadcog.embedded.controller_export import NOTICE, file_names, render, short_name
 from quadcog.errors import ExportError, QuadcogError
 from quadcog.files import RunFiles, output_path
 from quadcog.vehicles.vehicle import PRESETS, Vehicle
 
-__all__ = ["DEFAULT_VEHICLE", "RATE", "CONTROL_PERIOD", "resolve_vehicle", "app_files",
+__all__ = ["DEFAULT_VEHICLE", "RATE", "CONTROL_PERIOD", "resolve_vehicle", "app_files", "app_file_names",
            "write_crazyflie_app"]
 
 # the Crazyflie 2.1 preset, built from the firmware's own constants (the firmware's default
@@ -268,15 +268,30 @@ def app_files(controller: Controller, name: str, command: str) -> dict[str, str]
     """
     notice = NOTICE.format(command=command)
     law = render(controller, "float32", name, command, dt=CONTROL_PERIOD)
-    files = {"Makefile": _MAKEFILE.format(notice=notice),
-             "Kbuild": "obj-y += src/\n",
-             "app-config": _APP_CONFIG,
-             "src/Kbuild": f"obj-y += quadcog_{name}.o\nobj-y += quadcog_cf_{name}.o\n"
-                           "obj-y += quadcog_cf_app.o\n",
-             f"src/quadcog_cf_{name}.c": _controller_c(name, int(controller.n_state), notice),
-             "src/quadcog_cf_app.c": _app_main_c(notice)}
-    files.update({f"src/{fname}": text for fname, text in law.items()})
-    return files
+    texts = [_MAKEFILE.format(notice=notice), "obj-y += src/\n", _APP_CONFIG,
+             f"obj-y += quadcog_{name}.o\nobj-y += quadcog_cf_{name}.o\nobj-y += quadcog_cf_app.o\n",
+             _controller_c(name, int(controller.n_state), notice), _app_main_c(notice),
+             *law.values()]
+    return dict(zip(app_file_names(name), texts, strict=True))
+
+
+def app_file_names(name: str) -> list[str]:
+    """The files of the app for a law named ``name``, relative to the app folder, in the
+    order ``app_files`` gives them.
+
+    Parameters
+    ----------
+    name : str
+        The law's C name part (``<name>`` of ``quadcog_<name>_step``).
+
+    Returns
+    -------
+    list of str
+        Makefile, Kbuild, app-config, then ``src/``: its Kbuild, the firmware's controller
+        entry points, the app's main, and the law's header and source (``file_names``).
+    """
+    return ["Makefile", "Kbuild", "app-config", "src/Kbuild", f"src/quadcog_cf_{name}.c",
+            "src/quadcog_cf_app.c", *(f"src/{f}" for f in file_names(name))]
 
 
 def write_crazyflie_app(controller: str | Controller, out: str | os.PathLike[str],
