@@ -355,6 +355,12 @@ def sweep_keys_page() -> str:
     defaults = {"mode": f'`"{spec.MODES[0]}"`', "seed": "", "chunk": _value(spec.DEFAULT_CHUNK),
                 "threshold": _value(spec.DEFAULT_THRESHOLD), "inadmissible": '`"error"`',
                 "scenario": "required", "name": "required"}
+    meaning = dict(SWEEP_MEANING,       # the bounds from the module that checks them
+                   chunk=f"{SWEEP_MEANING['chunk']} (1 to {spec.MAX_CHUNK:,})",
+                   threshold=f"{SWEEP_MEANING['threshold']} (above 0, at most "
+                             f"{spec.MAX_THRESHOLD:g} m)",
+                   set=f"{SWEEP_MEANING['set']}; a file path, here or in a dimension's values, "
+                       "is relative to this sweep file")
     keys = [k for k in SWEEP_MEANING if k in spec.TOP] + sorted(set(spec.TOP) - set(SWEEP_MEANING))
     return "\n".join([
         "# Sweep keys\n",
@@ -363,7 +369,7 @@ def sweep_keys_page() -> str:
         "flight is validated like a scenario file. `mode` is one of "
         + ", ".join(f'`"{m}"`' for m in spec.MODES) + ".\n",
         "## Top level\n",
-        _table([(f"`{k}`", defaults.get(k, ""), SWEEP_MEANING.get(k, "")) for k in keys],
+        _table([(f"`{k}`", defaults.get(k, ""), meaning.get(k, "")) for k in keys],
                ("key", "default", "meaning")),
         "## `[[dimension]]`\n",
         "`key` names a scenario value as the scenario file spells it; exactly one source:\n",
