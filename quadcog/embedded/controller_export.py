@@ -10,6 +10,7 @@ provides the public interface of ``quadcog.controllers.base.Controller``:
 - ``n_state``, ``initial_state()`` (numbers) and ``project(c)`` (SX -> SX);
 - ``nominal`` (14,): the vehicle parameters the law was built for.
 """
+from contextlib import ExitStack
 import os
 from pathlib import Path
 
@@ -27,8 +28,8 @@ from quadcog.files import RunFiles, output_path
 from quadcog.model.conventions import N_STATE, PARAM_NAMES, STATE_NAMES
 from quadcog.trajectories.analytic import REF_SIZE
 
-__all__ = ["NOTICE", "PARAM_UNITS", "file_names", "short_name", "step_function", "documented_constants",
-           "render", "export_controller"]
+__all__ = ["NOTICE", "PARAM_UNITS", "file_names", "out_folder", "write_files", "short_name",
+           "step_function", "documented_constants", "render", "export_controller"]
 
 # {command}: what wrote the file (`make embedded`, the `quadcog export` line, the Python call)
 NOTICE = ("DO NOT EDIT: written by `{command}` from the controllers in quadcog/controllers/; "
@@ -357,9 +358,7 @@ def export_controller(controller: str | Controller, precision: str = "float32",
     quadcog.errors.InputError
         For an unknown controller name.
     """
-    if not isinstance(out, (str, os.PathLike)) or "\0" in os.fspath(out) or not os.fspath(out):
-        raise ExportError(f"out: expected a folder path (str or os.PathLike; '.' for the "
-                          f"working folder), got {out!r} ({type(out).__name__})")
+    out = out_folder(out)
     if name is not None:
         c_identifier(name, "name")
     if isinstance(controller, str):
@@ -370,21 +369,75 @@ def export_controller(controller: str | Controller, precision: str = "float32",
             command = f"quadcog.embedded.export_controller({controller!r}, {precision!r})"
         name = name if name is not None else c_identifier(controller, "controller")
         controller = make_controller(controller)
-    files = render(controller, precision, name, command)
-    out = Path(out)
-    # the header and the source are committed together (temporary files, then both renamed):
-    # a failure leaves the old pair or none, never a new header beside an old source
+    return write_files(render(controller, precision, name, command), out, "exported file")
+
+
+def out_folder(out: object) -> Path:
+    """``out`` checked as the folder of an export: a non-empty str or os.PathLike without a
+    null byte (``''`` wrote into the working folder; ``'.'`` says so).
+
+    Parameters
+    ----------
+    out : object
+        What the caller passed.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    quadcog.errors.ExportError
+        Naming the value.
+    """
+    if not isinstance(out, (str, os.PathLike)) or "\0" in os.fspath(out) or not os.fspath(out):
+        raise ExportError(f"out: expected a folder path (str or os.PathLike; '.' for the "
+                          f"working folder), got {out!r:.60} ({type(out).__name__})")
+    return Path(out)
+
+
+def write_files(files: dict[str, str], out: Path, what: str) -> list[Path]:
+    """Write ``files`` into ``out`` together or not at all.
+
+    Every file goes to a temporary name first (``quadcog.files.RunFiles``, one per folder),
+    then all are renamed: a failure or Ctrl-C leaves what was there, never a new header
+    beside an old source. A folder, link, FIFO or device in a file's place is refused
+    before anything is written (never written through).
+
+    Parameters
+    ----------
+    files : dict of str to str
+        {path relative to ``out``: text}.
+    out : pathlib.Path
+        The folder (made when missing).
+    what : str
+        What a file is, for messages ("exported file", "app file").
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in the order of ``files``.
+
+    Raises
+    ------
+    quadcog.errors.ExportError
+        Naming the file or folder that could not be written, and why.
+    """
+    for rel in files:
+        if os.path.lexists(out / rel):
+            output_path(out / rel, what, ExportError)
     try:
-        with RunFiles(out, owned=()) as pair:
-            for fname, text in files.items():
-                if os.path.lexists(out / fname):     # a folder, link or FIFO is not replaced
-                    output_path(out / fname, "exported file", ExportError)
-                pair.path(fname).write_text(text)
+        with ExitStack() as stack:
+            folders: dict[Path, RunFiles] = {}
+            for rel, text in files.items():
+                folder = (out / rel).parent
+                if folder not in folders:
+                    folders[folder] = stack.enter_context(RunFiles(folder, owned=()))
+                folders[folder].path(rel).write_text(text)
     except OSError as e:
-        where = e.filename or out
-        raise ExportError(f"{where}: cannot write the exported file ({e.strerror})") from None
+        raise ExportError(f"{e.filename or out}: cannot write the {what} ({e.strerror})") from None
     except QuadcogError as e:
         if isinstance(e, ExportError):
             raise
         raise ExportError(f"out = {str(out)!r}: {e}") from None
-    return [out / fname for fname in files]
+    return [out / rel for rel in files]

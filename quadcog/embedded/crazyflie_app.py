@@ -28,16 +28,14 @@ leaves ``control_t`` alone on the other ticks (the stabilizer's ``control`` is s
 command persists). With ``setpoint->mode.z == modeDisable`` (no position setpoint: the law
 cannot fly manual attitude setpoints) it commands zero thrust and restarts its state.
 """
-from contextlib import ExitStack
 import os
 from pathlib import Path
 
 from quadcog.controllers.base import Controller
 from quadcog.controllers.registry import CONTROLLERS, make_controller
 from quadcog.embedded.c_text import c_identifier, comment_text
-from quadcog.embedded.controller_export import NOTICE, file_names, render, short_name
-from quadcog.errors import ExportError, QuadcogError
-from quadcog.files import RunFiles, output_path
+from quadcog.embedded.controller_export import NOTICE, file_names, out_folder, render, short_name, write_files
+from quadcog.errors import ExportError
 from quadcog.vehicles.vehicle import PRESETS, Vehicle
 
 __all__ = ["DEFAULT_VEHICLE", "RATE", "CONTROL_PERIOD", "resolve_vehicle", "app_files", "app_file_names",
@@ -325,9 +323,7 @@ def write_crazyflie_app(controller: str | Controller, out: str | os.PathLike[str
         An unknown controller or vehicle, a name that is not a C identifier, a law that
         depends on t, or a folder that cannot be written.
     """
-    if not isinstance(out, (str, os.PathLike)) or not os.fspath(out):
-        raise ExportError(f"out: expected a folder path (a non-empty str or os.PathLike), got "
-                          f"{out!r:.60} ({type(out).__name__})")
+    out = out_folder(out)
     given_vehicle = vehicle is not None
     vehicle = resolve_vehicle(vehicle)
     if isinstance(controller, str):
@@ -348,26 +344,4 @@ def write_crazyflie_app(controller: str | Controller, out: str | os.PathLike[str
                           f"Controller, got {controller!r} ({type(controller).__name__})")
     command = comment_text(command, "command") if command is not None else (
         f"quadcog.embedded.crazyflie_app.write_crazyflie_app({type(controller).__name__}(...))")
-    files = app_files(controller, name, command)
-    out = Path(out)
-    for rel in files:                  # a folder, link, FIFO or device is never written through
-        if os.path.lexists(out / rel):
-            output_path(out / rel, "app file", ExportError)
-    # every file to a temporary name first, then all renamed: a failure or Ctrl-C leaves the
-    # app as it was, never a new Kbuild beside an old source (one RunFiles per folder)
-    try:
-        with ExitStack() as stack:
-            folders: dict[Path, RunFiles] = {}
-            for rel, text in files.items():
-                folder = (out / rel).parent
-                if folder not in folders:
-                    folders[folder] = stack.enter_context(RunFiles(folder, owned=()))
-                folders[folder].path(rel).write_text(text)
-    except OSError as e:
-        where = e.filename or out
-        raise ExportError(f"{where}: cannot write the app ({e.strerror})") from None
-    except QuadcogError as e:
-        if isinstance(e, ExportError):
-            raise
-        raise ExportError(f"out = {str(out)!r}: {e}") from None
-    return [out / rel for rel in files]
+    return write_files(app_files(controller, name, command), out, "app file")
