@@ -156,7 +156,6 @@ CASES = [
     ("static_balance", "window", lambda v: estimators.static_balance(LOG, CRAZYFLIE, window=v),
      {**_without(OBJECT, "None"), "FlightLog": lambda: LOG,
       "another log's window": lambda: dataclasses.replace(WINDOW, mask=WINDOW.mask[:-5]),
-      "integer mask": lambda: dataclasses.replace(WINDOW, mask=WINDOW.mask.astype(int)),
       "empty mask": lambda: dataclasses.replace(WINDOW, mask=np.zeros_like(WINDOW.mask))}),
     ("static_balance", "rotor_model",
      lambda v: estimators.static_balance(LOG, CRAZYFLIE, rotor_model=v), ROTOR_MODEL),

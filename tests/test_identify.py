@@ -158,9 +158,9 @@ def test_missing_signals_are_named():
     with pytest.raises(IdentificationError, match="regression.*velocity, roll, pitch, yaw, "
                                                   "body_rates"):
         identify(log, "crazyflie", method="regression")
-    with pytest.raises(IdentificationError, match="vehicle 'x900' is unknown"):
+    with pytest.raises(IdentificationError, match="^vehicle: expected a preset name .*, got 'x900'$"):
         identify(log, "x900")
-    with pytest.raises(IdentificationError, match="method 'best' is unknown"):
+    with pytest.raises(IdentificationError, match="^method: expected one of auto, static, regression, got 'best'$"):
         identify(log, "crazyflie", method="best")
     with pytest.raises(IdentificationError, match="no rotor_model"):
         identify(log, HUMMINGBIRD)

@@ -91,7 +91,8 @@ def test_cli_identify_prints_and_writes(tmp_path, capsys):
     (["identify", "no/such/log"], "no/such/log: no such log file"),
     (["identify", str(DATA / "LICENSE")], "LICENSE"),
     (["identify", str(DATA / "motor_data/normal_flight/E9_log00"), "--vehicle", "x900"],
-     "vehicle 'x900' is unknown"),
+     "vehicle: expected a preset name (hummingbird, crazyflie, x500, crazyflie21) or a "
+     "quadcog Vehicle, got 'x900'"),
     (["identify", str(DATA / "motor_data/normal_flight/E9_log00"), "--method", "regression"],
      "needs pitch, body_rates"),
     # the PX4 sample climbs to 2 m and lands at once: no plateau to balance on

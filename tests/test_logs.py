@@ -79,7 +79,7 @@ def test_flightlog_is_frozen_and_copies():
     ([0.0], {}, "N >= 2"),
     ([0.0, 0.1, 0.2], {"position": np.zeros((3, 2))}, r"shape \(3, 2\), expected \(3, 3\)"),
     ([0.0, 0.1, 0.2], {"roll": [0.0, np.nan, 0.0]}, r"signal 'roll' is nan at sample 1"),
-    ([0.0, 0.1, 0.2], {"roll": ["a", "b", "c"]}, "not numeric"),
+    ([0.0, 0.1, 0.2], {"roll": ["a", "b", "c"]}, r"signal 'roll'\[0\]: expected a real number, got 'a'"),
 ])
 def test_flightlog_refuses_bad_content(t, signals, match):
     with pytest.raises(LogFormatError, match=match):

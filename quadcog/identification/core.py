@@ -11,6 +11,7 @@ distance from O toward it).
 """
 from collections.abc import Sequence
 from dataclasses import dataclass
+import hashlib
 import os
 from pathlib import Path
 from typing import Any
@@ -21,6 +22,7 @@ import numpy.typing as npt
 from quadcog.errors import IdentificationError
 from quadcog.identification import _checks
 from quadcog.identification.estimators import (
+    R_G_NAMES,
     REGRESSION_SIGNALS,
     FlightEstimate,
     missing_for,
@@ -29,7 +31,8 @@ from quadcog.identification.estimators import (
 )
 from quadcog.identification.plausibility import check_log, check_types, hover_physics
 from quadcog.logs.flightlog import FlightLog
-from quadcog.validate import fail, plain
+from quadcog.model.parameters import LARGEST
+from quadcog.validate import array, fail, integer, real
 from quadcog.vehicles.rotor_model import RotorModel
 from quadcog.vehicles.vehicle import PRESETS, Vehicle
 
@@ -38,7 +41,6 @@ __all__ = ["METHODS", "JSON_KEYS", "R_G_NAMES", "IDENTIFIABLE_FRACTION", "NEVER_
            "as_vehicle"]
 
 METHODS = ("auto", "static", "regression")
-R_G_NAMES = ("x_G", "y_G", "z_G")
 JSON_KEYS = ("r_G", "r_G_ci95", "mass", "mass_ci95", "mass_change", "samples", "identifiable")
 # an entry of r_G is "determined" when its 95 % half-width is below this fraction of the arm
 IDENTIFIABLE_FRACTION = 0.05
@@ -48,6 +50,70 @@ IDENTIFIABLE_FRACTION = 0.05
 # shows (docs/identify.md: a simulated 23 deg circle with the *-real sensing noise)
 NEVER_DETERMINED = ("z_G",)
 ROTOR_ASYMMETRY = 0.05         # the weaker-rotor example of the verdict: 5 % less thrust
+
+
+def _r_G(value: object, where: str) -> tuple[float, float, float]:
+    """r_G: 3 finite numbers (m) within +-LARGEST, as a tuple of floats (a list, a tuple or
+    an array of shape (3,); not a column)."""
+    what = "3 finite numbers (m)"
+    try:
+        r = array(value, where, shape=(3,), what=what,  # type: ignore[arg-type]
+                  error=IdentificationError)
+    except IdentificationError:          # the value as a whole, not its first bad entry
+        fail(where, what, value, IdentificationError)
+    if not np.abs(r).max() <= LARGEST:
+        fail(where, f"3 numbers within +-{LARGEST:g} m", value, IdentificationError)
+    return (float(r[0]), float(r[1]), float(r[2]))
+
+
+def _r_G_ci95(value: object, where: str) -> tuple[float | None, ...]:
+    """r_G's 95 % half-widths: 3 entries, each None (not estimated) or a finite number >= 0
+    (m)."""
+    what = "3 half-widths (m), each a number >= 0 or None (not estimated)"
+    items = value.tolist() if isinstance(value, np.ndarray) and value.ndim == 1 else value
+    if not isinstance(items, (list, tuple)) or len(items) != 3:
+        fail(where, what, value, IdentificationError)
+    return tuple(None if v is None else real(v, f"{where}[{i}]", lo=0.0, unit="m",
+                                                 error=IdentificationError)
+                 for i, v in enumerate(items))
+
+
+def _mass(value: object, where: str) -> float:
+    """A mass (kg) in (0, LARGEST], as every vehicle's."""
+    return real(value, where, lo=0.0, lo_open=True, hi=LARGEST, unit="kg",
+                error=IdentificationError)
+
+
+def _mass_ci95(value: object, where: str) -> float:
+    return real(value, where, lo=0.0, unit="kg", error=IdentificationError)
+
+
+def _mass_change(value: object, where: str) -> float:
+    return real(value, where, lo=-LARGEST, hi=LARGEST, unit="kg", error=IdentificationError)
+
+
+def _samples(value: object, where: str) -> int:
+    """The log samples an identification used: a whole number >= 1."""
+    return integer(value, where, lo=1, error=IdentificationError)
+
+
+def _identifiable(value: object, where: str) -> tuple[str, ...]:
+    """The entries of r_G the data determine: distinct names of ``R_G_NAMES``, in order."""
+    what = f"distinct names of {', '.join(R_G_NAMES)}"
+    items = value.tolist() if isinstance(value, np.ndarray) and value.ndim == 1 else value
+    if not isinstance(items, (list, tuple)) or len(set(map(repr, items))) != len(items):
+        fail(where, what, value, IdentificationError)
+    for i, name in enumerate(items):
+        if not isinstance(name, str) or name not in R_G_NAMES:
+            fail(f"{where}[{i}]", f"one of {', '.join(R_G_NAMES)}", name, IdentificationError)
+    return tuple(str(n) for n in items)
+
+
+# The checks of the fields ``as_json`` writes (JSON_KEYS): Identification checks its own
+# with them, ``identified_cog`` the keys of a JSON file (where null stands for None)
+JSON_CHECKS = {"r_G": _r_G, "r_G_ci95": _r_G_ci95, "mass": _mass, "mass_ci95": _mass_ci95,
+               "mass_change": _mass_change, "samples": _samples,
+               "identifiable": _identifiable}
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,6 +152,16 @@ class Identification:
     Returns
     -------
     Identification
+
+    Raises
+    ------
+    IdentificationError
+        A field of another type or out of range, named ``Identification.<field>``: r_G not 3
+        finite numbers within +-LARGEST (m), a half-width negative or not a number (None
+        where not estimated), a mass not in (0, LARGEST] kg, samples not a whole number
+        >= 1, identifiable not distinct names of ``R_G_NAMES``, method or verdict not a str,
+        flights or baseline not a list or tuple of FlightEstimate, a condition number that
+        is not a finite number > 0.
     """
     r_G: tuple
     r_G_ci95: tuple
@@ -99,6 +175,22 @@ class Identification:
     flights: tuple = ()
     baseline: tuple = ()
     condition: float | None = None
+
+    def __post_init__(self) -> None:
+        for key, check in JSON_CHECKS.items():
+            value = getattr(self, key)
+            if not (key == "mass_change" and value is None):
+                object.__setattr__(self, key, check(value, f"Identification.{key}"))
+        for key in ("method", "verdict"):
+            object.__setattr__(self, key, _checks.text(getattr(self, key),
+                                                       f"Identification.{key}"))
+        for key in ("flights", "baseline"):
+            object.__setattr__(self, key, tuple(_checks.sequence(
+                getattr(self, key), f"Identification.{key}", FlightEstimate, "FlightEstimate")))
+        if self.condition is not None:
+            object.__setattr__(self, "condition", real(
+                self.condition, "Identification.condition", lo=0.0, lo_open=True,
+                error=IdentificationError))
 
     def as_json(self) -> dict[str, Any]:
         """Exactly the ``JSON_KEYS`` as plain JSON values (None for null).
@@ -163,8 +255,8 @@ def as_vehicle(vehicle: str | Vehicle) -> Vehicle:
         return vehicle
     if isinstance(vehicle, str) and vehicle in PRESETS:
         return PRESETS[vehicle]
-    raise IdentificationError(f"vehicle {plain(vehicle)} is unknown; expected one of "
-                              f"{', '.join(PRESETS)} or a quadcog Vehicle")
+    fail("vehicle", f"a preset name ({', '.join(PRESETS)}) or a quadcog Vehicle", vehicle,
+         IdentificationError)
 
 
 def as_logs(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
@@ -216,8 +308,7 @@ def as_logs(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
 
 def _choose(method: str, logs: list[FlightLog]) -> tuple[str, str]:
     if not isinstance(method, str) or method not in METHODS:
-        raise IdentificationError(f"method {plain(method)} is unknown; expected one of "
-                                  f"{', '.join(METHODS)}")
+        fail("method", f"one of {', '.join(METHODS)}", method, IdentificationError)
     lacking = {log.source: missing_for(log, REGRESSION_SIGNALS) for log in logs}
     lacking = {k: v for k, v in lacking.items() if v}
     if method == "regression" and lacking:
@@ -323,7 +414,8 @@ def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
     ------
     IdentificationError
         Unknown vehicle or method, a log without the signals the method needs, too few hover
-        samples; LogError for a file that cannot be read.
+        samples, a flight given twice (among the logs, or the logs and the baseline: the same
+        samples); LogError for a file that cannot be read.
     """
     preset = isinstance(vehicle, str)
     vehicle = as_vehicle(vehicle)
@@ -335,6 +427,7 @@ def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
     chosen, described = _choose(method, logs + (base or []))
     # the units and the physics of every log, before any estimate
     check_types(logs, base or [], vehicle if preset else None)
+    _check_distinct(logs, base or [])
     for log in logs + (base or []):
         _check_physics(log, vehicle, rotor_model)
     flights = _estimate(logs, vehicle, chosen, rotor_model)
@@ -363,6 +456,32 @@ def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
         verdict=verdict, flights=tuple(flights), baseline=base_est, condition=condition)
 
 
+def _flight_digest(log: FlightLog) -> bytes:
+    """A digest of a log's samples (time and standard signals): equal for the same flight
+    read twice, whatever its source is called (linear in the log)."""
+    h = hashlib.blake2b(digest_size=16)
+    h.update(np.ascontiguousarray(log.t).tobytes())
+    for name in sorted(log.signals):
+        h.update(name.encode() + b"\0" + np.ascontiguousarray(log.signals[name]).tobytes())
+    return h.digest()
+
+
+def _check_distinct(logs: list[FlightLog], baseline: list[FlightLog]) -> None:
+    """Refuse a flight given twice (the same file twice, or among the logs and the
+    baseline): its samples would count twice, narrowing the intervals without new data, and
+    a flight against itself shows no shift, whatever the payload."""
+    seen: dict[bytes, str] = {}
+    for role, items in (("logs", logs), ("baseline", baseline)):
+        for i, log in enumerate(items):
+            where = f"{role}[{i}]"
+            first = seen.setdefault(_flight_digest(log), where)
+            if first != where:
+                raise IdentificationError(
+                    f"{where}: expected a flight not given before, got {log.source}, the same "
+                    f"samples as {first}: a flight counted twice narrows the intervals without "
+                    "new data (and against itself shows no shift)")
+
+
 def _check_physics(log, vehicle, rotor_model):
     """The plausibility checks of one log (quadcog.identification.plausibility)."""
     from quadcog.identification.segments import hover_window, rotor_thrusts, vertical_acceleration
@@ -378,10 +497,13 @@ def _check_answer(logs, vehicle, r, half, m, m_half, mass_change):
     names = ", ".join(log.source for log in logs)
     values = [m, m_half] + list(r) + ([] if mass_change is None else [mass_change])
     estimated = [h for h in half if not np.isnan(h)]
-    if not (np.isfinite(values).all() and np.isfinite(estimated).all() and m > 0):
+    # within the model's scale too (LARGEST: what an Identification holds), z_G included
+    if not (np.isfinite(values).all() and np.isfinite(estimated).all() and m > 0
+            and np.abs(values).max() <= LARGEST):
         raise IdentificationError(
-            f"{names}: the estimate is not a number (mass {m!r} kg, r_G {list(r)!r} m): the "
-            "logs do not determine the CoG; check their units and signals")
+            f"{names}: the estimate is not a number within the model's scale (mass {m!r} kg, "
+            f"r_G {list(r)!r} m, each within {LARGEST:g}): the logs do not determine the CoG; "
+            "check their units and signals")
     arm = vehicle.arm_length
     if np.abs(r[:2]).max() > arm:
         raise IdentificationError(

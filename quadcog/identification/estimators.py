@@ -49,18 +49,20 @@ from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.signals import SIGNALS
 from quadcog.model.conventions import B_U, rotation_matrix
 from quadcog.model.functions import load
-from quadcog.model.parameters import with_cog
-from quadcog.validate import fail, nonnegative, positive
+from quadcog.model.parameters import LARGEST, with_cog
+from quadcog.validate import array, fail, integer, nonnegative, positive, real
 from quadcog.vehicles.rotor_model import RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["FILTER_RATE", "WARM_UP", "STATIC_SIGNALS", "REGRESSION_SIGNALS", "Z_G_MIN_TILT",
+           "MAX_CONDITION", "R_G_NAMES",
            "STATIC_MAX_TILT", "FlightEstimate", "static_balance", "regression", "missing_for"]
 
 # the composite law's filter rate lam (1/s) of its reference design (the Hummingbird's): one
 # definition, quadcog.controllers.design
 FILTER_RATE = REFERENCE.filter_rate
 WARM_UP = 5.0 / FILTER_RATE            # s: the filter's start-up term has decayed by e^-5
+R_G_NAMES = ("x_G", "y_G", "z_G")      # the entries of r_G, in messages and results
 STATIC_SIGNALS = ("position",)         # + the rotor model's signals
 REGRESSION_SIGNALS = ("position", "velocity", "roll", "pitch", "yaw", "body_rates")
 # z_G enters the moments through m g z_G sin(tilt) and the linear accelerations: below this
@@ -70,6 +72,9 @@ REGRESSION_SIGNALS = ("position", "velocity", "roll", "pitch", "yaw", "body_rate
 Z_G_MIN_TILT = np.radians(2.0)
 # the static balance assumes a level hover; beyond this RMS tilt it says it is biased
 STATIC_MAX_TILT = np.radians(3.0)
+# the scaled regressor's condition number beyond which least squares determines nothing (its
+# columns are dependent to the float64's precision: A^T A cannot be inverted)
+MAX_CONDITION = 1e12
 
 
 def missing_for(log: FlightLog, names: Sequence[str]) -> list[str]:
@@ -158,6 +163,14 @@ class FlightEstimate:
     Returns
     -------
     FlightEstimate
+
+    Raises
+    ------
+    IdentificationError
+        A field of another type, shape or range, named ``FlightEstimate.<field>``: arrays
+        not finite (a half-width may be NaN where not estimated, never negative or infinite),
+        blocks_m and blocks_v or t, moment and weight of different lengths, a mass not > 0,
+        samples not a whole number >= 0, a method not ``"static"`` or ``"regression"``.
     """
     source: str
     method: str
@@ -175,6 +188,39 @@ class FlightEstimate:
     condition: float | None
     rotor: str
     notes: tuple
+
+    def __post_init__(self) -> None:
+        def put(name, value):
+            object.__setattr__(self, name, value)
+        at = "FlightEstimate."
+        put("source", _checks.text(self.source, at + "source"))
+        if not (isinstance(self.method, str) and self.method in ("static", "regression")):
+            fail(at + "method", "'static' or 'regression'", self.method, IdentificationError)
+        put("method", str(self.method))
+        put("blocks_r", _checks.rows(self.blocks_r, at + "blocks_r", columns=3, min_rows=1))
+        put("blocks_m", _checks.rows(self.blocks_m, at + "blocks_m", ndim=1, min_rows=1))
+        put("blocks_v", _checks.rows(self.blocks_v, at + "blocks_v", columns=2,
+                                     n_rows=len(self.blocks_m)))
+        put("r_G", array(self.r_G, at + "r_G", shape=(3,), error=IdentificationError))
+        half = array(self.r_G_ci95, at + "r_G_ci95", shape=(3,), finite=False,
+                     error=IdentificationError)
+        if not ((half >= 0) | np.isnan(half)).all() or np.isinf(half).any():
+            fail(at + "r_G_ci95", "3 half-widths (m), each a finite number >= 0 or NaN (not "
+                 "estimated)", self.r_G_ci95, IdentificationError)
+        put("r_G_ci95", half)
+        put("mass", positive(self.mass, at + "mass", "kg", IdentificationError))
+        put("mass_ci95", nonnegative(self.mass_ci95, at + "mass_ci95", "kg",
+                                     IdentificationError))
+        put("samples", integer(self.samples, at + "samples", lo=0, error=IdentificationError))
+        put("t", _checks.rows(self.t, at + "t", ndim=1))
+        put("moment", _checks.rows(self.moment, at + "moment", columns=2, n_rows=len(self.t)))
+        put("weight", _checks.rows(self.weight, at + "weight", ndim=1, n_rows=len(self.t)))
+        if self.condition is not None:
+            put("condition", positive(self.condition, at + "condition",
+                                      error=IdentificationError))
+        put("rotor", _checks.text(self.rotor, at + "rotor"))
+        notes = _checks.sequence(self.notes, at + "notes", str, "str")
+        put("notes", tuple(str(n) for n in notes))
 
 
 def _tilt_cosine(log: FlightLog, notes: list[str]) -> npt.NDArray[np.float64]:
@@ -326,7 +372,9 @@ def regression(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str |
     _checks.vehicle(vehicle, "regression: vehicle")
     _checks.rotor_model(rotor_model, "regression: rotor_model")
     _check_window("regression", log, window)
-    filter_rate = positive(filter_rate, "regression: filter_rate", "1/s", IdentificationError)
+    # within the model's scale: lam (M nu - F[M nu]) of a rate of 1e300 overflowed to inf
+    filter_rate = real(filter_rate, "regression: filter_rate", lo=0.0, lo_open=True,
+                       hi=LARGEST, unit="1/s", error=IdentificationError)
     min_tilt = nonnegative(min_tilt, "regression: min_tilt", "rad", IdentificationError)
     if mass is not None:
         mass = positive(mass, "regression: mass", "kg", IdentificationError)
@@ -379,8 +427,14 @@ def regression(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str |
          - lam * (Mnu - _lowpass(Mnu, t, lam, restart)))
     Y = _lowpass(Phi0, t, lam, restart) + lam * (W - _lowpass(W, t, lam, restart))
     index_all = window.blocks(t)
-    keep = (t >= seg_start + WARM_UP) & (index_all >= 0)
+    warm_up = 5.0 / lam           # WARM_UP at the default rate: the start-up term is e^-5
+    keep = (t >= seg_start + warm_up) & (index_all >= 0)
     t, z, Y, index = t[keep], z[keep], Y[keep], index_all[keep]
+    n_blocks = int(index.max(initial=-1)) + 1
+    if n_blocks < MIN_BLOCKS:
+        raise IdentificationError(f"{log.source}: too few samples for the least squares "
+                                  f"({len(t)} in {n_blocks} blocks of {BLOCK_SECONDS:g} s "
+                                  f"after the filter's warm-up of {warm_up:.3g} s)")
     scale = np.r_[[vehicle.arm_length / (m * vehicle.g)] * 3, [1.0 / (m * vehicle.g)] * 3]
     zn, Yn = z * scale, Y * scale[None, :, None]
     eta = x[keep, 3:5]
@@ -388,13 +442,18 @@ def regression(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str |
     cols = [0, 1, 2] if tilt >= min_tilt else [0, 1]
     Yn = Yn[:, :, cols]
     A, b = Yn.reshape(-1, len(cols)), zn.reshape(-1)
+    condition = float(np.linalg.cond(A))
+    if not condition <= MAX_CONDITION:
+        names = ", ".join(R_G_NAMES[c] for c in cols)
+        why = (f"; the RMS tilt of {np.degrees(tilt):.3g} deg does not excite z_G (min_tilt "
+               f"{np.degrees(min_tilt):g} deg let it in)" if len(cols) == 3 else "")
+        raise IdentificationError(
+            f"{log.source}: the flight does not determine {names} by least squares: the "
+            f"scaled regressor's condition number is {condition:.3g}, expected at most "
+            f"{MAX_CONDITION:.3g} (its columns are dependent){why}")
     r = np.zeros(3)
     r[cols], *_ = np.linalg.lstsq(A, b, rcond=None)
     e = (b - A @ r[cols]).reshape(-1, 6)
-    n_blocks = index.max() + 1
-    if n_blocks < MIN_BLOCKS:
-        raise IdentificationError(f"{log.source}: too few samples for the least squares "
-                                  f"({len(t)} in {n_blocks} blocks of {BLOCK_SECONDS:g} s)")
     AtA_inv = np.linalg.inv(A.T @ A)
     meat = np.zeros((len(cols), len(cols)))
     blocks_r = np.zeros((n_blocks, 3))
@@ -409,9 +468,8 @@ def regression(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | str |
     cov = AtA_inv @ meat @ AtA_inv * n_blocks / (n_blocks - 1)
     half = np.full(3, np.nan)
     half[cols] = t_quantile(n_blocks - 1) * np.sqrt(np.diag(cov))
-    condition = float(np.linalg.cond(A))
     notes = list(static.notes[:-1]) + [
-        f"filter F(s) = {lam:g} / (s + {lam:g}) as the composite law's; first {WARM_UP:g} s "
+        f"filter F(s) = {lam:g} / (s + {lam:g}) as the composite law's; first {warm_up:g} s "
         "of the window are its warm-up",
         "the mass from the thrust balance of the same window"]
     if len(cols) == 2:

@@ -16,8 +16,7 @@ import numpy.typing as npt
 
 from quadcog.errors import IdentificationError
 from quadcog.files import read_json
-from quadcog.model.parameters import LARGEST
-from quadcog.validate import fail, real, vector
+from quadcog.validate import fail
 
 if TYPE_CHECKING:
     from quadcog.identification.core import Identification
@@ -42,12 +41,14 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
     Raises
     ------
     IdentificationError
-        A file that cannot be read, is not JSON, lacks a ``r_G`` of 3 finite numbers, or
-        holds a ``mass`` that no vehicle has (not a number in (0, ``LARGEST``] kg; null or
-        absent is accepted: only r_G is used, but a file with an impossible mass is not an
-        identification to trust).
+        A file that cannot be read, is not JSON, is not an object, repeats a key (JSON
+        keeps only the last: which one was meant?), lacks a ``r_G`` of 3 finite numbers
+        within +-LARGEST m, or holds another key of ``JSON_KEYS`` that no identification has
+        (checked as ``Identification`` checks its fields: a ``mass`` not in (0, LARGEST]
+        kg, a negative half-width, ...; null or absent is accepted: only r_G is used, but a
+        file with an impossible value is not an identification to trust).
     """
-    from quadcog.identification.core import Identification
+    from quadcog.identification.core import JSON_CHECKS, Identification
     if isinstance(source, Identification):
         return np.array(source.r_G, dtype=float)
     if isinstance(source, bytes) or not isinstance(source, (str, os.PathLike)) or not str(source):
@@ -58,23 +59,15 @@ def identified_cog(source: "Identification | str | Path") -> npt.NDArray[np.floa
     if path.is_dir():
         raise IdentificationError(f"{path}: is a folder; expected the JSON file of `quadcog "
                                   "identify --json`")
-    data = read_json(path, "identification (the JSON of `quadcog identify --json`)",
-                     IdentificationError)
-    r = data.get("r_G") if isinstance(data, dict) else None
-    where, what = f"{path}: key 'r_G'", "3 finite numbers (m)"
-    # a JSON list of 3 numbers, as `quadcog identify --json` writes: a column [[x], [y], [z]]
-    # (which vector() takes from Python) is not that file's shape
-    if not isinstance(r, list) or any(isinstance(v, (list, dict)) for v in r):
-        fail(where, what, r, IdentificationError)
-    try:
-        r_G = vector(r, where, 3, error=IdentificationError)
-    except IdentificationError:
-        fail(where, what, r, IdentificationError)
-    if not np.abs(r_G).max() <= LARGEST:
-        fail(where, f"3 numbers within +-{LARGEST:g} m", r, IdentificationError)
-    mass = data.get("mass")
-    if mass is not None:
-        # within the model's scale, as every vehicle's mass (a mass of 1e300 kg was accepted)
-        real(mass, f"{path}: key 'mass'", lo=0.0, lo_open=True, hi=LARGEST, unit="kg",
-             error=IdentificationError)
-    return r_G
+    what = "identification (the JSON of `quadcog identify --json`)"
+    data = read_json(path, what, IdentificationError)
+    if not isinstance(data, dict):
+        fail(f"{path}", f"the {what}: an object with the key 'r_G'", data, IdentificationError)
+    # a JSON list of 3 numbers, as `quadcog identify --json` writes (not a column [[x], [y],
+    # [z]]), within the model's scale: the r_G of an Identification
+    r_G = JSON_CHECKS["r_G"](data.get("r_G"), f"{path}: key 'r_G'")
+    for key, check in JSON_CHECKS.items():
+        if key != "r_G" and data.get(key) is not None:
+            check(data[key], f"{path}: key {key!r}")
+    return np.array(r_G, dtype=float)
+

@@ -30,6 +30,7 @@ from quadcog.errors import IdentificationError
 from quadcog.identification import _checks
 from quadcog.identification.segments import MAX_GAP, check_arguments, commands_from_mixer
 from quadcog.logs.flightlog import FlightLog
+from quadcog.logs.limits import BODY_RATE_MAX_DEG_S
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.logs.ulog import WRITER_HW, WRITER_NAME
 from quadcog.validate import array, choice, fail, integer
@@ -43,7 +44,8 @@ __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_
 
 RATE_HZ = (2.0, 1e5)              # a logger's sample rate (median step), Hz
 MAX_SPAN = 86400.0                # s: a log of more than a day is not one flight
-MAX_BODY_RATE = np.radians(4000.0)   # rad/s: above the largest gyroscope full scale in use
+# rad/s: above the largest gyroscope full scale in use (one definition, quadcog.logs.limits)
+MAX_BODY_RATE = float(np.radians(BODY_RATE_MAX_DEG_S))
 GRAVITY_FRACTION = 0.3            # |mean vertical acceleration| over the hover, fraction of g
 WEIGHT_RATIO = (0.5, 3.0)         # rotor thrust over the hover / the vehicle's weight
 RATE_MARGIN = 1.0                 # angular acceleration at most this times the rotors' reach

@@ -58,10 +58,39 @@ class HoverWindow:
     Returns
     -------
     HoverWindow
+
+    Raises
+    ------
+    IdentificationError
+        ``segments`` not pairs (start, end) of finite times with start <= end, one after
+        the other; ``height`` not a finite number; ``mask`` not a one-dimensional bool
+        array (integers would index samples, not mask them).
     """
     segments: tuple
     height: float
     mask: np.ndarray
+
+    def __post_init__(self) -> None:
+        at = "HoverWindow."
+        pairs = _checks.sequence(self.segments, at + "segments", (list, tuple, np.ndarray),
+                                 "(start, end) pair")
+        segments: list[tuple[float, float]] = []
+        for i, pair in enumerate(pairs):
+            a, b = array(pair, f"{at}segments[{i}]", shape=(2,),
+                         what="a (start, end) pair of times (s)", error=IdentificationError)
+            if not a <= b or (segments and a < segments[-1][1]):
+                fail(f"{at}segments[{i}]", "start <= end, after the segment before (s)",
+                     pair, IdentificationError)
+            segments.append((float(a), float(b)))
+        object.__setattr__(self, "segments", tuple(segments))
+        object.__setattr__(self, "height", real(self.height, at + "height", unit="m",
+                                                error=IdentificationError))
+        mask = self.mask
+        if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_ or mask.ndim != 1 \
+                or np.ma.is_masked(mask):
+            fail(at + "mask", "a one-dimensional bool array (one entry per sample of the log)",
+                 mask, IdentificationError)
+        object.__setattr__(self, "mask", np.array(mask))
 
     @property
     def samples(self) -> int:
@@ -269,8 +298,8 @@ def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | st
     model = vehicle.rotor_model if rotor_model is None else rotor_model
     if isinstance(model, str):
         if model not in ROTOR_MODELS:
-            raise IdentificationError(f"rotor model {model!r} is unknown; expected one of "
-                                      f"{', '.join(ROTOR_MODELS)}")
+            fail("rotor_model", f"a name of {', '.join(ROTOR_MODELS)} or a RotorModel",
+                 model, IdentificationError)
         model = ROTOR_MODELS[model]
     if not isinstance(model, RotorModel):
         raise IdentificationError(f"vehicle {vehicle.name!r} has no rotor_model, so motor "

@@ -22,8 +22,13 @@ types are not on that time base: their record counts are in ``meta["events"]``.
 Values no firmware logs are refused, named with their record: a variable that is not
 finite, a motor variable (``MOTOR_VARIABLES``) outside 0..65535 (the outputs are 16-bit
 whatever type the header declares), a motor request (``MOTOR_REQUEST_VARIABLES``) beyond an
-int32, a roll or pitch beyond +-180 deg, a yaw beyond
-+-``YAW_MAX_DEG``.
+int32, ``controller.cmd_thrust`` outside 0..65535 (the thrust the firmware caps at
+UINT16_MAX), ``controller.cmd_roll, cmd_pitch, cmd_yaw`` beyond +-``MOMENT_COMMAND_MAX``
+(the int16 of the firmware's ``control_t``), a body rate (``gyro.*`` in deg/s,
+``controller.r_*`` in rad/s) beyond ``quadcog.logs.limits.BODY_RATE_MAX_DEG_S``, a battery
+voltage (``pm.vbat``, ``pm.vbatMV``) outside 0..``VBAT_MAX_V``, a roll or pitch beyond
++-180 deg, a yaw beyond +-``YAW_MAX_DEG`` (``_limits`` has them all; the writer refuses the
+same values before writing).
 
 Conversions to quadcog's signals (the firmware's ground frame is z up and its body frame x
 forward, y left, z up, as quadcog's):
@@ -61,8 +66,9 @@ import numpy as np
 
 from quadcog.errors import LogCRCError, LogError, LogFormatError, LogSignalError
 from quadcog.files import atomic_write_bytes
+from quadcog.logs.access import log_path, read_bytes, writer_path
 from quadcog.logs.flightlog import FlightLog
-from quadcog.logs.limits import check_range, microsecond_ticks
+from quadcog.logs.limits import BODY_RATE_MAX_DEG_S, check_range, microsecond_ticks
 
 __all__ = ["read_usd", "write_usd", "parse_usd", "GRAVITY", "FULL_SCALE",
            "FIXED_FREQUENCY_ID"]
@@ -86,6 +92,16 @@ MOTOR_VARIABLES = tuple([f"motor.m{k}" for k in range(1, 5)]
 # beyond 0..FULL_SCALE when saturated, never beyond an int32
 MOTOR_REQUEST_VARIABLES = tuple(f"motor.m{k}req" for k in range(1, 5))
 _INT32 = (-2.0 ** 31, 2.0 ** 31 - 1)
+# controller.cmd_roll, cmd_pitch, cmd_yaw: the firmware's control_t holds the moment commands
+# as int16 (stabilizer_types.h; controller_pid.c logs them as floats, cmd_yaw negated, so
+# -32767..32768): beyond +-2^15 no firmware logs them
+MOMENT_COMMAND_VARIABLES = ("controller.cmd_roll", "controller.cmd_pitch", "controller.cmd_yaw")
+MOMENT_COMMAND_MAX = 2.0 ** 15
+# the body rates: the gyroscope in deg/s, or the controller's copy in rad/s
+GYRO_VARIABLES = ("gyro.x", "gyro.y", "gyro.z")
+RATE_VARIABLES = ("controller.r_roll", "controller.r_pitch", "controller.r_yaw")
+# V: the most the battery voltage pm.vbatMV (a uint16 of mV) holds; pm.vbat (V) likewise
+VBAT_MAX_V = 65.535
 # |roll|, |pitch| (deg): the firmware's estimators give atan2/asin angles, within 180 deg
 ROLL_PITCH_MAX_DEG = 180.0
 # |yaw| (deg): the firmware's is within 180 deg, but a yaw written unwrapped (quadcog's
@@ -131,14 +147,18 @@ def parse_usd(path: str | os.PathLike) -> tuple[int, dict]:
         id or one name.
     LogCRCError
         The stored CRC-32 differs from the content's.
+    LogError
+        ``path`` not a path (a str or os.PathLike naming a file), or a file that cannot be
+        read.
     """
-    version, events = _parse(str(path))
+    version, events = _parse(log_path(path, "parse_usd: path"))
     return version, {name: (ticks, variables) for name, ticks, variables in events.values()}
 
 
-def _parse(path: str) -> tuple[int, dict[int, tuple[str, np.ndarray, dict[str, np.ndarray]]]]:
+def _parse(file: Path) -> tuple[int, dict[int, tuple[str, np.ndarray, dict[str, np.ndarray]]]]:
     """``parse_usd`` keyed by event id: (version, {id: (name, ticks, variables)})."""
-    data = Path(path).read_bytes()
+    data = read_bytes(file)
+    path = str(file)
     if len(data) < 9:
         raise LogFormatError(f"{path}: {len(data)} bytes: too short for a Crazyflie uSD log "
                              "(magic, version, event count and CRC take 9)")
@@ -214,8 +234,10 @@ def _parse(path: str) -> tuple[int, dict[int, tuple[str, np.ndarray, dict[str, n
     events = {}
     for event_id, (name, dtype) in layouts.items():
         at = np.asarray(starts[event_id], dtype=np.int64)
-        block = raw[at[:, None] + np.arange(dtype.itemsize)] if at.size else \
-            np.zeros((0, dtype.itemsize), np.uint8)
+        # each record's bytes, through a window view of the file (no copy): one copy of the
+        # records in all (an index array per byte took 8 times the file)
+        block = np.lib.stride_tricks.sliding_window_view(raw, dtype.itemsize)[at] \
+            if at.size else np.zeros((0, dtype.itemsize), np.uint8)
         rec = np.ascontiguousarray(block).view(dtype).reshape(-1)
         ticks = rec["_tick"].astype(np.float64) * _STAMP[version][1]
         # a structured dtype always has names
@@ -225,18 +247,34 @@ def _parse(path: str) -> tuple[int, dict[int, tuple[str, np.ndarray, dict[str, n
 
 
 def _limits(var):
-    """(lo, hi, what) the values of a variable the reader converts must lie within, or
-    None when the reader does not bound it."""
+    """(lo, hi, what, unit) the values of a variable the reader converts must lie within
+    (the firmware's own range, without float32 rounding), or None when the reader does not
+    bound it. ``what`` is said by the reader, ``unit`` by the writer."""
     if var in MOTOR_VARIABLES:
-        return 0.0, FULL_SCALE, "the firmware's 16-bit motor output"
+        return 0.0, FULL_SCALE, "the firmware's 16-bit motor output", "16-bit"
     if var in MOTOR_REQUEST_VARIABLES:
-        return *_INT32, "the firmware's int32 motor request"
+        return *_INT32, "the firmware's int32 motor request", "int32"
+    if var == "controller.cmd_thrust":
+        return 0.0, FULL_SCALE, "the firmware's thrust command (capped at UINT16_MAX)", \
+            "16-bit thrust command"
+    if var in MOMENT_COMMAND_VARIABLES:
+        return (-MOMENT_COMMAND_MAX, MOMENT_COMMAND_MAX,
+                "the firmware's int16 moment command", "int16")
+    if var in GYRO_VARIABLES:
+        return (-BODY_RATE_MAX_DEG_S, BODY_RATE_MAX_DEG_S,
+                "a gyroscope's rate (deg/s; the largest full scale in use)", "deg/s")
+    if var in RATE_VARIABLES:
+        w = float(np.radians(BODY_RATE_MAX_DEG_S))
+        return -w, w, "a gyroscope's rate (rad/s; the largest full scale in use)", "rad/s"
+    if var == "pm.vbat":
+        return 0.0, VBAT_MAX_V, "a battery voltage (V)", "V"
+    if var == "pm.vbatMV":
+        return 0.0, VBAT_MAX_V * 1e3, "a battery voltage (mV)", "mV"
     angle = var.removeprefix("stateEstimate.")
     if angle in ("roll", "pitch"):
-        return (-ROLL_PITCH_MAX_DEG - ANGLE_ROUNDING_DEG, ROLL_PITCH_MAX_DEG + ANGLE_ROUNDING_DEG,
-                f"a {angle} angle (deg)")
+        return -ROLL_PITCH_MAX_DEG, ROLL_PITCH_MAX_DEG, f"a {angle} angle (deg)", "deg"
     if angle == "yaw":
-        return -YAW_MAX_DEG, YAW_MAX_DEG, "a yaw angle (deg) that float32 resolves"
+        return -YAW_MAX_DEG, YAW_MAX_DEG, "a yaw angle (deg) that float32 resolves", "deg"
     return None
 
 
@@ -247,7 +285,9 @@ def _check_limits(path, event, ticks, raw):
         limits = _limits(var)
         if limits is None:
             continue
-        lo, hi, what = limits
+        lo, hi, what, unit = limits
+        if unit == "deg":             # an angle: atan2f can return pi as 3.1415927 > pi
+            lo, hi = lo - ANGLE_ROUNDING_DEG, hi + ANGLE_ROUNDING_DEG
         bad = (v < lo) | (v > hi)
         if bad.any():
             k = int(np.argmax(bad))
@@ -331,16 +371,18 @@ def read_usd(path: str | os.PathLike) -> FlightLog:
     ------
     LogFormatError
         See ``parse_usd``; also fewer than 2 fixed-frequency records (id ``0xFFFF``), time
-        stamps that do not increase, a variable that is not finite (NaN, inf), a motor
-        variable (``MOTOR_VARIABLES``) outside 0..65535, a motor request beyond an int32,
-        a roll or pitch beyond
-        ``ROLL_PITCH_MAX_DEG`` or a yaw beyond ``YAW_MAX_DEG`` (plus float32 rounding,
-        ``ANGLE_ROUNDING_DEG``).
+        stamps that do not increase, a variable that is not finite (NaN, inf), or one
+        beyond what the firmware logs (module docstring: motor outputs and requests, thrust
+        and moment commands, body rates, battery voltage, angles; the angles' limits plus
+        float32 rounding, ``ANGLE_ROUNDING_DEG``).
     LogCRCError
         The CRC-32 does not match.
+    LogError
+        ``path`` not a path, or a file that cannot be read.
     """
-    path = str(path)
-    version, events = _parse(path)
+    file = log_path(path, "read_usd: path")
+    path = str(file)
+    version, events = _parse(file)
     # the time base is the event of id 0xFFFF, whatever its name (the firmware's is
     # FIXED_FREQUENCY_NAME; parse_usd has refused two events of one name or one id)
     name, ticks, variables = events.get(FIXED_FREQUENCY_ID, (FIXED_FREQUENCY_NAME, None, {}))
@@ -356,7 +398,8 @@ def read_usd(path: str | os.PathLike) -> FlightLog:
                              f"{float(ticks[k + 1])!r} s after {float(ticks[k])!r} s; "
                              "expected increasing")
     types = {k: v.dtype.str for k, v in variables.items()}
-    raw = {k: v.astype(np.float64) for k, v in variables.items()}
+    with np.errstate(invalid="ignore"):     # a signalling NaN: refused below, by name
+        raw = {k: v.astype(np.float64) for k, v in variables.items()}
     for var, v in raw.items():      # before any conversion: named as logged, inf as inf
         bad = ~np.isfinite(v)
         if bad.any():
@@ -412,11 +455,6 @@ def _variables(log):
     return out
 
 
-# the attitude variables the writer writes, and the magnitude the reader takes (deg)
-_ANGLE_MAX_DEG = {"stateEstimate.roll": ROLL_PITCH_MAX_DEG,
-                  "stateEstimate.pitch": ROLL_PITCH_MAX_DEG, "stateEstimate.yaw": YAW_MAX_DEG}
-
-
 def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
     """Write a log's signals as a Crazyflie uSD log (version 2) that ``read_usd`` reads back.
 
@@ -442,11 +480,14 @@ def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
     ------
     LogSignalError
         The log has none of the signals a Crazyflie log carries, a motor value outside
-        0..1 or a voltage outside 0..65.535 V (the integer fields cannot hold it), a roll or
-        pitch beyond ``ROLL_PITCH_MAX_DEG`` or a yaw beyond ``YAW_MAX_DEG`` (the reader
-        refuses them).
+        0..1 or a voltage outside 0..65.535 V (the integer fields cannot hold it), or a value
+        the reader refuses (``_limits``: a thrust command outside 0..1, a moment command
+        beyond the int16 of the firmware, a body rate beyond ``BODY_RATE_MAX_DEG_S``, a roll
+        or pitch beyond ``ROLL_PITCH_MAX_DEG``, a yaw beyond ``YAW_MAX_DEG``).
+    LogError
+        ``log`` not a FlightLog, ``path`` not a file that may be replaced.
     """
-    path = Path(path)
+    path = writer_path(log, path, "write_usd")
     variables = _variables(log)
     if not variables:
         raise LogSignalError(f"{log.source}: no signal a Crazyflie log carries (it has "
@@ -463,11 +504,12 @@ def write_usd(log: FlightLog, path: str | os.PathLike) -> Path:
                 raise LogSignalError(
                     f"{log.source}: {name} would be {values.min():g}..{values.max():g}, "
                     f"outside the 0..{hi:g} the Crazyflie logs", source=log.source)
-        elif name in _ANGLE_MAX_DEG:        # within the reader's limits (exactly: float32
-            bound = _ANGLE_MAX_DEG[name]    # holds 180 and 1e5 without rounding)
-            check_range(log, name, values, "Crazyflie", -bound, bound, "deg")
         else:
-            check_range(log, name, values, "Crazyflie")
+            check_range(log, name, values, "Crazyflie")        # float32 holds it
+            limits = _limits(name)
+            if limits is not None:      # the reader's limits, on the float32 it will read
+                lo, hi, _, unit = limits
+                check_range(log, name, values.astype(np.float32), "Crazyflie", lo, hi, unit)
         fields.append((name, _TYPES[typ]))
         columns.append(values)
     rec = np.zeros(log.n_samples, dtype=np.dtype(fields))

@@ -2,20 +2,28 @@
 returns them, checked once here (shapes, finite values, strictly increasing time)."""
 from collections.abc import Mapping
 from dataclasses import dataclass
+import os
 from types import MappingProxyType
 
 import numpy as np
 
 from quadcog.errors import InputError, LogFormatError, LogSignalError
 from quadcog.logs.signals import LOG_FORMATS, SIGNALS
-from quadcog.validate import plain
+from quadcog.validate import array, fail, plain
 
 __all__ = ["FlightLog"]
 
 
-def _frozen(a):
-    a = np.array(a, dtype=np.float64)        # a copy: the log owns its arrays
-    a.setflags(write=False)
+# what a log's time and values must be (validate.array adds "of real numbers, not ...")
+_NUMERIC = "a numeric array"
+
+
+def _frozen(value, where):
+    """``value`` as a new read-only float64 array of real numbers (``validate.array``:
+    strings, bools, complex numbers, dates, objects, masked entries and integers beyond the
+    float range refused, naming ``where``); not yet checked to be finite."""
+    a = array(value, where, finite=False, what=_NUMERIC, error=LogFormatError)
+    a.setflags(write=False)           # a copy: the log owns its arrays
     return a
 
 
@@ -42,8 +50,8 @@ class FlightLog:
 
     Parameters
     ----------
-    source : str
-        The file (or a name) the log came from; used in messages.
+    source : str or os.PathLike
+        The file (or a name) the log came from; used in messages (kept as a str).
     format : str
         One of ``LOG_FORMATS``.
     t : array_like, (N,)
@@ -64,9 +72,11 @@ class FlightLog:
     Raises
     ------
     LogFormatError
-        A signal or raw variable of the wrong shape, a non-finite entry (named with its
-        sample), ``t`` not strictly increasing; ``InputError`` for an unknown format or signal
-        name.
+        Time, a signal or a raw variable that is not real numbers (text, bools, complex
+        numbers, dates, masked entries), of the wrong shape, with a non-finite entry (named
+        with its sample); ``t`` not strictly increasing or spanning more than a float holds;
+        ``InputError`` for an unknown format or signal name, a source that is not a str or
+        os.PathLike, a raw or meta key that is not a str.
     """
     source: str
     format: str
@@ -76,20 +86,26 @@ class FlightLog:
     meta: Mapping[str, str]
 
     def __post_init__(self):
-        src = str(self.source)
+        source = self.source
+        if isinstance(source, bytes) or not isinstance(source, (str, os.PathLike)) or \
+                not isinstance(os.fspath(source), str):
+            fail("FlightLog: source", "the log's file or name (a str or os.PathLike)", source)
+        src = os.fspath(source)
         object.__setattr__(self, "source", src)
         if not isinstance(self.format, str) or self.format not in LOG_FORMATS:
             raise InputError(f"{src}: format {self.format!r} is not one of {LOG_FORMATS}")
-        try:
-            t = _frozen(self.t)
-        except (TypeError, ValueError, OverflowError) as e:
-            raise LogFormatError(f"{src}: time is not numeric ({e})") from None
+        t = _frozen(self.t, f"{src}: time")
         if t.ndim != 1 or t.size < 2:
             raise LogFormatError(f"{src}: time must be (N,) with N >= 2 samples, got shape "
                                  f"{t.shape}")
         if not np.isfinite(t).all():
             raise LogFormatError(f"{src}: time is not finite at sample {_first_bad(t)[0]}")
-        steps = np.diff(t)
+        with np.errstate(over="ignore"):        # said below, in the log's terms
+            steps = np.diff(t)
+        if not np.isfinite(steps).all():
+            raise LogFormatError(f"{src}: time runs from {float(t[0])!r} s to "
+                                 f"{float(t[-1])!r} s, a span beyond the range of a float; "
+                                 "expected the times of one flight (s)")
         if not (steps > 0).all():
             i = int(np.argmax(steps <= 0))
             raise LogFormatError(f"{src}: time is not strictly increasing: sample {i + 1} at "
@@ -107,6 +123,10 @@ class FlightLog:
                                  f"{tuple(SIGNALS)}")
             a = self._array(value, f"signal {name!r}", (n,) + SIGNALS[name].shape)
             signals[name] = a
+        for field in ("raw", "meta"):       # names: two keys must not become one name
+            for k in getattr(self, field):
+                if not isinstance(k, str):
+                    fail(f"{src}: {field} key", "a name (a str)", k)
         raw = {str(k): self._array(v, f"variable {k!r}", (n,)) for k, v in dict(self.raw).items()}
         object.__setattr__(self, "signals", MappingProxyType(signals))
         object.__setattr__(self, "raw", MappingProxyType(raw))
@@ -114,10 +134,7 @@ class FlightLog:
                                                            dict(self.meta).items()}))
 
     def _array(self, value, what, shape):
-        try:
-            a = _frozen(value)
-        except (TypeError, ValueError, OverflowError) as e:
-            raise LogFormatError(f"{self.source}: {what} is not numeric ({e})") from None
+        a = _frozen(value, f"{self.source}: {what}")
         if a.shape != shape:
             raise LogFormatError(f"{self.source}: {what} has shape {a.shape}, expected {shape} "
                                  "(one row per sample of t)")

@@ -5,9 +5,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from quadcog.errors import LogError, LogFormatError
-from quadcog.files import input_file, output_path
+from quadcog.logs.access import log_path, writer_path
 from quadcog.logs.signals import LOG_FORMATS
-from quadcog.validate import fail, plain
+from quadcog.validate import plain
 
 if TYPE_CHECKING:
     from quadcog.logs.flightlog import FlightLog
@@ -26,15 +26,6 @@ def _check_format(fmt, where):
     if not isinstance(fmt, str) or fmt not in LOG_FORMATS:
         raise LogError(f"{where}: format {plain(fmt)} is not one of {LOG_FORMATS}")
     return fmt
-
-
-def _log_path(path: object, where: str) -> Path:
-    """``path`` as a Path: a non-empty str or os.PathLike naming a file (not a folder, a FIFO
-    or a device: quadcog.files.input_file)."""
-    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or \
-            not isinstance(os.fspath(path), str) or not os.fspath(path):
-        fail(where, "the path of a flight log file (str or os.PathLike)", path, LogError)
-    return input_file(path, "a flight log file", LogError, where)
 
 
 def detect_format(path: str | os.PathLike) -> str:
@@ -58,7 +49,7 @@ def detect_format(path: str | os.PathLike) -> str:
         The file cannot be opened; ``LogFormatError`` when it is empty or nothing identifies
         its format.
     """
-    path = Path(_log_path(path, "detect_format: path"))
+    path = log_path(path, "detect_format: path")
     try:
         with open(path, "rb") as f:
             head = f.read(len(ULOG_MAGIC))
@@ -103,7 +94,7 @@ def read_log(path: str | os.PathLike, format: str | None = None) -> "FlightLog":
         Unreadable file; ``LogFormatError`` (damaged content), ``LogCRCError`` (Crazyflie CRC
         mismatch); ``MissingDependencyError`` for Parquet without pyarrow.
     """
-    path = Path(_log_path(path, "read_log: path"))
+    path = log_path(path, "read_log: path")
     fmt = detect_format(path) if format is None else _check_format(format, f"read_log({path})")
     if not path.is_file():
         raise LogError(f"{path}: no such flight log file")
@@ -144,13 +135,9 @@ def write_log(log: "FlightLog", path: str | os.PathLike, format: str) -> Path:
         Unknown format, or ``log`` is not a FlightLog; ``LogSignalError`` when the format
         cannot carry the log (e.g. a Crazyflie log without position).
     """
-    from quadcog.logs.flightlog import FlightLog
     fmt = _check_format(format, f"write_log({path!r:.80})")
-    if not isinstance(log, FlightLog):
-        raise LogError(f"write_log: log must be a quadcog.logs.FlightLog, got "
-                       f"{type(log).__name__}")
     # checked before any work: a folder, a link, a FIFO or a device is never replaced
-    path = output_path(path, "write_log path", LogError)
+    path = writer_path(log, path, "write_log")
     if fmt == "crazyflie-usd":
         from quadcog.logs.crazyflie import write_usd
         return write_usd(log, path)

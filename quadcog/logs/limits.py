@@ -9,16 +9,34 @@ import numpy.typing as npt
 
 from quadcog.errors import LogSignalError
 from quadcog.logs.flightlog import FlightLog
+from quadcog.validate import array, fail, integer, real
 
-__all__ = ["FLOAT32_MAX", "TICKS_MAX", "EXACT_US", "UNIT_SIGNALS", "microsecond_ticks", "check_range",
-           "check_unit_signals"]
+__all__ = ["FLOAT32_MAX", "TICKS_MAX", "EXACT_INTEGER", "EXACT_US", "UNIT_SIGNALS", "BODY_RATE_MAX_DEG_S",
+           "microsecond_ticks", "check_range", "check_unit_signals"]
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 TICKS_MAX = 2 ** 64 - 1                         # a uint64 time stamp (us)
 UNIT_SIGNALS = ("motor_command", "motor_pwm")   # 0..1 of full scale in every format
+# |body rate| (deg/s) a logged gyroscope can give: above the largest full scale of the
+# gyroscopes flight controllers use (2000 deg/s; 4000 deg/s for some), so a rate beyond it is
+# no measurement (deg/s read as something else, or a damaged value). The Crazyflie reader
+# refuses such gyro variables, the identification such a body_rates signal
+# (quadcog.identification.plausibility.MAX_BODY_RATE, in rad/s).
+BODY_RATE_MAX_DEG_S = 4000.0
 
 
-EXACT_US = float(2 ** 53)       # us: float64 holds every whole number of us below this
+# float64 holds every integer up to this magnitude, and not every one beyond (2^53 + 1 reads
+# as 2^53): a time stamp in us (EXACT_US), an integer cell of a table (quadcog.logs.table)
+EXACT_INTEGER = 2 ** 53
+EXACT_US = float(EXACT_INTEGER)       # us: float64 holds every whole number of us below this
+
+
+def _log_and_format(log: object, fmt: object, where: str) -> None:
+    """Refuse a ``log`` that is not a FlightLog and a format name that is not a str."""
+    if not isinstance(log, FlightLog):
+        fail(f"{where}: log", "a quadcog.logs.FlightLog", log, LogSignalError)
+    if not isinstance(fmt, str):
+        fail(f"{where}: fmt", "the format's name (a str)", fmt, LogSignalError)
 
 
 def microsecond_ticks(log: FlightLog, start_us: int, fmt: str) -> npt.NDArray[np.uint64]:
@@ -44,8 +62,12 @@ def microsecond_ticks(log: FlightLog, start_us: int, fmt: str) -> npt.NDArray[np
     LogSignalError
         A stamp beyond a uint64, a time before the first stamp (negative), a time beyond
         ``EXACT_US`` (float64 would round its stamp: the steps would change), or samples
-        closer than 1 us.
+        closer than 1 us; ``log`` not a FlightLog, ``start_us`` not a whole number in
+        0..``TICKS_MAX``, ``fmt`` not a str.
     """
+    _log_and_format(log, fmt, "microsecond_ticks")
+    start_us = integer(start_us, "microsecond_ticks: start_us", lo=0, hi=TICKS_MAX,
+                       error=LogSignalError)
     last = float(log.t[-1]) * 1e6 + start_us
     if not last < TICKS_MAX:
         raise LogSignalError(f"{log.source}: time t = {float(log.t[-1])!r} s is {last:.3g} us, "
@@ -93,9 +115,18 @@ def check_range(log: FlightLog, name: str, values: npt.ArrayLike, fmt: str,
     Raises
     ------
     LogSignalError
-        A value outside [lo, hi], naming it and its sample.
+        A value outside [lo, hi] (NaN too), naming it and its sample; an argument of
+        another type (``values`` not real numbers, ``lo`` or ``hi`` not finite).
     """
-    a = np.asarray(values, dtype=np.float64)
+    _log_and_format(log, fmt, "check_range")
+    for arg, value in (("name", name), ("why", why)):
+        if not isinstance(value, str):
+            fail(f"check_range: {arg}", "a str", value, LogSignalError)
+    lo = real(lo, "check_range: lo", error=LogSignalError)
+    hi = real(hi, "check_range: hi", error=LogSignalError)
+    a = array(values, "check_range: values", finite=False, error=LogSignalError)
+    if a.ndim == 0:
+        fail("check_range: values", "an array of one row per sample", values, LogSignalError)
     bad = ~((a >= lo) & (a <= hi))
     if bad.any():
         k = np.unravel_index(int(np.argmax(bad)), a.shape)
@@ -117,8 +148,9 @@ def check_unit_signals(log: FlightLog, fmt: str) -> None:
     Raises
     ------
     LogSignalError
-        Naming the signal and the sample.
+        Naming the signal and the sample; ``log`` not a FlightLog, ``fmt`` not a str.
     """
+    _log_and_format(log, fmt, "check_unit_signals")
     for name in UNIT_SIGNALS:
         if log.has(name):
             check_range(log, name, log.signal(name), fmt, 0.0, 1.0, "0..1 of full scale")

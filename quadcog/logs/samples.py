@@ -12,10 +12,12 @@ A sample's NAME is its path under ``sample_data/``; a folder's name stands for t
 (``sample_logs``). ``quadcog identify`` takes ``sample:NAME`` where it takes a log file, and
 ``python -m quadcog.logs.samples`` prints every name.
 """
+import os
 from pathlib import Path
 import sys
 
 from quadcog.errors import LogError
+from quadcog.validate import fail
 
 __all__ = ["SAMPLE_FOLDER", "SAMPLE_PREFIX", "sample", "sample_logs", "sample_names",
            "resolve_log_argument"]
@@ -111,12 +113,14 @@ def resolve_log_argument(argument: str | Path) -> list[Path]:
     Raises
     ------
     LogError
-        ``sample:NAME`` with a NAME that names no sample, or an empty argument (which
-        ``Path`` would read as the current folder).
+        ``sample:NAME`` with a NAME that names no sample, an empty argument (which ``Path``
+        would read as the current folder), or one that is not a str or os.PathLike.
     """
-    text = str(argument)
-    if not text:
-        raise LogError("log: expected a log file's path or sample:NAME, got ''")
+    if isinstance(argument, bytes) or not isinstance(argument, (str, os.PathLike)) or \
+            not isinstance(os.fspath(argument), str) or not os.fspath(argument):
+        fail("log", "a log file's path or sample:NAME (a str or os.PathLike)", argument,
+             LogError)
+    text = os.fspath(argument)
     if text.startswith(SAMPLE_PREFIX):
         return sample_logs(text[len(SAMPLE_PREFIX):])
     return [Path(argument)]

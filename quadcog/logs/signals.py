@@ -18,8 +18,10 @@ with ``_`` for ``/`` and without ``^`` (``acceleration_x_m_s2``); a scalar signa
 component (``roll_rad``, ``battery_voltage_V``), a dimensionless one no unit
 (``motor_command_m1``). Time is ``t_s``.
 """
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
+
+from quadcog.validate import fail
 
 __all__ = ["LOG_FORMATS", "SIGNALS", "SignalSpec", "TIME_COLUMN", "signal_columns",
            "table_columns", "unit_token"]
@@ -104,8 +106,22 @@ def unit_token(unit: str) -> str:
     -------
     str
         The unit with ``_`` for ``/`` and no ``^``; empty for the dimensionless ``"1"``.
+
+    Raises
+    ------
+    InputError
+        ``unit`` not a str.
     """
+    if not isinstance(unit, str):
+        fail("unit_token: unit", "a unit (a str such as 'm/s^2')", unit)
     return "" if unit == "1" else unit.replace("/", "_").replace("^", "")
+
+
+def _signal_name(name: object, where: str) -> str:
+    """``name`` if it is the name of a standard signal (a str key of ``SIGNALS``)."""
+    if not isinstance(name, str) or name not in SIGNALS:
+        fail(where, f"a name of quadcog.logs.SIGNALS ({', '.join(SIGNALS)})", name)
+    return str(name)
 
 
 def signal_columns(name: str) -> tuple:
@@ -121,7 +137,13 @@ def signal_columns(name: str) -> tuple:
     tuple of str
         One name for a scalar signal (``"roll_rad"``), one per component for a vector
         (``"position_x_m", "position_y_m", "position_z_m"``).
+
+    Raises
+    ------
+    InputError
+        ``name`` not a name of ``SIGNALS``.
     """
+    name = _signal_name(name, "signal_columns: name")
     spec = SIGNALS[name]
     unit = unit_token(spec.unit)
     parts = [(name, c) for c in spec.components] if spec.components else [(name,)]
@@ -140,6 +162,16 @@ def table_columns(names: Iterable[str] | None = None) -> tuple:
     -------
     tuple of str
         ``t_s`` and each signal's ``<name>_<unit>`` columns.
+
+    Raises
+    ------
+    InputError
+        ``names`` a str (one name is not a sequence of its letters) or not iterable, or one
+        that is not a name of ``SIGNALS`` (it was left out silently).
     """
-    chosen = set(SIGNALS) if names is None else set(names)
+    if names is not None and (isinstance(names, (str, bytes)) or not isinstance(names, Iterable)):
+        fail("table_columns: names", "None or an iterable of names of quadcog.logs.SIGNALS",
+             names)
+    chosen = set(SIGNALS) if names is None else {
+        _signal_name(n, f"table_columns: names[{i}]") for i, n in enumerate(names)}
     return (TIME_COLUMN,) + tuple(c for n in SIGNALS if n in chosen for c in signal_columns(n))

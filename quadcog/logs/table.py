@@ -11,6 +11,12 @@ optional sign, digits, a point, an exponent: ``-1.5e-3``), optionally quoted; ``
 comment, and ``1_000`` or digits of other scripts are refused, not read, as is a number
 beyond the float range either way (``1e400``, or ``1e-400``, which would read as 0). A CSV
 file is UTF-8 text; a byte-order mark in front of it is dropped.
+
+Every source's cells then pass one check (``_check_cells``), in the type the file holds:
+finite, a float not below the normal range of its type (a Parquet float32 subnormal too),
+an integer not beyond 2^53 (``quadcog.logs.limits.EXACT_INTEGER``: float64 would change its
+digits). Column names appear once (a CSV header's, a Parquet schema's). A Parquet file's pages
+are checked against their CRC-32 where it has them (the writer writes them).
 """
 from collections import Counter
 import csv
@@ -24,13 +30,17 @@ import warnings
 
 import numpy as np
 
-from quadcog.errors import LogError, LogFormatError
+from quadcog.errors import LogError, LogFormatError, LogSignalError
 from quadcog.files import CSV_BLOCK, replacing
+from quadcog.logs.access import log_path, writer_path
 from quadcog.logs.flightlog import FlightLog
+from quadcog.logs.limits import EXACT_INTEGER
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns, table_columns
-from quadcog.validate import import_extra
+from quadcog.validate import fail, import_extra
 
-__all__ = ["read_table", "write_table", "require_pyarrow"]
+__all__ = ["read_table", "write_table", "require_pyarrow", "TABLE_FORMATS"]
+
+TABLE_FORMATS = ("csv", "parquet")          # the formats of LOG_FORMATS that are tables
 
 
 
@@ -50,17 +60,51 @@ def require_pyarrow() -> ModuleType:
     return import_extra("sweep", "pyarrow.parquet")
 
 
+def _table_format(fmt, where):
+    """``fmt`` as one of ``TABLE_FORMATS`` (a str, numpy's str_ too)."""
+    if not isinstance(fmt, str) or fmt not in TABLE_FORMATS:
+        fail(where, f"one of {', '.join(map(repr, TABLE_FORMATS))}", fmt, LogError)
+    return str(fmt)
+
+
+def _check_cells(path, name, a):
+    """Refuse a column's cell that is not a finite number, a nonzero float below the normal
+    range of its type (a subnormal: digits lost, as a CSV cell below ``FLOAT_TINY`` would
+    be) or an integer beyond ``EXACT_INTEGER`` (float64 would change its last digits); every
+    table source goes through here, in the type its file holds."""
+    bad = ~np.isfinite(a)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: "
+                             f"{float(a[i])!r} is not a finite number")
+    if a.dtype.kind in "iu":
+        big = (a > EXACT_INTEGER) | (a < -EXACT_INTEGER)
+        if big.any():
+            i = int(np.argmax(big))
+            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: the integer "
+                                 f"{int(a[i])} is beyond 2^53 in magnitude, where a float64 "
+                                 "no longer holds every integer (its last digits would be "
+                                 "lost); expected a number of a flight log")
+    if a.dtype.kind == "f":
+        tiny = float(np.finfo(a.dtype).tiny)
+        small = (a != 0) & (np.abs(a) < tiny)
+        if small.any():
+            i = int(np.argmax(small))
+            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: "
+                                 f"{float(a[i])!r} is below the range of a {a.dtype} (a "
+                                 f"subnormal: a nonzero magnitude is at least {tiny:.4g}); "
+                                 "expected a normal number or 0")
+
+
 def _from_columns(path, fmt, columns, meta):
-    """A FlightLog of {column name: float64 array} (checked: time column, finite cells)."""
+    """A FlightLog of {column name: 1-D numeric array}, each checked (``_check_cells``) in
+    the type the file holds, then taken as float64; the time column, strictly increasing."""
     if TIME_COLUMN not in columns:
         raise LogFormatError(f"{path}: no time column {TIME_COLUMN!r}; columns are "
                              f"{', '.join(columns) or 'none'}")
     for name, a in columns.items():
-        bad = ~np.isfinite(a)
-        if bad.any():
-            i = int(np.argmax(bad))
-            raise LogFormatError(f"{path}: column {name!r}, data row {i + 1}: "
-                                 f"{float(a[i])!r} is not a finite number")
+        _check_cells(path, name, a)
+    columns = {name: np.asarray(a, dtype=np.float64) for name, a in columns.items()}
     t_abs = columns[TIME_COLUMN]
     if t_abs.size < 2:
         raise LogFormatError(f"{path}: {t_abs.size} data rows; a flight log needs at least 2")
@@ -183,11 +227,17 @@ def _header(path, f):
         raise LogFormatError(f"{path}: the header has a column name of {len(long[0]):,} "
                              f"characters ({long[0][:20]!r}...); expected names of at most "
                              f"{MAX_CELL}")
-    seen = Counter(header)
+    _check_names(path, header)
+    return header, count
+
+
+def _check_names(path, names):
+    """Refuse a table whose columns repeat a name (which column would be the signal?)."""
+    seen = Counter(names)
     dup = sorted(c for c, k in seen.items() if k > 1)
     if dup:
-        raise LogFormatError(f"{path}: repeated column names {dup[:10]}")
-    return header, count
+        raise LogFormatError(f"{path}: repeated column names {dup[:10]}; expected each "
+                             "column once")
 
 
 def _cells(path, header, skip):
@@ -246,9 +296,17 @@ def _read_parquet(path):
     pq = require_pyarrow()
     import pyarrow as pa
     try:
-        table = pq.read_table(path)
+        # the names first: pyarrow reads a table of repeated names, then cannot tell its
+        # columns apart; the pages' CRC-32 checked where the file has them (write_table
+        # writes them): a damaged value is refused, not read
+        _check_names(path, pq.read_schema(path).names)
+        table = pq.read_table(path, page_checksum_verification=True)
+    except UnicodeDecodeError as e:         # a column name or path that is not UTF-8
+        raise LogFormatError(f"{path}: not a readable Parquet file (a name in its schema is "
+                             f"not UTF-8 text: {e.reason} at byte {e.start})") from None
     except (pa.ArrowException, OSError) as e:
-        raise LogFormatError(f"{path}: not a readable Parquet file ({e})") from None
+        reason = (str(e).strip().splitlines() or [type(e).__name__])[0]
+        raise LogFormatError(f"{path}: not a readable Parquet file ({reason})") from None
     cols = {}
     for name in table.column_names:
         col = table.column(name)
@@ -258,7 +316,7 @@ def _read_parquet(path):
         if col.null_count:
             i = int(np.flatnonzero(np.asarray(col.is_null()))[0])
             raise LogFormatError(f"{path}: column {name!r}, data row {i + 1} is empty (null)")
-        cols[name] = np.asarray(col.to_numpy(), dtype=np.float64)
+        cols[name] = np.asarray(col.to_numpy())     # checked in its own type
     return _from_columns(path, "parquet", cols, {"columns": str(len(cols))})
 
 
@@ -285,8 +343,16 @@ def read_table(path: str | os.PathLike, fmt: str) -> FlightLog:
         a signal with only some of its columns, a damaged file.
     MissingDependencyError
         Parquet without pyarrow.
+    LogError
+        ``path`` not a path or a file that cannot be opened, ``fmt`` not ``"csv"`` or
+        ``"parquet"``.
     """
-    return _read_csv(path) if fmt == "csv" else _read_parquet(path)
+    path = log_path(path, "read_table: path")
+    fmt = _table_format(fmt, "read_table: fmt")
+    try:
+        return _read_csv(path) if fmt == "csv" else _read_parquet(path)
+    except OSError as e:            # the CSV file cannot be opened (Parquet's: pyarrow's)
+        raise LogError(f"{path}: cannot open the flight log ({e.strerror})") from None
 
 
 def write_table(log: FlightLog, path: str | os.PathLike, fmt: str) -> Path:
@@ -301,20 +367,38 @@ def write_table(log: FlightLog, path: str | os.PathLike, fmt: str) -> Path:
     fmt : str
         ``"csv"`` (numbers written with every digit: read back exactly; a subnormal,
         below ``FLOAT_TINY`` in magnitude, is written as 0, which the reader takes, where
-        it refuses the subnormal) or ``"parquet"`` (float64 columns).
+        it refuses the subnormal) or ``"parquet"`` (float64 columns, subnormals written as
+        0 likewise, each page with its CRC-32, which the reader checks).
 
     Returns
     -------
     pathlib.Path
         The file written.
+
+    Raises
+    ------
+    LogSignalError
+        A time that is a subnormal (written as 0 it would repeat the time before).
+    LogError
+        ``log`` not a FlightLog, ``path`` not a file that may be replaced, ``fmt`` not
+        ``"csv"`` or ``"parquet"``.
     """
+    path = writer_path(log, path, "write_table")
+    fmt = _table_format(fmt, "write_table: fmt")
     names = table_columns(log.signals)
+    tiny = (log.t != 0) & (np.abs(log.t) < FLOAT_TINY)
+    if tiny.any():        # written as 0 it would repeat a time, which the reader refuses
+        k = int(np.argmax(tiny))
+        raise LogSignalError(f"{log.source}: time t = {float(log.t[k])!r} s at sample {k} is "
+                             f"below the range of a float (a subnormal, at most "
+                             f"{FLOAT_TINY:.4g} s from 0); cannot write it as {fmt}",
+                             source=log.source)
     blocks = [log.t[:, None]] + [log.signals[n].reshape(log.n_samples, -1)
                                 for n in SIGNALS if n in log.signals]
     data = np.hstack(blocks)
     pq = require_pyarrow() if fmt == "parquet" else None
-    if pq is None:
-        data = np.where(np.abs(data) < FLOAT_TINY, np.copysign(0.0, data), data)
+    # a subnormal as 0: every table reader refuses subnormals (_check_cells)
+    data = np.where(np.abs(data) < FLOAT_TINY, np.copysign(0.0, data), data)
     with replacing(path, "write_log path", LogError) as tmp:
         if pq is None:
             with open(tmp, "w", newline="", encoding="utf-8") as f:
@@ -325,5 +409,6 @@ def write_table(log: FlightLog, path: str | os.PathLike, fmt: str) -> Path:
                                  for row in data[start:start + CSV_BLOCK].tolist()])
         else:
             import pyarrow as pa
-            pq.write_table(pa.table({n: data[:, j] for j, n in enumerate(names)}), tmp)
+            pq.write_table(pa.table({n: data[:, j] for j, n in enumerate(names)}), tmp,
+                           write_page_checksum=True)        # the reader checks them
     return Path(path)

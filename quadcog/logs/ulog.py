@@ -15,8 +15,11 @@ PX4's ground frame is NED and its body frame FRD; both become z-up frames by the
 - ``actuator_motors``: ``control[0..3]`` (0..1, PX4 motor order) -> ``motor_command`` in
   quadcog's order, assigned by the rotor positions of the parameters ``CA_ROTOR{i}_PX``,
   ``CA_ROTOR{i}_PY`` (FRD): one rotor per quadrant, front-right, back-right, back-left,
-  front-left. Without those parameters PX4's quad X numbering (1 front-right, 2 back-left,
-  3 front-left, 4 back-right) is assumed and ``meta["rotor_order"]`` says so. A NaN control
+  front-left. Without those parameters (no ``CA_ROTOR_COUNT``: a PX4 before its control
+  allocation) PX4's quad X numbering (1 front-right, 2 back-left, 3 front-left, 4 back-right)
+  is assumed and ``meta["rotor_order"]`` says so; a ``CA_ROTOR_COUNT`` other than 4 (another
+  airframe, or NaN), or rotor parameters that are not finite numbers, leave the order unknown
+  and the motor outputs unread (said there too). A NaN control
   (PX4: motor stopped) is read as 0 and counted in ``meta["motor_command_nan_as_zero"]``;
 - ``actuator_outputs``: ``output[n - 1]`` (us) of the channel ``n`` whose ``PWM_MAIN_FUNC{n}``
   is motor ``101 + i`` (channel ``i + 1`` without those parameters) -> ``motor_pwm`` =
@@ -28,15 +31,18 @@ PX4's ground frame is NED and its body frame FRD; both become z-up frames by the
 - ``vehicle_thrust_setpoint``: ``xyz[2]`` (normalized, FRD: thrust along -z) ->
   ``thrust_command`` = ``-xyz[2]``.
 
-The file must be of a format version PX4 writes (``ULOG_VERSIONS``) and every topic read
-must stamp its samples with ``uint64_t timestamp`` (us), as PX4's do.
+The file must be of a format version PX4 writes (``ULOG_VERSIONS``), hold no message pyulog
+takes for damage (``_check_messages``: pyulog would rescan the file byte by byte, for ever in
+its header), and every topic read must stamp its samples with ``uint64_t timestamp`` (us), as
+PX4's do.
 
 Time base: the time stamps (``timestamp``, us) of the first of ``vehicle_local_position``,
 ``vehicle_attitude``, ``vehicle_angular_velocity`` in the log, within the span that every
 topic read covers (so nothing is extrapolated; what is cut at either end is in
 ``meta["trimmed_s"]``). Each topic is interpolated onto it: linearly for float fields (the
 quaternion component-wise with its sign kept continuous, then normalized: a logged sample
-whose norm is farther from 1 than ``QUATERNION_NORM_TOLERANCE`` is refused), by the previous
+whose norm is farther from 1 than ``QUATERNION_NORM_TOLERANCE`` is refused, one with a NaN
+leaves the attitude out, named as logged in ``meta["signals_dropped"]``), by the previous
 sample for integer fields. ``raw`` holds every numeric field (not ``char``) of the topics read as
 ``"topic.field"`` on that base (fields not finite somewhere, NaN or infinite, are left out and
 counted in ``meta["raw_dropped"]``); ``meta`` has the log's info messages (``sys_name``,
@@ -58,10 +64,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadcog.errors import LogError, LogFormatError, LogSignalError
+from quadcog.errors import AttitudeError, InputError, LogError, LogFormatError, LogSignalError
 from quadcog.files import atomic_write_bytes
+from quadcog.logs.access import log_path, read_bytes, writer_path
 from quadcog.logs.flightlog import FlightLog
 from quadcog.logs.limits import FLOAT32_MAX, check_range, check_unit_signals, microsecond_ticks
+from quadcog.validate import array
 
 __all__ = ["read_ulog", "write_ulog", "px4_to_quadcog_quaternion", "quaternion_to_euler",
            "euler_to_quaternion", "TOPICS", "QUADX_ORDER"]
@@ -97,6 +105,16 @@ _NOT_NUMBERS = ("char", "bool")
 # larger than this can be logged; PX4's nest at most a few deep
 MAX_FORMAT_BYTES = 0xFFFF - 2
 MAX_NESTING = 16
+# The message types pyulog reads in the definitions section (the header's messages, until
+# the first subscription or logged text) and in the data section. A message of another type
+# that is of type 0, empty or over _PYULOG_MAX_UNKNOWN bytes pyulog takes for damage
+# (ULog._check_packet_corruption) and rescans from the next byte; in the definitions section
+# a header read there that runs past the end of the file sends it back to rescan the same
+# bytes, for ever (a 3 kB log with one byte changed never returned). Refused first.
+_DEFINITION_TYPES = tuple(map(ord, "BFIMPQALC"))
+_DATA_TYPES = tuple(map(ord, "IMPQALCDOS"))
+_DATA_START = tuple(map(ord, "ALC"))
+_PYULOG_MAX_UNKNOWN = 10000
 # |q| of a logged attitude quaternion: PX4 logs unit quaternions (float32, |q| = 1 to 1e-6);
 # farther from 1 than this the sample is not an attitude (normalising would hide the damage)
 QUATERNION_NORM_TOLERANCE = 0.1
@@ -121,9 +139,34 @@ def px4_to_quadcog_quaternion(q: ArrayLike) -> np.ndarray:
     -------
     numpy.ndarray, (..., 4)
         (w, x, -y, -z): the quaternion of ``T R T`` with ``T = diag(1, -1, -1)``.
+
+    Raises
+    ------
+    InputError
+        ``q`` not finite real numbers of shape (..., 4).
     """
-    q = np.asarray(q, dtype=np.float64)
-    return q * np.array([1.0, 1.0, -1.0, -1.0])
+    return _quaternions(q, "px4_to_quadcog_quaternion: q", unit=False) \
+        * np.array([1.0, 1.0, -1.0, -1.0])
+
+
+def _quaternions(q, where, unit=True):
+    """``q`` as finite float64 quaternions (..., 4); with ``unit``, each of norm within
+    ``QUATERNION_NORM_TOLERANCE`` of 1, returned normalized (an AttitudeError otherwise: a
+    zero quaternion has no attitude)."""
+    what = "quaternions (w, x, y, z): finite numbers of shape (..., 4)"
+    a = array(q, where, what=what)
+    if a.ndim < 1 or a.shape[-1] != 4:
+        raise InputError(f"{where}: expected {what}, got shape {a.shape}")
+    if not unit:
+        return a
+    norm = np.sqrt(np.einsum("...i,...i->...", a, a))
+    bad = ~(np.abs(norm - 1.0) <= QUATERNION_NORM_TOLERANCE)
+    if bad.any():
+        k = np.unravel_index(int(np.argmax(bad)), bad.shape) if bad.ndim else ()
+        raise AttitudeError(f"{where}: expected unit quaternions (norm within 1 +- "
+                            f"{QUATERNION_NORM_TOLERANCE:g}), got {a[k].tolist()} of norm "
+                            f"{float(norm[k]):.6g}" + (f" at {tuple(map(int, k))}" if k else ""))
+    return a / norm[..., None]
 
 
 def quaternion_to_euler(q: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -142,8 +185,14 @@ def quaternion_to_euler(q: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarra
         rad; yaw in (-pi, pi], pitch in [-pi/2, pi/2].
     yaw : numpy.ndarray, (...)
         rad; yaw in (-pi, pi], pitch in [-pi/2, pi/2].
+
+    Raises
+    ------
+    InputError
+        ``q`` not finite real numbers of shape (..., 4); ``AttitudeError`` for a norm
+        farther from 1 than ``QUATERNION_NORM_TOLERANCE`` (within it, ``q`` is normalized).
     """
-    w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    w, x, y, z = np.moveaxis(_quaternions(q, "quaternion_to_euler: q"), -1, 0)
     roll = np.arctan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
     pitch = np.arcsin(np.clip(2.0 * (w * y - z * x), -1.0, 1.0))
     yaw = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
@@ -166,17 +215,33 @@ def euler_to_quaternion(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np
     -------
     numpy.ndarray, (..., 4)
         (w, x, y, z).
+
+    Raises
+    ------
+    InputError
+        An angle not finite real numbers, or angles whose shapes do not broadcast.
     """
-    cr, sr = np.cos(np.asarray(roll) / 2), np.sin(np.asarray(roll) / 2)
-    cp, sp = np.cos(np.asarray(pitch) / 2), np.sin(np.asarray(pitch) / 2)
-    cy, sy = np.cos(np.asarray(yaw) / 2), np.sin(np.asarray(yaw) / 2)
+    angles = [array(a, f"euler_to_quaternion: {n}") for n, a in
+              (("roll", roll), ("pitch", pitch), ("yaw", yaw))]
+    try:
+        roll, pitch, yaw = np.broadcast_arrays(*angles)
+    except ValueError:
+        raise InputError("euler_to_quaternion: expected roll, pitch and yaw of shapes that "
+                         f"broadcast together, got shapes "
+                         f"{', '.join(str(a.shape) for a in angles)}") from None
+    cr, sr = np.cos(roll / 2), np.sin(roll / 2)
+    cp, sp = np.cos(pitch / 2), np.sin(pitch / 2)
+    cy, sy = np.cos(yaw / 2), np.sin(yaw / 2)
     return np.stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
                      cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy], axis=-1)
 
 
 def _check_messages(path, data):
     """Walk the message headers: a file cut inside a message is refused (pyulog would stop
-    there silently); the format definitions met on the way are checked (``_check_formats``)."""
+    there silently), as is a message pyulog takes for damage (of a type its section does not
+    know, ``_DEFINITION_TYPES`` or ``_DATA_TYPES``, and of type 0, empty or over
+    ``_PYULOG_MAX_UNKNOWN`` bytes); the format definitions met on the way are checked
+    (``_check_formats``)."""
     if len(data) < 16 or data[:7] != ULOG_MAGIC:
         raise LogFormatError(f"{path}: not a ULog file (it does not start with the ULog magic "
                              f"bytes {ULOG_MAGIC.hex(' ')})")
@@ -187,6 +252,7 @@ def _check_messages(path, data):
                              "would misread)")
     i, end = 16, len(data)
     formats = []
+    in_data = False
     while i < end:
         if i + 3 > end:
             raise LogFormatError(f"{path}: truncated ULog: {end - i} bytes of a message "
@@ -196,7 +262,17 @@ def _check_messages(path, data):
             raise LogFormatError(f"{path}: truncated ULog: the message at byte {i} (type "
                                  f"{chr(data[i + 2])!r}) needs {size} bytes, the file has "
                                  f"{end - i - 3}")
-        if data[i + 2] == ord("F"):
+        kind = data[i + 2]
+        known = _DATA_TYPES if in_data else _DEFINITION_TYPES
+        if kind not in known and (kind == 0 or size == 0 or size > _PYULOG_MAX_UNKNOWN):
+            section = "data" if in_data else "definitions"
+            raise LogFormatError(
+                f"{path}: damaged ULog: the message at byte {i} of the {section} section has "
+                f"type 0x{kind:02x} and {size} bytes; expected a ULog message (types "
+                f"{', '.join(map(chr, known))} there; another type of 1..{_PYULOG_MAX_UNKNOWN} "
+                "bytes is skipped)")
+        in_data = in_data or kind in _DATA_START
+        if kind == ord("F"):
             formats.append(data[i + 3:i + 3 + size])
         i += 3 + size
     _check_formats(path, formats)
@@ -279,7 +355,7 @@ def _check_formats(path: str, payloads: list[bytes]) -> None:
 def _load(path):
     from pyulog import ULog
     from pyulog.exceptions import ULogException
-    data = Path(path).read_bytes()
+    data = read_bytes(Path(path))
     _check_messages(path, data)
     try:
         # pyulog reads the bytes checked above, from memory: given a name it opens the file
@@ -335,7 +411,9 @@ def _required(path, topic, data, names):
 def _check_quaternions(path, q, stamps):
     """Refuse attitude samples that are not unit quaternions: |q| farther from 1 than
     ``QUATERNION_NORM_TOLERANCE``, or an infinite component. A sample with a NaN (PX4: no
-    estimate yet) is left to the reader, which drops the attitude signals it spoils."""
+    estimate yet) is left to the reader, which drops the attitude signals it spoils and
+    names the sample as logged (its field, index and time stamp) in
+    ``meta["signals_dropped"]``."""
     norm = np.sqrt(np.einsum("ij,ij->i", q, q))
     bad = np.isinf(q).any(axis=1) | (np.abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE)
     if bad.any():
@@ -344,6 +422,12 @@ def _check_quaternions(path, q, stamps):
                              f"{int(stamps[k])} us) is {q[k].tolist()}, of norm "
                              f"{float(norm[k]):.6g}; expected a unit quaternion (norm within "
                              f"1 +- {QUATERNION_NORM_TOLERANCE:g})")
+
+
+def _is_number(value):
+    """Whether a parameter's value is a real number (pyulog gives an int or a float; a
+    damaged type gives bytes or text, and a bool is no number)."""
+    return isinstance(value, (int, float, np.number)) and not isinstance(value, (bool, np.bool_))
 
 
 def _check_thr_mdl_fac(path, params):
@@ -355,18 +439,41 @@ def _check_thr_mdl_fac(path, params):
         return
     value = params["THR_MDL_FAC"]
     lo, hi = THR_MDL_FAC_RANGE
-    ok = isinstance(value, (int, float, np.number)) and not isinstance(value, bool) \
-        and lo <= float(value) <= hi          # False for NaN
+    ok = _is_number(value) and lo <= float(value) <= hi          # False for NaN
     if not ok:
         raise LogFormatError(f"{path}: parameter THR_MDL_FAC is {value!r}; expected PX4's "
                              f"thrust model factor, a number within {lo:g}..{hi:g}")
 
 
+def _rotor_count(params):
+    """``CA_ROTOR_COUNT`` as an int; None when it is not logged. A value that is not a whole
+    number (NaN, 2.5, a bool) is returned as it is, for ``_rotor_map`` to name."""
+    if "CA_ROTOR_COUNT" not in params:
+        return None
+    value = params["CA_ROTOR_COUNT"]
+    whole = _is_number(value) and np.isfinite(float(value)) and float(value).is_integer()
+    return int(value) if whole else value
+
+
 def _rotor_map(params):
-    """(PX4 motor index of quadcog's rotors 1..4, positions FLU (4, 2), directions, note)."""
+    """(PX4 motor index of quadcog's rotors 1..4, positions FLU (4, 2), directions, note).
+
+    PX4's quad X numbering is assumed only where the log has no ``CA_ROTOR_COUNT`` (a PX4
+    older than its control allocation) or positions for 4 rotors are not all logged. A
+    ``CA_ROTOR_COUNT`` that is logged but is not 4 (another airframe, or not a count: NaN)
+    leaves the order unknown, so no motor output is taken as one of quadcog's rotors."""
+    count = _rotor_count(params)
+    if count is not None and count != 4:
+        what = (f"CA_ROTOR_COUNT = {count}: not a quadrotor" if isinstance(count, int) else
+                f"CA_ROTOR_COUNT is {count!r}, not a rotor count")
+        return None, None, None, f"{what}: rotor order unknown (motor outputs not read)"
     keys = [(f"CA_ROTOR{i}_PX", f"CA_ROTOR{i}_PY", f"CA_ROTOR{i}_KM") for i in range(4)]
-    if params.get("CA_ROTOR_COUNT") != 4 or not all(k in params for ks in keys for k in ks):
+    if count is None or not all(k in params for ks in keys for k in ks):
         return QUADX_ORDER, None, None, "assumed PX4 quad X (no CA_ROTOR parameters of 4 rotors)"
+    odd = [k for ks in keys for k in ks if not _is_number(params[k])]
+    if odd:
+        return None, None, None, (f"CA_ROTOR parameters not numbers ({odd[0]} is "
+                                  f"{params[odd[0]]!r:.40}): rotor order unknown")
     flu = np.array([[params[px], -params[py]] for px, py, _ in keys], dtype=float)
     km = np.array([params[k] for _, _, k in keys], dtype=float)
     if not (np.isfinite(flu).all() and np.isfinite(km).all()):
@@ -392,9 +499,7 @@ def _pwm_range(path, params, n):
     values = []
     for key in keys:
         value = params.get(key)
-        ok = value is None or (isinstance(value, (int, float, np.number))
-                               and not isinstance(value, bool)
-                               and np.isfinite(float(value)))
+        ok = value is None or (_is_number(value) and np.isfinite(float(value)))
         if not ok:          # (output - lo) / (hi - lo) would be NaN or a TypeError
             raise LogFormatError(f"{path}: parameter {key} is {value!r}; expected a finite "
                                  f"PWM (us) {where}")
@@ -414,9 +519,10 @@ def _pwm_range(path, params, n):
 
 def _motor_pwm(path, d, t_us, order, params):
     """actuator_outputs as 0..1 per quadcog rotor (unclipped), and where its range came from."""
-    # a function that is not a whole number (a damaged float parameter) assigns no motor
+    # a function that is not a whole number (a damaged float parameter, or of a damaged
+    # type: bytes) assigns no motor
     funcs = {int(params[f"PWM_MAIN_FUNC{n}"]): n for n in range(1, 17)
-             if f"PWM_MAIN_FUNC{n}" in params
+             if _is_number(params.get(f"PWM_MAIN_FUNC{n}"))
              and float(params[f"PWM_MAIN_FUNC{n}"]).is_integer()}
     ts = d["timestamp"].astype(np.float64)
     cols, defaults = [], False
@@ -469,12 +575,22 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
         ``QUATERNION_NORM_TOLERANCE`` of 1, a PWM range parameter that is not a finite number
         within ``PWM_RANGE_US`` or a minimum not below its maximum, a file format version
         not in ``ULOG_VERSIONS``, a time stamp not declared ``uint64_t``, a
-        ``THR_MDL_FAC`` not within ``THR_MDL_FAC_RANGE``.
+        ``THR_MDL_FAC`` not within ``THR_MDL_FAC_RANGE``, a message pyulog takes for damage
+        (of type 0, or of a type its section does not know and empty or over 10,000
+        bytes). ``LogError`` for a path that is not one or a file that cannot be read.
     LogSignalError
         None of the time-base topics (``vehicle_local_position``, ``vehicle_attitude``,
         ``vehicle_angular_velocity``) is in the log.
     """
-    path = str(path)
+    # a signalling NaN of a float32 field warns when cast or interpolated: every value that
+    # is not finite is dropped, counted and named here (raw_dropped, signals_dropped)
+    path = log_path(path, "read_ulog: path")
+    with np.errstate(invalid="ignore"):
+        return _read_ulog(str(path))
+
+
+def _read_ulog(path: str) -> FlightLog:
+    """``read_ulog`` of a path (str), numpy's invalid-value warnings off."""
     u = _load(path)
     topics = {}
     text: set[str] = set()           # char fields: text, not numbers, so not in raw
@@ -534,6 +650,7 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
         v = fields(lp, names)
         if v is not None:
             signals[signal] = v * _FLIP
+    attitude_dropped = None
     if "vehicle_attitude" in topics:
         d = topics["vehicle_attitude"]
         _required(path, "vehicle_attitude", d, TOPICS["vehicle_attitude"])
@@ -544,12 +661,19 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
         q[1:] *= flips[:, None]
         ts = d["timestamp"].astype(np.float64)
         qi = np.column_stack([np.interp(t_us, ts, q[:, i]) for i in range(4)])
-        norm = np.linalg.norm(qi, axis=1)
-        if not (norm > 0.5).all():
-            raise LogFormatError(f"{path}: vehicle_attitude.q is not a unit quaternion "
-                                 f"(norm {norm.min():.3g} after interpolation)")
-        roll, pitch, yaw = quaternion_to_euler(px4_to_quadcog_quaternion(qi / norm[:, None]))
-        signals.update(roll=roll, pitch=pitch, yaw=yaw)
+        spoiled = np.isnan(qi).any(axis=1)
+        if spoiled.any():       # named as logged: its field, sample and time stamp
+            at = int(np.searchsorted(ts, t_us[int(np.argmax(spoiled))], side="right")) - 1
+            k = next(j for j in (at, at + 1) if j < len(q) and np.isnan(q[j]).any())
+            i = int(np.argmax(np.isnan(q[k])))
+            attitude_dropped = (f"roll, pitch, yaw (vehicle_attitude.q[{i}] is nan in its "
+                                f"sample {k}, time stamp {int(d['timestamp'][k])} us: "
+                                f"{int(spoiled.sum())} of {t_us.size} samples not finite)")
+        else:
+            # unit quaternions (checked) with continuous signs: norms of 0.6 at least
+            qi /= np.linalg.norm(qi, axis=1)[:, None]
+            roll, pitch, yaw = quaternion_to_euler(px4_to_quadcog_quaternion(qi))
+            signals.update(roll=roll, pitch=pitch, yaw=yaw)
     v = fields("vehicle_angular_velocity", ("xyz[0]", "xyz[1]", "xyz[2]"))
     if v is not None:
         signals["body_rates"] = v * _FLIP
@@ -593,7 +717,7 @@ def read_ulog(path: str | os.PathLike) -> FlightLog:
     if v is not None:
         signals["thrust_command"] = -v[:, 0]
     # an estimate that is not valid yet is NaN in PX4's topics: leave such a signal out, say so
-    not_finite: list[str] = []
+    not_finite: list[str] = [] if attitude_dropped is None else [attitude_dropped]
     for name in list(signals):
         bad = ~np.isfinite(signals[name]).reshape(t_us.size, -1).all(axis=1)
         if bad.any():
@@ -704,9 +828,10 @@ def write_ulog(log: FlightLog, path: str | os.PathLike) -> Path:
         (``quadcog.logs.limits.microsecond_ticks``).
     LogError
         ``meta["rotor_positions_m"]`` is not four positions, one per quadrant in quadcog's
-        rotor order, that float32 parameters hold.
+        rotor order, that float32 parameters hold; ``log`` not a FlightLog, ``path`` not a
+        file that may be replaced.
     """
-    path = Path(path)
+    path = writer_path(log, path, "write_ulog")
     s = log.signals
     extra = [n for n in s if n not in _CARRIED]
     angles = [n for n in ("roll", "pitch", "yaw") if n in s]
