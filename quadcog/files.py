@@ -437,6 +437,8 @@ def path_kind(path: str | os.PathLike[str]) -> str | None:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
         return "a symbolic link to a missing file" if os.path.islink(path) else None
+    except ValueError:                  # os.stat: "embedded null byte"
+        return "a path with a null byte (no file has one)"
     except OSError as e:
         import errno
         if e.errno == errno.ELOOP:
@@ -572,6 +574,9 @@ def output_path(path: object, what: str = "output file", error: type[Exception] 
         raise error(f"{what}: expected a file name (str or os.PathLike), got "
                     f"{type(path).__name__} {path!r:.60}")
     text = os.fspath(path)
+    if "\0" in text:                    # os.stat would raise "embedded null byte"
+        raise error(f"{what}: expected a file name without a null byte, got "
+                    f"{one_line(repr(text))}")
     target = Path(text)
     # Path() drops a trailing "/" (and reads "" as "."): judge the text as given
     if not text or target.name in ("", ".", "..") or str(text).endswith(("/", os.sep)):
@@ -595,6 +600,8 @@ def _check_replaceable(target: Path, what: str, error: type[Exception]) -> None:
         st = os.lstat(target)
     except FileNotFoundError:
         return
+    except ValueError:                  # os.lstat: "embedded null byte"
+        raise error(f"{what} {_describe(target)}: holds a null byte; no file name can") from None
     except OSError as e:
         raise error(f"{what} {_describe(target)}: cannot be checked ({e.strerror})") from None
     kinds = ((stat_mod.S_ISDIR, "a folder"), (stat_mod.S_ISLNK, "a symbolic link"),
@@ -811,8 +818,9 @@ def read_json(path: str | os.PathLike[str], what: str = "JSON file",
     """The data of a JSON file written by quadcog (or by hand), refused with ``error``
     naming the file when it is not such data: unreadable, not UTF-8, not JSON, over
     ``MAX_JSON_BYTES``, nested deeper than ``MAX_JSON_DEPTH`` (Python's parser would recurse
-    until RecursionError), holding NaN or Infinity, or an integer of more digits than Python
-    converts (4300).
+    until RecursionError), holding NaN or Infinity, an integer of more digits than Python
+    converts (4300), or an object that gives a key twice (at any depth; ``json`` would keep
+    the last value in silence).
 
     Parameters
     ----------
@@ -833,16 +841,18 @@ def read_json(path: str | os.PathLike[str], what: str = "JSON file",
     InputError
         (or ``error``) naming the file and what is wrong.
     """
-    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or not str(path):
-        raise error(f"{what}: expected a file name (str or os.PathLike), got "
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or not str(path) \
+            or "\0" in os.fspath(path):
+        raise error(f"{what}: expected a file name (str or os.PathLike, no null byte), got "
                     f"{type(path).__name__} {path!r:.60}")
     p = Path(path)
     if p.exists() and not p.is_file():      # a folder, a FIFO or a device: never read
-        raise error(f"{p}: is not a regular file; expected a {what}")
+        raise error(f"{p}: is not a regular file; expected the {what}")
     try:
         size = p.stat().st_size
         if size > MAX_JSON_BYTES:
-            raise error(f"{p}: {size:,} bytes; a {what} is at most {MAX_JSON_BYTES:,}")
+            raise error(f"{p}: {size:,} bytes; expected the {what} in at most "
+                        f"{MAX_JSON_BYTES:,}")
         text = p.read_bytes().decode("utf-8")
     except OSError as e:
         raise error(f"{p}: cannot read the {what} ({e.strerror})") from None
@@ -852,9 +862,26 @@ def read_json(path: str | os.PathLike[str], what: str = "JSON file",
         raise error(f"{p}: the {what} nests more than {MAX_JSON_DEPTH} levels deep; not a "
                     "file quadcog writes")
     try:
-        return json.loads(text, parse_constant=_reject_constant)
+        return json.loads(text, parse_constant=_reject_constant, object_pairs_hook=_pairs)
+    except _RepeatedKey as e:
+        raise error(f"{p}: key {one_line(repr(e.args[0]))}: expected once in the {what}, got "
+                    "it twice (JSON would keep the last value and drop the first)") from None
     except (ValueError, RecursionError) as e:       # bad JSON, huge integers
         raise error(f"{p}: the {what} is not valid JSON ({str(e)[:200]})") from None
+
+
+class _RepeatedKey(Exception):
+    """A JSON object gave this key twice (``read_json`` names the file)."""
+
+
+def _pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object from its pairs as written, or _RepeatedKey."""
+    seen: set[str] = set()
+    for key, _ in items:
+        if key in seen:
+            raise _RepeatedKey(key)
+        seen.add(key)
+    return dict(items)
 
 
 def cpu_model() -> str:

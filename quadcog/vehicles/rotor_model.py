@@ -19,6 +19,7 @@ inverse (for writing simulated flights as logs). ``signal`` names the log signal
 reads (``quadcog.logs`` standard names: ``"motor_pwm"`` or ``"motor_command"``) and
 ``uses_voltage`` whether it needs ``"battery_voltage"``.
 """
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, cast
 
@@ -462,7 +463,7 @@ def px4_thrust_curve_from_log(log: Any, max_thrust: float) -> RotorModel:
     # checked first: it is written into the source with :g (a string raised ValueError)
     max_thrust = validate.positive(max_thrust, "px4_thrust_curve_from_log: max_thrust", "N")
     meta = getattr(log, "meta", None)
-    if not isinstance(meta, dict):
+    if not isinstance(meta, Mapping):       # a FlightLog's meta is a read-only mapping
         validate.fail("px4_thrust_curve_from_log: log", "a flight log read by "
                       "quadcog.logs.read_log (a FlightLog with its meta)", log)
     text: Any = meta.get("param.THR_MDL_FAC")
