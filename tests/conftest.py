@@ -162,3 +162,33 @@ def interrupt_mid_flight(argv, sig, *, group=False, **popen):
             proc.wait()
     assert sent, f"the run showed no progress before it ended: {seen!r}"
     return proc.returncode, seen.decode(errors="replace").replace("\r\n", "\n")
+
+
+def cli_error_line(capsys):
+    """The one line a refused command printed on stderr (argparse's usage lines aside), with
+    no traceback and no internal error."""
+    err = capsys.readouterr().err
+    lines = [l for l in err.strip().splitlines() if not l.startswith("usage:")
+             and not l.startswith(" ")]
+    assert len(lines) == 1, err          # one line, whatever the names hold
+    assert "Traceback" not in err and "internal error" not in err
+    return lines[0]
+
+
+@pytest.fixture
+def no_flight(monkeypatch):
+    """Any flight is a failure of the test: refusals come before the work."""
+    from quadcog.scenarios.scenario import Scenario
+
+    def flown(*args, **kwargs):
+        raise AssertionError("the scenario was flown before the refusal")
+    monkeypatch.setattr(Scenario, "run", flown)
+
+
+def small_sweep(**extra):
+    """A sweep file's data: two 0.3 s flights of fig6 under fl, ``extra`` keys added."""
+    data = {"scenario": "fig6", "set": {"duration": 0.3, "controller": "fl",
+                                        "controller_params": {}},
+            "dimension": [{"key": "cog[0].r[0]", "values": [0.0, 0.01]}]}
+    data.update(extra)
+    return data

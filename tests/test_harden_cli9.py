@@ -22,6 +22,7 @@ from pathlib import Path
 import shutil
 import warnings
 
+from conftest import cli_error_line, small_sweep
 import numpy as np
 import pytest
 
@@ -41,22 +42,8 @@ SCENARIO = 'name = "s"\ncontroller = "pd"\nduration = 0.05\n'
 LONG = "A" * 5000
 
 
-def _error_line(capsys):
-    err = capsys.readouterr().err
-    lines = [l for l in err.strip().splitlines() if not l.startswith("usage:")
-             and not l.startswith(" ")]
-    assert len(lines) == 1, err
-    assert "Traceback" not in err and "internal error" not in err
-    return lines[0]
 
 
-@pytest.fixture
-def no_flight(monkeypatch):
-    from quadcog.scenarios.scenario import Scenario
-
-    def flown(*args, **kwargs):
-        raise AssertionError("the scenario was flown before the refusal")
-    monkeypatch.setattr(Scenario, "run", flown)
 
 
 # -- 1. the failure map: a step time within the run, a duration the flights can take ---------
@@ -111,24 +98,18 @@ def test_admissibility_refuses_a_grid_beyond_one_map():
 
 # -- 2. sweep files: the chunk and the threshold bounded ---------------------------------------
 
-def _spec(**extra):
-    data = {"scenario": "fig6", "set": {"duration": 0.3, "controller": "fl",
-                                        "controller_params": {}},
-            "dimension": [{"key": "cog[0].r[0]", "values": [0.0, 0.01]}]}
-    data.update(extra)
-    return data
 
 
 @pytest.mark.parametrize("chunk", [10 ** 9, 10 ** 100, MAX_CHUNK + 1])
 def test_a_chunk_beyond_the_limit_is_refused(chunk):
     with pytest.raises(SizeError, match=f"key 'chunk'.*{MAX_CHUNK}"):
-        from_dict(_spec(chunk=chunk))
+        from_dict(small_sweep(chunk=chunk))
 
 
 @pytest.mark.parametrize("threshold", [1e308, MAX_THRESHOLD * 2, 10 ** 400])
 def test_a_threshold_beyond_the_limit_is_refused(threshold):
     with pytest.raises(SweepError, match="key 'threshold'"):
-        from_dict(_spec(threshold=threshold))
+        from_dict(small_sweep(threshold=threshold))
 
 
 # -- 4. names of any length are printed as one short line ------------------------------------
@@ -136,14 +117,14 @@ def test_a_threshold_beyond_the_limit_is_refused(threshold):
 @pytest.mark.parametrize("command", ["scenarios", "sweeps"])
 def test_show_shortens_a_long_name(capsys, command):
     assert main([command, "--show", LONG]) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert len(line) < 400 and "5000 characters" in line, line
 
 
 def test_run_names_a_long_scenario_name_as_no_scenario(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["run", LONG]) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert "no such scenario file" in line and len(line) < 500, line
 
 
@@ -158,7 +139,7 @@ def test_argparse_errors_are_one_short_line(capsys):
     with pytest.raises(SystemExit) as e:
         main(["targets", "--laws", LONG])
     assert e.value.code == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert "--laws" in line and len(line) < 600, line
 
 
@@ -272,18 +253,18 @@ def test_an_empty_scenario_name_is_refused(spec):
         scenario_path(spec)
 
 
-def test_run_controller_without_stack_is_one_error_line(capsys, tmp_path, monkeypatch,
+def test_run_controller_without_stack_is_onecli_error_line(capsys, tmp_path, monkeypatch,
                                                         no_flight):
     monkeypatch.chdir(tmp_path)
     assert main(["run", "fig3a", "--controller", "pid", "--out", "o"]) == 2
-    assert _error_line(capsys).startswith("quadcog: error: --controller pid: ")
+    assert cli_error_line(capsys).startswith("quadcog: error: --controller pid: ")
 
 
 def test_sweep_out_that_is_a_file_is_named_as_such(capsys, tmp_path):
     pytest.importorskip("distributed")
     (tmp_path / "f").write_text("x")
     assert main(["sweep", "failure-map", "--out", str(tmp_path / "f")]) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert "--out" in line and "not a folder" in line, line
 
 
@@ -395,7 +376,7 @@ def test_export_refuses_to_overwrite_its_scenario(tmp_path, capsys, target, rel)
     scenario.write_text(text)
     assert main(["export", "--scenario", str(scenario), "--target", target,
                  "--out", str(tmp_path)]) == 2
-    assert "is the same file as the scenario file" in _error_line(capsys)
+    assert "is the same file as the scenario file" in cli_error_line(capsys)
     assert scenario.read_text() == text
     assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == [scenario.name]
 
@@ -429,5 +410,5 @@ def test_targets_checks_its_output_before_flying(tmp_path, monkeypatch, capsys, 
         out.write_text("x")
     assert main(["targets", "--out", str(out), "--vehicles", "crazyflie", "--laws", "pd",
                  "--cases", "hover"]) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert ("FIFO" if case == "fifo" else "not a folder") in line, line

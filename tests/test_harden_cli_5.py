@@ -17,6 +17,7 @@ import json
 import os
 import re
 
+from conftest import cli_error_line
 import pytest
 
 from quadcog.cli import main
@@ -30,22 +31,8 @@ SWEEP = ('scenario = "fig7"\nset = {duration = 0.2}\n[[dimension]]\nkey = "vehic
 HUGE = "9" * 5000
 
 
-def _error_line(capsys):
-    err = capsys.readouterr().err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err          # one line, whatever the names hold
-    assert "internal error" not in err and "Traceback" not in err
-    return lines[0]
 
 
-@pytest.fixture
-def no_flight(monkeypatch):
-    """Any flight is a failure of the test: refusals come before the work."""
-    from quadcog.scenarios.scenario import Scenario
-
-    def flown(*args, **kwargs):
-        raise AssertionError("the scenario was flown before the refusal")
-    monkeypatch.setattr(Scenario, "run", flown)
 
 
 @pytest.mark.parametrize("case", ["identified", "scenario_named_like_a_result", "symlink",
@@ -73,7 +60,7 @@ def test_run_refuses_outputs_that_are_its_inputs(tmp_path, monkeypatch, capsys, 
         os.link(read, out / "flight.png")        # a file a run would replace or remove
     before = read.read_bytes()
     assert main(argv) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert "is the same file as" in line and "--out" in line, line
     assert read.read_bytes() == before
 
@@ -87,14 +74,14 @@ def test_sweep_refuses_to_overwrite_its_sweep_file(tmp_path, monkeypatch, capsys
     spec = tmp_path / "results.csv"
     spec.write_text(SWEEP)
     assert main(["sweep", str(spec), "--out", str(tmp_path)]) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert "is the same file as the sweep file" in line and "--out" in line, line
     assert spec.read_text() == SWEEP
     inside = tmp_path / "o" / "chunks" / "s.toml"        # anything under chunks/ may go
     inside.parent.mkdir(parents=True)
     inside.write_text(SWEEP)
     assert main(["sweep", str(inside), "--out", str(tmp_path / "o")]) == 2
-    assert "chunks" in _error_line(capsys)
+    assert "chunks" in cli_error_line(capsys)
 
 
 @pytest.fixture
@@ -130,7 +117,7 @@ def test_identify_checks_every_output_before_the_work(tmp_path, monkeypatch, cap
         else:
             os.mkfifo(png)
     assert main(argv) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert "--out" in line and "run file" not in line, line
     if case == "json_is_the_folder":
         assert not out.exists()
@@ -151,7 +138,7 @@ def test_json_refuses_a_folder_like_name_as_given(tmp_path, monkeypatch, capsys,
     monkeypatch.chdir(tmp_path)
     (tmp_path / "in.csv").write_text("t_s,x_m\n0,0\n1,0\n")
     assert main(["identify", "in.csv", "--json", value]) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert f"--json: expected a file name (not a folder), got {value!r}" in line, line
     assert list(tmp_path.iterdir()) == [tmp_path / "in.csv"]
 
@@ -162,14 +149,14 @@ def test_integers_past_pythons_digit_limit_name_the_key(tmp_path, monkeypatch, c
     with pytest.raises(ScenarioError, match=r"key 'vehicle\.m' \(line 5\).*5000 digits"):
         read_toml(tmp_path / "big.toml")
     assert main(["run", "big.toml", "--out", "o"]) == 2
-    assert "'vehicle.m'" in _error_line(capsys)
+    assert "'vehicle.m'" in cli_error_line(capsys)
     assert main(["run", "fig7", "--set", f"vehicle.m={HUGE}", "--out", "o"]) == 2
-    line = _error_line(capsys)
+    line = cli_error_line(capsys)
     assert "'vehicle.m'" in line and "5000 digits" in line and HUGE not in line
     (tmp_path / "sweep.toml").write_text(
         SWEEP.replace("values = [0.5, 0.6]", f"range = {{start = 0.5, stop = 1, num = {HUGE}}}"))
     assert main(["sweep", "sweep.toml", "--out", "o"]) == 2
-    assert "num" in _error_line(capsys)
+    assert "num" in cli_error_line(capsys)
     assert not (tmp_path / "o").exists()
 
 
@@ -187,7 +174,7 @@ def test_paths_that_are_not_regular_files_say_what_they_are(tmp_path, monkeypatc
         os.symlink(path, path)
     for argv in (["identify", path], ["run", path, "--out", "o"]):
         assert main(argv) == 2
-        line = _error_line(capsys)
+        line = cli_error_line(capsys)
         assert said in line and "no such" not in line, line
 
 
@@ -197,7 +184,7 @@ def test_messages_stay_on_one_line(tmp_path, monkeypatch, capsys):
     for argv in (["identify", "a\nb.csv"], ["scenarios", "--show", "a\nb"],
                  ["run", "s.toml", "--set", "sensing.seed=1e300", "--out", "o"]):
         assert main(argv) == 2
-        line = _error_line(capsys)
+        line = cli_error_line(capsys)
         assert not re.search(r"\d{40}", line), line     # long numbers are shortened
     assert main(["run", "s.toml", "--set", 'name="a\\nb"', "--out", "o", "--quiet",
                  "--no-plot"]) == 0

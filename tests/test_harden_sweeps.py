@@ -13,6 +13,7 @@ import sys
 import threading
 import time
 
+from conftest import small_sweep
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 import numpy as np
@@ -218,12 +219,6 @@ def test_two_cli_sweeps_into_one_folder_the_second_refuses(tiny, tmp_path):
     assert not (out / "results.csv").exists()
 
 
-def _spec(**extra):
-    data = {"scenario": "fig6", "set": {"duration": 0.3, "controller": "fl",
-                                        "controller_params": {}},
-            "dimension": [{"key": "cog[0].r[0]", "values": [0.0, 0.01]}]}
-    data.update(extra)
-    return data
 
 
 @pytest.mark.parametrize("dims", [
@@ -233,13 +228,13 @@ def _spec(**extra):
 ])
 def test_overlapping_keys_are_refused(dims):
     with pytest.raises(SweepError, match="overlaps"):
-        sweep(_spec(dimension=dims), progress=False, plots=False)
+        sweep(small_sweep(dimension=dims), progress=False, plots=False)
 
 
 @pytest.mark.parametrize("chunk", [0, -1, 1.5, True, "64", [2], {"n": 2}, None])
 def test_chunk_of_an_odd_kind_is_refused(chunk):
     with pytest.raises(SweepError, match="chunk"):
-        sweep(_spec(chunk=chunk), progress=False, plots=False)
+        sweep(small_sweep(chunk=chunk), progress=False, plots=False)
 
 
 @pytest.mark.parametrize("kwargs, error, text", [
@@ -255,7 +250,7 @@ def test_chunk_of_an_odd_kind_is_refused(chunk):
 def test_backend_arguments_are_refused_before_work(kwargs, error, text, tmp_path):
     t0 = time.perf_counter()
     with pytest.raises(error, match=text):
-        sweep(_spec(), progress=False, plots=False, **kwargs)
+        sweep(small_sweep(), progress=False, plots=False, **kwargs)
     assert time.perf_counter() - t0 < 5
 
 
@@ -278,7 +273,7 @@ def test_sizes_are_refused_before_any_allocation(dims, samples, size):
         extra.update(mode="monte-carlo", samples=samples)
     t0 = time.perf_counter()
     with pytest.raises(SizeError, match=r"too large|at most") as e:
-        sweep(_spec(**extra), progress=False, plots=False)
+        sweep(small_sweep(**extra), progress=False, plots=False)
     assert size in str(e.value)
     assert time.perf_counter() - t0 < 5
 
@@ -287,7 +282,7 @@ def test_sizes_are_refused_before_any_allocation(dims, samples, size):
 def test_sweep_values_of_a_table_or_mixed_kinds_are_refused(value):
     dims = [{"key": "cog[0].ramp", "values": value if isinstance(value, list) else [value]}]
     with pytest.raises(SweepError, match="values"):
-        sweep(_spec(dimension=dims), progress=False, plots=False)
+        sweep(small_sweep(dimension=dims), progress=False, plots=False)
 
 
 def test_a_rejected_sweep_file_creates_no_out_folder(tmp_path):
@@ -390,7 +385,7 @@ def test_sensing_on_results_do_not_depend_on_workers_or_interruption(tmp_path, m
 
 def test_a_controller_that_cannot_be_designed_is_refused_before_any_flight(tmp_path):
     dims = [{"key": "controller_params.poles_psi", "values": [[-1.0, -2.0], [0.5, 0.5]]}]
-    spec = _spec(dimension=dims)
+    spec = small_sweep(dimension=dims)
     spec["set"]["controller"] = "adaptive"
     out = tmp_path / "never"
     with pytest.raises(SweepError, match=r"poles_psi.*cannot be designed"):
@@ -417,7 +412,7 @@ HOSTILE = st.one_of(st.none(), st.booleans(), st.integers(-3, 3), st.just(10 ** 
                               "name", "key", "values", "range", "uniform", "ball", "set"]),
        value=HOSTILE)
 def test_property_hostile_sweep_fields(where, value):
-    spec = _spec()
+    spec = small_sweep()
     dim = spec["dimension"][0]
     if where in ("key",):
         dim["key"] = value
