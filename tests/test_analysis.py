@@ -264,7 +264,7 @@ def test_latex_text_escapes_every_special_character():
 
 def test_report_copies_only_fragments_and_figures(tmp_path):
     """`make report` must not copy the runs' trajectories a second time."""
-    from report.pdf import _copy_results
+    from report.pdf import COPY_MARKER, _copy_results
     src = tmp_path / "paper"
     (src / "fig6").mkdir(parents=True)
     (src / "report_fragment.tex").write_text("x")
@@ -273,5 +273,5 @@ def test_report_copies_only_fragments_and_figures(tmp_path):
     assert _copy_results(src, tmp_path / "build" / "paper")
     got = sorted(p.relative_to(tmp_path / "build").as_posix()
                  for p in (tmp_path / "build").rglob("*") if p.is_file())
-    assert got == ["paper/fig6/flight.png", "paper/report_fragment.tex"]
+    assert got == [f"paper/{COPY_MARKER}", "paper/fig6/flight.png", "paper/report_fragment.tex"]
     assert not _copy_results(tmp_path / "nothing", tmp_path / "build" / "analysis")
