@@ -31,8 +31,8 @@ from quadcog.errors import InputError, QuadcogError
 __all__ = ["input_file", "path_kind", "same_file", "check_outputs", "one_line", "make_folder",
            "creatable_folder", "remove_made", "CSV_BLOCK", "CSV_DECIMALS", "plain_value",
            "strict_json", "rounded", "write_csv", "plot_text", "RunFiles", "atomic_write",
-           "atomic_write_bytes", "output_path", "replacing", "read_json", "MAX_JSON_BYTES",
-           "MAX_JSON_DEPTH", "cpu_model", "run_stamp"]
+           "atomic_write_bytes", "save_figure", "output_path", "replacing", "read_json",
+           "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "cpu_model", "run_stamp"]
 
 CSV_BLOCK = 1024            # rows formatted at a time
 CSV_DECIMALS = 10           # values are rounded to this many decimals ...
@@ -705,6 +705,34 @@ def atomic_write(path: str | os.PathLike[str], text: str, what: str = "output fi
     """
     with replacing(path, what, error, protect) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], what: str = "figure",
+                error: type[Exception] = InputError, **savefig: Any) -> Path:
+    """``fig.savefig`` all or nothing (``replacing``): never through a link, FIFO or device,
+    and a failed or interrupted draw leaves the old file.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or os.PathLike
+        The file; its suffix is the format (``.png`` without one).
+    what : str
+        What the file is, for messages.
+    error : type, optional
+        Exception class raised (default quadcog.InputError).
+    **savefig
+        Passed on to ``Figure.savefig`` (``dpi``, ``bbox_inches``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    with replacing(path, what, error) as tmp:
+        fig.savefig(tmp, format=Path(os.fspath(path)).suffix[1:] or "png", **savefig)
+    return Path(path)
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, what: str = "output file",

@@ -43,3 +43,55 @@ def test_other_exception_classes_get_the_same_message(tmp_path):
         read_json(path, "manifest", BuildError)
     path.write_text('{"a": 1, "b": [1, 2, {"c": null}]}')
     assert read_json(path) == {"a": 1, "b": [1, 2, {"c": None}]}
+
+
+@pytest.mark.parametrize("kind", ["link", "fifo"])
+def test_figures_and_analysis_files_never_write_through_a_link_or_fifo(tmp_path, kind):
+    """save_figure (every plot function that takes a path), the failure map's .npz and .json
+    and the analysis .json wrote with savefig, savez and open(): through a link into its
+    target, and into a FIFO (blocking until a reader came)."""
+    import os
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from quadcog.files import save_figure
+    from quadcog.studies.analysis.analysis_files import write_json
+    from quadcog.studies.analysis.failure_map import save_failure_map
+    victim = tmp_path / "victim"
+    victim.write_text("precious\n")
+
+    def target(name):
+        path = tmp_path / name
+        if kind == "link":
+            path.symlink_to(victim)
+        else:
+            os.mkfifo(path)
+        return path
+    fig = plt.figure()
+    with pytest.raises(InputError, match="figure .*: is a (symbolic link|FIFO)"):
+        save_figure(fig, target("f.png"))
+    plt.close(fig)
+    with pytest.raises(InputError, match="analysis .json .*: is a (symbolic link|FIFO)"):
+        write_json({"a": 1.0}, target("analysis.json"))
+    fm = {"x_G": [0.0], "y_G": [0.0], "admissible": [[True]], "lambda_min": [[1.0]],
+          "controllers": {}}
+    with pytest.raises(InputError, match="failure map .npz .*: is a (symbolic link|FIFO)"):
+        save_failure_map(fm, target("fm.npz"), tmp_path / "fm.json")
+    assert victim.read_text() == "precious\n" and not (tmp_path / "fm.json").exists()
+
+
+def test_a_figure_is_written_whole_in_the_format_of_its_suffix(tmp_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from quadcog.files import save_figure
+    fig = plt.figure()
+    fig.add_subplot().plot([0, 1], [1, 0])
+    assert save_figure(fig, tmp_path / "f.png", dpi=50).read_bytes()[:4] == b"\x89PNG"
+    assert save_figure(fig, tmp_path / "f.pdf").read_bytes()[:4] == b"%PDF"
+    assert save_figure(fig, tmp_path / "noext").read_bytes()[:4] == b"\x89PNG"
+    plt.close(fig)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.pdf", "f.png", "noext"]

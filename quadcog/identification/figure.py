@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from quadcog.errors import IdentificationError
-from quadcog.files import plot_text
+from quadcog.files import plot_text, save_figure
 from quadcog.validate import fail
 
 if TYPE_CHECKING:
@@ -104,6 +104,6 @@ def plot_identification(result: "Identification", path: str | Path | None = None
         fig.tight_layout()
         if path is not None:
             Path(path).parent.mkdir(parents=True, exist_ok=True)
-            fig.savefig(path, dpi=100)
+            save_figure(fig, path, "identification figure", dpi=100)
             plt.close(fig)
     return fig

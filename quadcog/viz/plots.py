@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from quadcog.files import plot_text
+from quadcog.files import plot_text, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -246,6 +246,6 @@ def plot_flight(result: Any, path: str | Path | None = None, name: str | None = 
         fig.tight_layout()
         if path is not None:
             Path(path).parent.mkdir(parents=True, exist_ok=True)
-            fig.savefig(path, dpi=100)
+            save_figure(fig, path, "flight figure", dpi=100)
             plt.close(fig)
     return fig

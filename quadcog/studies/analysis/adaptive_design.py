@@ -14,6 +14,7 @@ import casadi as ca
 import numpy as np
 
 from quadcog.controllers import AdaptiveFeedbackLinearization
+from quadcog.files import save_figure
 from quadcog.model.conventions import N_STATE
 from quadcog.sim.divergence import Limits
 from quadcog.sim.flight import simulate
@@ -261,5 +262,5 @@ def plot_lyapunov(study: dict[str, dict[str, Any]], path: str | os.PathLike[str]
     cx.axhline(1.0, color="0.5", lw=0.8)
     cx.set_ylim(0.55, 1.12)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, "Lyapunov plot", dpi=120)
     plt.close(fig)

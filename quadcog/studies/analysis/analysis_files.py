@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from quadcog import config
+from quadcog.files import atomic_write
 
 __all__ = ["jsonable", "write_json", "markdown", "write_markdown", "latex_fragment",
            "write_latex"]
@@ -58,9 +59,7 @@ def write_json(summary: dict[str, Any], path: str | os.PathLike[str]) -> None:
     path : str or os.PathLike
         The file.
     """
-    with open(path, "w") as fh:
-        json.dump(jsonable(summary), fh, indent=1)
-        fh.write("\n")
+    atomic_write(path, json.dumps(jsonable(summary), indent=1) + "\n", "analysis .json")
 
 
 def _c(z, digits=4):

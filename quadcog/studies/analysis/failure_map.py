@@ -13,6 +13,7 @@ from quadcog.controllers import AdaptiveFeedbackLinearization, CascadePD, Feedba
 from quadcog.controllers.adaptive import admissible_estimate_radius
 from quadcog.controllers.base import Controller
 from quadcog.errors import ParameterError, SizeError
+from quadcog.files import atomic_write, replacing, save_figure
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
 from quadcog.model.parameters import check_parameters, inertia_about_cog, with_cog
 from quadcog.sim.flight import RK4_LIMIT
@@ -308,11 +309,12 @@ def save_failure_map(fm: dict[str, Any], npz_path: str | os.PathLike[str],
     for name, c in fm["controllers"].items():
         for key in ("tail_rms", "diverged", "diverged_at", "failed"):
             arrays[f"{name}_{key}"] = c[key]
-    np.savez_compressed(npz_path, **arrays)
+    # each all or nothing, never through a link, FIFO or device (quadcog.files.replacing)
+    with replacing(npz_path, "failure map .npz") as tmp, open(tmp, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
     from quadcog.studies.analysis.analysis_files import jsonable
-    with open(json_path, "w") as fh:
-        json.dump(jsonable({k: v for k, v in fm.items()}), fh)
-        fh.write("\n")
+    atomic_write(json_path, json.dumps(jsonable({k: v for k, v in fm.items()})) + "\n",
+                 "failure map .json")
 
 
 def plot_failure_map(fm: dict[str, Any], path: str | os.PathLike[str]) -> None:
@@ -392,5 +394,5 @@ def plot_failure_map(fm: dict[str, Any], path: str | os.PathLike[str]) -> None:
                  f"{fm['duration']:g} s (m)")
     fig.suptitle(f"CoG step at hover at t = {fm['t_step']:g} s to ($x_G$, $y_G$, 0): "
                  f"{len(xs)} x {len(ys)} grid, arm = {xs[-1]:.0f} cm", y=0.99)
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, "failure map figure", dpi=120)
     plt.close(fig)

@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from quadcog.controllers import CascadePD
+from quadcog.files import save_figure
 from quadcog.studies.analysis.frequency import channel_loop, channel_margins, gain_range_by_eigenvalues
 from quadcog.studies.analysis.linear import loop_statespace
 
@@ -126,5 +127,5 @@ def plot_sigma(result: dict[str, Any], path: str | os.PathLike[str]) -> None:
     bx.legend(loc="lower left", bbox_to_anchor=(0, 1.0), ncol=2, frameon=False, fontsize=9,
               borderaxespad=0.2)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, "sigma plot", dpi=120)
     plt.close(fig)

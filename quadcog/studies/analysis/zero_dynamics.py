@@ -26,6 +26,7 @@ from scipy.integrate import solve_ivp
 from quadcog.codegen.fastcall import evaluate
 from quadcog.controllers.decoupling import decoupled_input
 from quadcog.errors import QuadcogError
+from quadcog.files import save_figure
 from quadcog.model.conventions import IDX, N_PARAM, N_STATE, NU, OUTPUT_ROWS, R_G
 from quadcog.model.functions import Model, load
 from quadcog.model.parameters import check_parameters, with_cog
@@ -404,5 +405,5 @@ def plot_zero_dynamics(study: dict[str, Any], path: str | os.PathLike[str]) -> N
     fig.suptitle("Free states of the exact output-tracking loop (true parameters, "
                  "start u, v = 0.5, -0.3 m/s)")
     fig.tight_layout(rect=(0, 0.07, 1, 1))
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, "zero dynamics plot", dpi=120)
     plt.close(fig)
