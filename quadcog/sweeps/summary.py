@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from quadcog.files import save_figure
 from quadcog.sweeps.arrow_table import require_pyarrow, to_arrow
 from quadcog.sweeps.spec import Sweep
 
@@ -205,7 +206,7 @@ def plot_sweep(sweep: Sweep, columns: dict[str, NDArray[Any]], out: Path) -> lis
         # below the axes, outside the data: the legend never hides a point
         axes[0][0].legend(loc="upper left", bbox_to_anchor=(0.0, -0.14), ncol=3, fontsize=7,
                           markerscale=min(1.0, 8.0 / np.sqrt(s)), facecolor="0.85")
-        fig.savefig(out / "failure_map.png", dpi=110, bbox_inches="tight")
+        save_figure(fig, out / "failure_map.png", "sweep figure", dpi=110, bbox_inches="tight")
         plt.close(fig)
         written.append("failure_map.png")
 
@@ -236,7 +237,7 @@ def plot_sweep(sweep: Sweep, columns: dict[str, NDArray[Any]], out: Path) -> lis
         ax.grid(alpha=0.3)
         fname = "survival_" + re.sub(r"[^A-Za-z0-9]+", "_", c).strip("_") + ".png"
         fig.tight_layout()
-        fig.savefig(out / fname, dpi=110)
+        save_figure(fig, out / fname, "sweep figure", dpi=110)
         plt.close(fig)
         written.append(fname)
 
@@ -256,7 +257,7 @@ def plot_sweep(sweep: Sweep, columns: dict[str, NDArray[Any]], out: Path) -> lis
     ax.set_ylabel("flights")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "tail_rms_hist.png", dpi=110)
+    save_figure(fig, out / "tail_rms_hist.png", "sweep figure", dpi=110)
     plt.close(fig)
     written.append("tail_rms_hist.png")
     return written
