@@ -7,21 +7,26 @@ copy and must fail.
     python bench/mutations.py --tests tests/test_physics.py tests/test_vehicle.py
     python bench/mutations.py --list              # the mutations and their edits
 
-For each mutation the script copies the tracked files (``git ls-files``, as they are in the
-working tree) into a temporary folder, applies the edit (it must match exactly once, or the
-script stops: a moved source must not silently test nothing), regenerates ``generated/`` with
-``python -m derive`` when the edit is in ``derive/`` (and checks that the generated C changed,
-so the mistake reaches the compiled model as a real one would), and runs pytest there with this
-interpreter, cwd and PYTHONPATH set to the copy. A small pytest plugin checks, inside that pytest
-process, that ``quadcog``, ``derive``, ``report`` and the generated folder are the copy's (an
-editable install points at the checkout). The unmutated copy runs first as a control: every
-selected test must pass there, else the script aborts.
+For each mutation the script copies the tracked files and the new ones git does not ignore
+(``git ls-files --cached --others --exclude-standard``, as they are in the working tree: a new
+module or test file not yet added is part of it) into a temporary folder, applies the edit (it
+must match exactly once, or the script stops: a moved source must not silently test nothing),
+regenerates ``generated/`` with ``python -m derive`` when the edit is in ``derive/`` (and
+checks that the generated C changed, so the mistake reaches the compiled model as a real one
+would), and runs pytest there with this interpreter, cwd and PYTHONPATH set to the copy (and
+QUADCOG_VENDOR_DIR to the checkout's shared/vendor, so that the tests that need the firmware
+or PX4 tarballs do not skip). A small pytest plugin checks, inside that pytest process, that
+``quadcog``, ``derive``, ``report`` and the generated folder are the copy's (an editable
+install points at the checkout). The unmutated copy runs first as a control: every selected
+test must pass there, else the script aborts.
 
 When ``python -m derive`` itself refuses a mutated derivation (its own symbolic self-checks,
 e.g. that the hover trim U* gives x_dot = 0), the mistake never reaches generated/: that
 counts as caught, by derive. A ``*_past_derive`` variant of the same mistake then switches that
 one self-check off (a second edit, also asserted), so that the tests show whether they would
-catch it on their own.
+catch it on their own. A mutation under which pytest stops before its collection finishes
+(``import quadcog`` raises in the copy, e.g. a preset vehicle refuses its own mixer) also counts
+as caught, its error named: after a control that collected, no test can run with it.
 
 Prints a table (mutation | where | tests that fail | count) and writes it, with the full list of
 failing tests, to out/mutations/results.md. Exit status: 0 when every mutation is caught, 1
@@ -42,7 +47,8 @@ import xml.etree.ElementTree as ET
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# Fast test files relevant to physics (about 40 s together on a free core, compiled code cached).
+# Fast test files relevant to physics and the layers beyond it (about 35 s together on a free
+# core, compiled code cached: the control run; the 40 mutations take about 20 min in all).
 DEFAULT_TESTS = [
     "tests/test_physics.py", "tests/test_vehicle.py", "tests/test_identities.py",
     "tests/test_independent_mechanics.py", "tests/test_hover.py", "tests/test_kinematics.py",
@@ -51,6 +57,13 @@ DEFAULT_TESTS = [
     "tests/test_inertial_model.py", "tests/test_inertial_consistency.py",
     # the newer layers: log readers, identification, payloads, the payload law (issue 33)
     "tests/test_harden_identify.py",
+    # the guards of the layers beyond the model (a second oracle each: Lee's law, Newton, a t
+    # table, hand counts, ...): the laws, the timeline and divergence, vehicle files, sweep and
+    # identification statistics, the Crazyflie loop's noise; the inline trig and PX4's frames
+    "tests/test_guard_controllers.py", "tests/test_guard_timeline.py",
+    "tests/test_guard_vehicle_files.py", "tests/test_guard_sweeps.py",
+    "tests/test_guard_identification.py", "tests/test_guard_crazyflie.py",
+    "tests/test_trig_c.py", "tests/test_px4_frames.py",
 ]
 
 
@@ -74,8 +87,8 @@ class Mutation:
 
 MUTATIONS = [
     Mutation("products_of_inertia", "quadcog/sim/plant.py",
-             "return p_eff, -m * ca.vertcat(x * y, x * z, y * z)",
-             "return p_eff, m * ca.vertcat(x * y, x * z, y * z)",
+             "diag, products = diag + S_diag * m, -m * S_off",
+             "diag, products = diag + S_diag * m, m * S_off",
              "sign of the products of inertia of the truth model's parallel-axis I_O"),
     Mutation("products_of_inertia_derive", "derive/symbols.py",
              "I_O_full = sp.Matrix([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])",
@@ -106,14 +119,14 @@ MUTATIONS = [
              "return ((a, 0.0), (0.0, -a), (-a, 0.0), (0.0, a))",
              "rotors 2 and 4 swapped in the \"+\" layout"),
     Mutation("parallel_axis_dropped", "quadcog/sim/plant.py",
-             "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1] + diag,",
-             "p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1],",
+             "diag, products = diag + S_diag * m, -m * S_off",
+             "diag, products = diag, -m * S_off",
              "parallel-axis term m (|r|^2 - r_i^2) dropped from the truth model's diagonal I_O"),
     Mutation("parallel_axis_dropped_admissibility", "quadcog/model/parameters.py",
              "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"
-             "                - p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
+             "                    - p[IDX[\"m\"]] * (r @ r * np.eye(3) - np.outer(r, r)))",
              "return (np.diag(p[IDX[\"Ixx\"]:IDX[\"Izz\"] + 1])\n"
-             "                - 0.0 * (r @ r * np.eye(3) - np.outer(r, r)))",
+             "                    - 0.0 * (r @ r * np.eye(3) - np.outer(r, r)))",
              "parallel-axis term dropped from I_G in the admissibility check"),
     Mutation("jerk_feed_forward_dropped", "quadcog/controllers/feedback_linearization.py",
              "a_cmd_dot = ref[JERK] + drag * ref[ACC]",
@@ -186,6 +199,85 @@ MUTATIONS = [
              "if duration is not None and e.t > duration:",
              "if duration is not None and e.t > 10 * duration:",
              "a payload event after the end of the run is accepted silently"),
+    # -- the control laws, the compiled kernels' trig, the run's timeline, divergence, vehicle
+    # files, PX4 and Crazyflie boundaries, sweep and identification statistics
+    Mutation("geometric_rate_cross_term_dropped", "quadcog/controllers/geometric.py",
+             "        w_dot = (-self.k_R * e_R - self.k_W * (w - w_c) - ca.cross(w, w_c)\n",
+             "        w_dot = (-self.k_R * e_R - self.k_W * (w - w_c)\n",
+             "the geometric law's angular acceleration without the -w x (R^T R_c Omega_c) term "
+             "(Lee's feed-forward of the rotating desired frame)"),
+    Mutation("geometric_attitude_error_order", "quadcog/controllers/geometric.py",
+             "e_R = _vee(Rc.T @ R - R.T @ Rc) / 2",
+             "e_R = _vee(R.T @ Rc - Rc.T @ R) / 2",
+             "the geometric law's e_R = (R_c^T R - R^T R_c)^vee / 2 with the products in the "
+             "wrong order (its sign flipped)"),
+    Mutation("cascade_yaw_error_unwrapped", "quadcog/controllers/cascade_pd.py",
+             "U4 = -kpsi[0] * wrap_angle(x[5] - ref[YAW])",
+             "U4 = -kpsi[0] * (x[5] - ref[YAW])",
+             "the cascade PD law's yaw error not wrapped to (-pi, pi]: across +-pi it turns "
+             "the long way round"),
+    Mutation("composite_covariance_unbounded", "quadcog/controllers/composite.py",
+             "P_dot = (self.forgetting * P @ (ca.DM.eye(3) - P / k0)",
+             "P_dot = (self.forgetting * P",
+             "the composite law's forgetting without its bound: P_dot = beta P - ..., the "
+             "covariance grows without bound where the data do not excite (z_G at hover)"),
+    Mutation("fl_integral_integrates_wrong_rows", "quadcog/controllers/fl_integral.py",
+             "return decoupled_input(alpha, v - b), e[ATTITUDE_ROWS]",
+             "return decoupled_input(alpha, v - b), e[0:3]",
+             "feedback linearization with integral action integrates the z, phi, theta errors "
+             "(rows 0-2 of y) instead of phi, theta, psi"),
+    Mutation("inline_sine_coefficient_typo", "quadcog/codegen/trig_c.py",
+             '"-1.98412698298579493134e-04"',
+             '"-1.98412698928579493134e-04"',
+             "two digits transposed in the third coefficient of the inline sine's polynomial "
+             "(fdlibm's S3)"),
+    Mutation("cog_change_one_step_late", "quadcog/sim/timeline.py",
+             'starts = np.searchsorted(t, [c.t for c in self.changes], side="left")',
+             'starts = np.searchsorted(t, [c.t for c in self.changes], side="right")',
+             "a CoG change applies from the first sample after its time, not at it (one step "
+             "late: searchsorted's side, on a run's grid of times in order)"),
+    Mutation("disturbance_one_step_long", "quadcog/sim/timeline.py",
+             'stop = np.searchsorted(t, [d.t + d.duration for d in pulses], side="left")',
+             'stop = np.searchsorted(t, [d.t + d.duration for d in pulses], side="right")',
+             "a disturbance pulse also acts at the sample of its end time (one step too long: "
+             "impulse F (duration + dt); searchsorted's side, on a run's grid)"),
+    Mutation("tail_start_is_the_fraction", "quadcog/sim/schedule.py",
+             'return (1 - config.get("metrics.tail_fraction")) *',
+             'return config.get("metrics.tail_fraction") *',
+             "the compiled runs' tail metrics start at tail_fraction * duration (the last 75 % "
+             "instead of the last 25 %)"),
+    Mutation("divergence_tilt_reads_yaw", "quadcog/sim/divergence.py",
+             "tilt = ca.fmax(ca.fabs(x[3]), ca.fabs(x[4]))",
+             "tilt = ca.fmax(ca.fabs(x[3]), ca.fabs(x[5]))",
+             "the divergence rule's tilt reads yaw (x[5]) in place of pitch (x[4])"),
+    Mutation("vehicle_file_inertia_not_moved_to_O", "quadcog/vehicles/description.py",
+             "I_O = I_G + m * (float(r_G @ r_G) * np.eye(3) - np.outer(r_G, r_G))",
+             "I_O = I_G",
+             "a URDF/SDF vehicle's inertia taken about its CoG as I_O (no parallel-axis shift "
+             "to O on the rotors' axis)"),
+    Mutation("vehicle_file_inertia_rotated_backwards", "quadcog/vehicles/description.py",
+             "I_model = where.R @ I_G @ where.R.T",
+             "I_model = where.R.T @ I_G @ where.R",
+             "a link's inertia turned to model axes with R^T I R instead of R I R^T"),
+    Mutation("sweep_quantile_as_percentile", "quadcog/sweeps/summary.py",
+             "float(np.quantile(tail, p))",
+             "float(np.percentile(tail, p))",
+             "the sweep summary's tail RMS quantiles by np.percentile with fractions "
+             "(p50 is the 0.5th percentile)"),
+    Mutation("ci95_degrees_of_freedom", "quadcog/identification/segments.py",
+             "t_quantile(n - 1) * b.std(axis=0, ddof=1)",
+             "t_quantile(n) * b.std(axis=0, ddof=1)",
+             "the 95 % interval of a mean of n block means with Student's t of n degrees of "
+             "freedom instead of n - 1"),
+    Mutation("px4_gps_course_swapped", "quadcog/px4/sensors.py",
+             "math.atan2(ve, vn)",
+             "math.atan2(vn, ve)",
+             "HIL_GPS course over ground measured from east (atan2(vn, ve)) instead of north"),
+    Mutation("crazyflie_noise_columns_unordered", "quadcog/crazyflie/loop.py",
+             "    sig = np.concatenate([sig[0:3], sig[6:9], sig[3:6], sig[9:12]])\n",
+             "",
+             "the Crazyflie loop's noise in the state's order (attitude's sigma on the world "
+             "velocity, velocity's on the Euler angles)"),
 ]
 
 PROBE = '''"""Loaded by bench/mutations.py with -p: records which quadcog, derive and report this
@@ -213,13 +305,22 @@ class Abort(Exception):
     """The check cannot be trusted (an edit did not apply, the control failed, ...)."""
 
 
+class NoTestRan(Exception):
+    """pytest stopped before its collection finished (e.g. ``import quadcog`` raises in the
+    copy): under a mutation, after a control that collected, the mistake stops every test."""
+
+
 def tracked_files(root):
-    out = subprocess.run(["git", "ls-files", "-z"], cwd=root, check=True, capture_output=True)
-    return [f for f in out.stdout.decode().split("\0") if f]
+    """The files git tracks and the new ones it does not ignore (a module or test file not yet
+    added is part of the working tree the tests run on)."""
+    out = subprocess.run(["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
+                         cwd=root, check=True, capture_output=True)
+    return list(dict.fromkeys(f for f in out.stdout.decode().split("\0") if f))
 
 
 def make_pristine(dest):
-    """The tracked files of the checkout, as they are in its working tree, copied to dest."""
+    """The tracked and new (not ignored) files of the checkout, as they are in its working
+    tree, copied to dest."""
     for rel in tracked_files(ROOT):
         src = ROOT / rel
         if not src.is_file():              # deleted in the working tree
@@ -259,6 +360,11 @@ def environment(copy, cache):
     env["PYTHONPATH"] = str(copy) + (os.pathsep + env["PYTHONPATH"]
                                      if env.get("PYTHONPATH") else "")
     env["QUADCOG_CACHE_DIR"] = str(cache)
+    # the vendor tarballs (firmware, PX4) are found beside the checkout (shared/vendor); the
+    # copy is elsewhere, so without this the tests that need them skip in every copy
+    vendor = ROOT.parent / "shared" / "vendor"
+    if "QUADCOG_VENDOR_DIR" not in env and vendor.is_dir():
+        env["QUADCOG_VENDOR_DIR"] = str(vendor)
     env["QUADCOG_MUTATION_COPY"] = str(copy)
     env["PYTHONDONTWRITEBYTECODE"] = "1"
     return env
@@ -291,8 +397,11 @@ def run_tests(copy, env, tests, workdir, label):
     seconds = time.perf_counter() - t0
     (workdir / f"{label}.log").write_text(res.stdout + res.stderr)
     if not probe.is_file():
-        raise Abort(f"{label}: pytest exited {res.returncode} before collection finished; see "
-                    f"{workdir / (label + '.log')}\n{(res.stdout + res.stderr)[-2000:]}")
+        errors = [line[1:].strip() for line in (res.stdout + res.stderr).splitlines()
+                  if line.startswith("E ")]
+        raise NoTestRan(f"pytest exited {res.returncode} before collection finished ("
+                        f"{(errors or ['?'])[-1][:160]}); see {workdir / (label + '.log')}",
+                        (res.stdout + res.stderr)[-2000:])
     found = json.loads(probe.read_text())
     root = copy.resolve()
     bad = {k: v for k, v in found.items() if not Path(v).resolve().is_relative_to(root)}
@@ -372,8 +481,11 @@ def main(argv=None):
 
         control = tmp / "control"
         shutil.copytree(pristine, control)
-        failed, _, seconds = run_tests(control, environment(control, cache), args.tests, logs,
-                                       "control")
+        try:
+            failed, _, seconds = run_tests(control, environment(control, cache), args.tests,
+                                           logs, "control")
+        except NoTestRan as e:
+            raise Abort(f"control: {e.args[0]}\n{e.args[1]}") from None
         timings["control"] = seconds
         print(f"control (no mutation): {len(failed)} failing, {seconds:.0f} s", flush=True)
         if failed:
@@ -388,7 +500,12 @@ def main(argv=None):
             where = apply(m, copy)
             env = environment(copy, cache)
             refused = regenerate(m, copy, env, pristine) if m.derived else None
-            failed = [] if refused else run_tests(copy, env, args.tests, logs, m.name)[0]
+            failed = []
+            if not refused:
+                try:
+                    failed = run_tests(copy, env, args.tests, logs, m.name)[0]
+                except NoTestRan as e:       # caught: no test can run with the mistake
+                    refused = e.args[0]
             timings[m.name] = time.perf_counter() - t0
             rows.append((m.name, where, failed, refused, m.what))
             print(f"{m.name}: {refused or f'{len(failed)} failing'} ({where}), "
