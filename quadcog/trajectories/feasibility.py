@@ -148,7 +148,8 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
     max_tilt : float, optional
         Largest tilt of the thrust (rad); default as ``reference_limits``.
     constant : bool
-        The rows are all the same (``Trajectory.constant``): only the first is checked.
+        The rows are all the same (``Trajectory.constant``): only the first is read and
+        checked.
 
     Returns
     -------
@@ -161,11 +162,16 @@ def check_reference(t: npt.NDArray[np.float64], ref: npt.NDArray[np.float64], ve
         ``t`` not (N,) finite times, ``ref`` not (N, 14) finite rows (N >= 1), ``constant`` not
         a bool, or what ``reference_limits`` raises.
     """
-    t, ref = _rows(t, ref)
     constant = validate.flag(constant, "constant")
+    if constant and isinstance(t, np.ndarray) and isinstance(ref, np.ndarray) and \
+            t.ndim == 1 and ref.ndim == 2 and t.size == ref.shape[0]:
+        # every row the same (a hover): the first says it all, and only it is read (the
+        # check of a long run's rows reads them all twice)
+        t, ref = t[:1], ref[:1]
+    t, ref = _rows(t, ref)
     limits = reference_limits(vehicle, max_tilt)
     a, j = ref[:, ACC], ref[:, JERK]
-    if constant:        # every row the same (a hover): the first says it all
+    if constant:
         a, j, t = a[:1], j[:1], t[:1]
     f = a + np.array([0.0, 0.0, vehicle.g])                     # specific thrust vector
     # row_norms and the sums written out: the bits of np.linalg.norm(., axis=1) and
