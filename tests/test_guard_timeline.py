@@ -2,7 +2,8 @@
 written here: a CoG change acts from its own time (the docstring's "from time t"), a force
 pulse of duration D gives a free body the momentum F D (Newton, RK4 exact for a constant
 force), the tail metric is the RMS of the errors of the last quarter computed from the
-flown states, and the divergence rule reads |phi| and |theta|, not the heading.
+flown states, and the divergence rule reads |phi| and |theta|, not the heading. Times out
+of order take the timeline's second path (CoG and wrench), held to an oracle too.
 (bench/mutations.py: cog_change_one_step_late, disturbance_one_step_long,
 tail_start_is_the_fraction, divergence_tilt_reads_yaw.)"""
 import math
@@ -81,3 +82,47 @@ def test_the_divergence_rule_reads_roll_and_pitch_not_yaw():
     pitch = np.zeros((2, 12))
     pitch[1, 4] = math.radians(86.0)
     assert first_divergence(pitch, np.zeros(2), limits) == (1, DivergenceCause.TILT)
+
+
+def _cog_oracle(changes, times):
+    """r_G at each time, written from the docstrings: the last change started at or before
+    t holds, moving from the previous change's r to its own over its ramp."""
+    out = np.zeros((len(times), 3))
+    for k, t in enumerate(times):
+        prev, value = np.zeros(3), np.zeros(3)
+        for c in changes:
+            if c.t <= t:
+                s = 1.0 if c.ramp == 0 else min(max((t - c.t) / c.ramp, 0.0), 1.0)
+                value = prev + s * (np.array(c.r) - prev)
+            prev = np.array(c.r)
+        out[k] = value
+    return out
+
+
+def test_times_out_of_order_give_each_time_its_own_cog_and_wrench():
+    """The timeline's second path, for times not in order (a run's grid takes the first):
+    each shuffled time gets the CoG and the wrench the oracle written here gives it, and the
+    same bits as the same times sorted."""
+    changes = [CogChange(0.2, (0.01, 0.0, 0.0), 0.15), CogChange(0.4, (0.0, 0.02, -0.01)),
+               CogChange(1.0, (-0.03, 0.0, 0.0), 0.5)]
+    pulses = [Disturbance(t=0.1, duration=0.3, force=(1.0, 0.0, 0.0)),
+              Disturbance(t=0.2, duration=0.5, moment=(0.0, 0.0, 0.1)),
+              Disturbance(t=0.25, duration=0.05, force=(0.0, 2.0, 0.0))]
+    rng = np.random.default_rng(7)
+    t = np.concatenate([rng.uniform(0.0, 2.0, 300),
+                        [0.0, 0.1, 0.2, 0.25, 0.3, 0.4, 0.5, 0.7, 1.0, 1.5, 2.0]])
+    shuffled = rng.permutation(t)
+    assert not (np.diff(shuffled) >= 0).all()
+    profile = CogProfile(changes)
+    got = profile.sample(shuffled)
+    np.testing.assert_allclose(got, _cog_oracle(changes, shuffled), rtol=0, atol=1e-15)
+    order = np.argsort(shuffled, kind="stable")
+    assert got[order].tolist() == profile.sample(shuffled[order]).tolist()
+    w = wrench_table(pulses, shuffled)
+    expected = np.zeros((t.size, 6))
+    for k, tk in enumerate(shuffled):
+        for d in pulses:
+            if d.t <= tk < d.t + d.duration:
+                expected[k] += np.concatenate([d.force, d.moment])
+    np.testing.assert_allclose(w, expected, rtol=0, atol=1e-15)
+    assert w[order].tolist() == wrench_table(pulses, shuffled[order]).tolist()
