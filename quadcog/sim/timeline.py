@@ -548,34 +548,34 @@ class PayloadProfile:
 
     def _tracks(self, t: np.ndarray) -> list[tuple[Payload, np.ndarray, np.ndarray]]:
         """(payload, its centre at each t (N, 3), on board at each t (N,)) per payload life."""
-        tracks: list[list[Any]] = []           # [payload, positions, on board]
+        # [payload, positions, on board, where its last attach or move put it]; a move
+        # starts from there (no event starts inside the same payload's previous move), not
+        # from a sample: the times may be in any order, or one (on_board), and a move started
+        # from the attach position or a mid-ramp sample
+        tracks: list[list[Any]] = []
         alive: dict[str, list[Any]] = {}
         for p in self.carried:
-            alive[p.name] = [p, np.repeat(np.array([p.position]), t.size, 0), np.ones(t.size, bool)]
+            alive[p.name] = [p, np.repeat(np.array([p.position]), t.size, 0),
+                             np.ones(t.size, bool), np.array(p.position)]
             tracks.append(alive[p.name])
         for e in self.events:
             after = t >= e.t
             if e.action == "attach":
                 p = e.payload()
-                alive[e.name] = [p, np.repeat(np.array([p.position]), t.size, 0), after.copy()]
+                alive[e.name] = [p, np.repeat(np.array([p.position]), t.size, 0), after.copy(),
+                                 np.array(p.position)]
                 tracks.append(alive[e.name])
             elif e.action == "drop":
                 alive.pop(e.name)[2] &= ~after
             else:
                 track = alive[e.name]
-                start = self._position_at(track, e.t, t)
+                start, end = track[3], np.array(e.position)
                 s = (np.clip((t - e.t) / e.ramp, 0.0, 1.0) if e.ramp > 0
                      else after.astype(float))
-                moved = start + s[:, None] * (np.array(e.position) - start)
+                moved = start + s[:, None] * (end - start)
                 track[1] = np.where(after[:, None], moved, track[1])
-        return [(p, r, on) for p, r, on in tracks]
-
-    @staticmethod
-    def _position_at(track: list[Any], when: float, t: np.ndarray) -> np.ndarray:
-        """Where a payload's centre is just before ``when``: its last position sampled before
-        then, else where it was attached."""
-        k = int(np.searchsorted(t, when)) - 1
-        return np.array(track[1][k] if k >= 0 else track[0].position)
+                track[3] = end
+        return [(p, r, on) for p, r, on, _ in tracks]
 
     def sample(self, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """The summed inertial parameters of the payloads on board at given times.

@@ -32,7 +32,10 @@ The functions here return the ``Vehicle`` fields (this module sits below ``vehic
 ``Vehicle.from_urdf``, ``Vehicle.from_sdf`` and ``Vehicle.from_file`` make the vehicle.
 
 A needed value that is missing, not a number or out of its range raises ``VehicleFileError``
-naming the value (its element path) and the file (lengths, masses and inertias beyond the
+naming the value (its element path) and the file; so does what the reader would otherwise
+read as something else: an element it reads given twice, an attribute it does not read
+(``unit``, ``relative_to``, ``auto``), a ``<!DOCTYPE>``, a xacro element, a nested SDF
+``<model>`` (lengths, masses and inertias beyond the
 model's scale ``LARGEST`` too: their sums overflowed to a NaN that named no value); so does a
 URDF whose links are not one tree of uniquely named links, an SDF whose ``<include>`` s loop
 or copy more than ``MAX_INCLUDED_ELEMENTS`` elements, and links whose mass lies farther than
@@ -132,14 +135,66 @@ def check_options(reader: Any, options: dict[str, Any], where: str) -> None:
                          f"{', '.join(map(repr, unknown))}")
 
 
+class _NoDoctype(ET.TreeBuilder):
+    """The tree of a file without a DTD: neither format has one, and PyBullet's and Gazebo's
+    readers expand no entities, so a ``<!DOCTYPE>`` (entities, default attributes, an
+    external DTD) would make the file mean one thing to quadcog and another to them."""
+
+    def doctype(self, name: str, pubid: str | None, system: str | None) -> None:
+        raise _DoctypeError(name)
+
+
+class _DoctypeError(Exception):
+    pass
+
+
 def _parse(path: Path) -> ET.Element:
     input_file(path, "a vehicle file (.urdf or .sdf)", VehicleFileError)   # included ones too
     try:
-        return ET.parse(path).getroot()
+        data = path.read_bytes()
     except FileNotFoundError:
         raise VehicleFileError(f"{path}: no such file") from None
-    except (ET.ParseError, OSError) as e:
+    except OSError as e:
+        raise VehicleFileError(f"{path}: not readable ({e})") from None
+    parser = ET.XMLParser(target=_NoDoctype())
+    try:
+        # fed at once: fed in chunks (ET.parse), expat re-scans a token that spans them, and a
+        # 50 MB attribute took 30 s
+        parser.feed(data)
+        return parser.close()
+    except _DoctypeError as e:
+        raise VehicleFileError(f"{path}: <!DOCTYPE {plain(str(e))}>: a document type "
+                               "declaration; expected a URDF or SDF file without one (neither "
+                               "format has entities or a DTD)") from None
+    except (ET.ParseError, LookupError) as e:       # LookupError: an unknown encoding
         raise VehicleFileError(f"{path}: not readable as XML ({e})") from None
+
+
+def _one(parent: ET.Element, tag: str, what: str, path: Path) -> ET.Element | None:
+    """The child ``tag`` of ``parent`` (None if it has none), refused if it has several: the
+    formats allow one, and reading the first dropped the others' numbers silently."""
+    found = parent.findall(tag)
+    if len(found) > 1:
+        raise VehicleFileError(f"{path}: {what} has {len(found)} <{tag}> elements; expected "
+                               "at most one")
+    return found[0] if found else None
+
+
+def _text(parent: ET.Element, tag: str, what: str, path: Path) -> str | None:
+    node = _one(parent, tag, what, path)
+    return None if node is None else (node.text or "")
+
+
+def _attributes(node: ET.Element, known: tuple[str, ...], what: str, path: Path) -> None:
+    """Refuse attributes of ``node`` that quadcog does not read: each changes what the numbers
+    mean (``<mass value="27" unit="g">``, ``<pose relative_to=...>``, ``<inertial
+    auto="true">``), and none is in the formats as quadcog reads them."""
+    unknown = sorted(set(node.attrib) - set(known))
+    if unknown:
+        raise VehicleFileError(
+            f"{path}: {what} has attribute(s) {', '.join(f'{a}={node.get(a)!r}' for a in unknown)}"
+            f"; expected {'only ' + ', '.join(known) if known else 'none'} (quadcog reads no "
+            "other: SI units, poses in their parent's frame)")
 
 
 # xsd:double as URDF and SDF write numbers; Python's float() also takes "1_000", "inf" and
@@ -225,22 +280,31 @@ _IDENTITY = _Pose(np.eye(3), np.zeros(3))
 
 
 def _sdf_pose(element: ET.Element | None, what: str, path: Path) -> _Pose:
-    node = None if element is None else element.find("pose")
-    if node is None or not (node.text or "").strip():
+    node = None if element is None else _one(element, "pose", what, path)
+    if node is None:
+        return _IDENTITY
+    _attributes(node, ("degrees",), f"{what}/pose", path)
+    # sdformat's bool: true or 1, false or 0 ("yes" was read as false: degrees as radians)
+    degrees = node.get("degrees", "false").strip().lower()
+    if degrees not in ("true", "1", "false", "0"):
+        raise VehicleFileError(f"{path}: {what}/pose@degrees = {plain(degrees)}; expected "
+                               "true, 1, false or 0")
+    if not (node.text or "").strip():
         return _IDENTITY
     v = _numbers(node.text, f"{what}/pose", path, 6)
     if not np.abs(v[:3]).max() <= LARGEST:
         raise VehicleFileError(f"{path}: {what}/pose = {plain((node.text or '').strip())}; expected "
                                f"x y z within +-{LARGEST:g} m (the model's scale) and roll "
                                "pitch yaw")
-    rpy = np.radians(v[3:]) if node.get("degrees", "false").lower() == "true" else v[3:]
+    rpy = np.radians(v[3:]) if degrees in ("true", "1") else v[3:]
     return _Pose(_rotation(rpy), v[:3])
 
 
 def _urdf_origin(element: ET.Element | None, what: str, path: Path) -> _Pose:
-    node = None if element is None else element.find("origin")
+    node = None if element is None else _one(element, "origin", what, path)
     if node is None:
         return _IDENTITY
+    _attributes(node, ("xyz", "rpy"), f"{what}/origin", path)
     xyz = _numbers(node.get("xyz", "0 0 0"), f"{what}/origin@xyz", path, 3, scale=True)
     rpy = _numbers(node.get("rpy", "0 0 0"), f"{what}/origin@rpy", path, 3)
     return _Pose(_rotation(rpy), xyz)
@@ -366,7 +430,9 @@ def urdf_fields(path: str | os.PathLike[str], *,
     Raises
     ------
     VehicleFileError
-        A missing file, a needed value missing or not a number, ``kf`` or ``km`` not > 0, a
+        A missing file, a ``<!DOCTYPE>`` or xacro element, an element read given twice, an
+        attribute of ``<inertial>``, ``<mass>``, ``<inertia>`` or ``<origin>`` that is not
+        read, a needed value missing or not a number, ``kf`` or ``km`` not > 0, a
         drag moment per thrust ``km / kf`` above ``MAX_MOMENT_CONSTANT``, ``thrust2weight``
         outside ``THRUST_TO_WEIGHT`` (at most 1: the rotors cannot lift the vehicle), a link
         or joint without a name or named twice, a joint naming a link that does not exist, a
@@ -390,23 +456,34 @@ def urdf_fields(path: str | os.PathLike[str], *,
     if root.tag != "robot":
         raise VehicleFileError(f"{path}: the root element is <{root.tag}>; expected <robot> "
                                "(URDF)")
+    for element in root.iter():
+        # xacro's macros, properties and includes are expanded by xacro, not by PyBullet or
+        # quadcog: the links and masses they make were left out silently
+        if element.tag.startswith("{") and "xacro" in element.tag.partition("}")[0]:
+            raise VehicleFileError(f"{path}: <xacro:{element.tag.partition('}')[2]}> is a xacro "
+                                   "macro; expected a URDF (expand it first: xacro "
+                                   "FILE.urdf.xacro > FILE.urdf)")
     links = _urdf_links(root, path)
     link_pose = _urdf_link_poses(root, links, path)
     bodies = []
     for link_name, link in links.items():
-        inertial = link.find("inertial")
+        inertial = _one(link, "inertial", f"link {link_name!r}", path)
         if inertial is None:
             continue
         what = f"link {link_name!r} <inertial>"
-        mass = inertial.find("mass")
+        _attributes(inertial, (), what, path)
+        mass = _one(inertial, "mass", what, path)
+        if mass is not None:
+            _attributes(mass, ("value",), f"{what}/mass", path)
         m = _number(None if mass is None else mass.get("value"), f"{what}/mass@value", path,
                     scale=True)
         if m == 0.0:
             continue
-        node = inertial.find("inertia")
+        node = _one(inertial, "inertia", what, path)
         if node is None:
             raise VehicleFileError(f"{path}: {what}/inertia is missing; expected ixx, iyy, "
                                    f"izz (kg m^2) of a link of mass {m:g} kg")
+        _attributes(node, _INERTIA_KEYS, f"{what}/inertia", path)
         values = {k: _number(node.get(k, "0" if k[1] != k[2] else None),
                              f"{what}/inertia@{k}", path, scale=True) for k in _INERTIA_KEYS}
         where = link_pose[link_name].then(_urdf_origin(inertial, what, path))
@@ -419,9 +496,10 @@ def urdf_fields(path: str | os.PathLike[str], *,
             raise VehicleFileError(f"{path}: link {link_name!r} is missing; expected the four "
                                    "rotor links prop0_link .. prop3_link (gym-pybullet-drones)")
         rotors.append(_within_scale(link_pose[link_name].then(
-            _urdf_origin(links[link_name].find("inertial"), f"link {link_name!r} <inertial>",
+            _urdf_origin(_one(links[link_name], "inertial", f"link {link_name!r}", path),
+                         f"link {link_name!r} <inertial>",
                          path)), f"rotor link {link_name!r}", path))
-    props = root.find("properties")
+    props = _one(root, "properties", "<robot>", path)
     if props is None:
         raise VehicleFileError(f"{path}: <properties> is missing; expected kf, km and "
                                "thrust2weight (gym-pybullet-drones)")
@@ -486,7 +564,7 @@ def _urdf_link_poses(root: ET.Element, links: dict[str, ET.Element],
         joint_names.add(joint_name)
         ends = []
         for end in ("parent", "child"):
-            node = joint.find(end)
+            node = _one(joint, end, what, path)
             link_name = None if node is None else node.get("link")
             if link_name is None:
                 raise VehicleFileError(f"{path}: {what}/{end}@link is missing; expected the "
@@ -585,7 +663,7 @@ class _SdfModel:
 def _model_file(folder: Path, read: _SdfRead) -> Path:
     config = folder / "model.config"
     if config.is_file():
-        sdf = read.parse(config).find("sdf")
+        sdf = _one(read.parse(config), "sdf", "model.config", config)
         if sdf is not None and (sdf.text or "").strip():
             return folder / (sdf.text or "").strip()
     return folder / "model.sdf"
@@ -597,9 +675,15 @@ def _sdf_model(path: Path, read: _SdfRead) -> _SdfModel:
     if key in read.models:
         return read.models[key]
     root = read.parse(path)
-    model = root.find("model") if root.tag == "sdf" else None
+    model = _one(root, "model", "<sdf>", path) if root.tag == "sdf" else None
     if model is None:
         raise VehicleFileError(f"{path}: no <sdf><model>; expected an SDF model file")
+    nested = model.find("model")
+    if nested is not None:
+        # its links would weigh in Gazebo and be left out here
+        raise VehicleFileError(f"{path}: <model> holds a nested <model name="
+                               f"{plain(nested.get('name', ''))}>; expected the model's own "
+                               "links and <include>s (quadcog reads no nested models)")
     links = [(link, _sdf_pose(link, f"link {link.get('name')!r}", path))
              for link in model.findall("link")]
     joints, plugins = model.findall("joint"), model.findall("plugin")
@@ -608,7 +692,7 @@ def _sdf_model(path: Path, read: _SdfRead) -> _SdfModel:
         if len(read.chain) > MAX_INCLUDE_DEPTH:
             raise VehicleFileError(f"{path}: <include> nested deeper than {MAX_INCLUDE_DEPTH}; "
                                    "expected no loop")
-        uri = (include.findtext("uri") or "").strip()
+        uri = (_text(include, "uri", "<include>", path) or "").strip()
         if not uri:
             raise VehicleFileError(f"{path}: <include><uri> is missing")
         target = (_model_file(_model_folder(uri, path.parent.parent, read.model_paths, path),
@@ -674,7 +758,9 @@ def sdf_fields(path: str | os.PathLike[str], *,
     Raises
     ------
     VehicleFileError
-        A missing file or included model, includes that loop, nest deeper than
+        A missing file or included model, a ``<!DOCTYPE>``, a nested ``<model>``, an element
+        read given twice, an attribute of ``<pose>`` other than ``degrees`` (true, 1, false
+        or 0) or one of ``<inertial>``, includes that loop, nest deeper than
         ``MAX_INCLUDE_DEPTH`` or copy more than ``MAX_INCLUDED_ELEMENTS`` links, joints and
         plugins, a needed value missing or not a number, a rotor axis that is not along body
         z, a ``motorNumber`` that is not one of 0..3 or is given twice, a constant out of its
@@ -714,7 +800,7 @@ def sdf_fields(path: str | os.PathLike[str], *,
     joint_of = {j.get("name", ""): j for j in joints}
 
     def text(plugin: ET.Element, tag: str) -> str | None:
-        return plugin.findtext(tag)
+        return _text(plugin, tag, "a MulticopterMotorModel plugin", path)
 
     # Gazebo hands motor k the k-th rotor command: the numbers order the rotors, so each of
     # 0..3 must be given once, written as an integer (1.5 or 1e300 orders nothing)
@@ -776,18 +862,23 @@ def sdf_fields(path: str | os.PathLike[str], *,
     bodies = []
     for link, pose in links:
         link_name = link.get("name", "")
-        inertial = link.find("inertial")
+        inertial = _one(link, "inertial", f"link {link_name!r}", path)
         if inertial is None or (not rotor_links and link_name in rotor_names):
             continue
         what = f"link {link_name!r} <inertial>"
-        m = _number(inertial.findtext("mass"), f"{what}/mass", path, scale=True)
+        # auto="false" (SDF 1.11's default) says the numbers are as written; auto="true"
+        # asks Gazebo to compute them from the collisions, which quadcog does not
+        manual = inertial.get("auto", "false").strip().lower() in ("false", "0")
+        _attributes(inertial, ("auto",) if manual else (), what, path)
+        m = _number(_text(inertial, "mass", what, path), f"{what}/mass", path, scale=True)
         if m == 0.0:
             continue
-        node = inertial.find("inertia")
+        node = _one(inertial, "inertia", what, path)
         if node is None:
             raise VehicleFileError(f"{path}: {what}/inertia is missing; expected ixx, iyy, "
                                    f"izz (kg m^2) of a link of mass {m:g} kg")
-        inertia = {k: _number(node.findtext(k) or ("0" if k[1] != k[2] else None),
+        inertia = {k: _number(_text(node, k, f"{what}/inertia", path) or
+                             ("0" if k[1] != k[2] else None),
                              f"{what}/inertia/{k}", path, scale=True) for k in _INERTIA_KEYS}
         where = pose.then(_sdf_pose(inertial, what, path))
         bodies.append(_body(m, where, _inertia_matrix(inertia), what, path))

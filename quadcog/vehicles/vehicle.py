@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from quadcog.errors import InputError, ParameterError
+from quadcog.errors import InputError, ParameterError, VehicleFileError
 from quadcog.model.conventions import IDX, PARAM_NAMES, R_G, hover_trim
 from quadcog.model.inertial_parameters import (
     check_physically_consistent,
@@ -316,16 +316,17 @@ class Vehicle:
         Raises
         ------
         VehicleFileError
-            A missing file, a needed value missing, not a number or out of its range, or links
-            that are not one tree of uniquely named links (named with the file;
-            ``quadcog.vehicles.description.urdf_fields``).
+            A missing file, a needed value missing, not a number or out of its range, links
+            that are not one tree of uniquely named links
+            (``quadcog.vehicles.description.urdf_fields``), or a CoG that leaves no level
+            hover within the rotors' thrusts (named with the file).
         InputError
             An unknown option, or ``drag`` not None or a table of the six drag coefficients.
         PhysicalConsistencyError
             A link whose mass and inertia no rigid body has.
         """
         check_options(urdf_fields, options, "Vehicle.from_urdf")
-        return cls._from_fields(urdf_fields(path, **options), drag)
+        return cls._from_fields(urdf_fields(path, **options), drag, path)
 
     @classmethod
     def from_sdf(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
@@ -351,16 +352,17 @@ class Vehicle:
         Raises
         ------
         VehicleFileError
-            A missing file or included model, includes that loop or copy too much, or a
+            A missing file or included model, includes that loop or copy too much, a
             needed value missing, not a number or out of its range
-            (``quadcog.vehicles.description.sdf_fields``).
+            (``quadcog.vehicles.description.sdf_fields``), or a CoG that leaves no level
+            hover within the rotors' thrusts.
         InputError
             An unknown option, or ``drag`` not None or a table of the six drag coefficients.
         PhysicalConsistencyError
             A link whose mass and inertia no rigid body has.
         """
         check_options(sdf_fields, options, "Vehicle.from_sdf")
-        return cls._from_fields(sdf_fields(path, **options), drag)
+        return cls._from_fields(sdf_fields(path, **options), drag, path)
 
     @classmethod
     def from_file(cls, path: str | os.PathLike[str], drag: dict[str, float] | None = None,
@@ -388,10 +390,11 @@ class Vehicle:
         InputError
             An unknown option, or ``drag`` not None or a table of the six drag coefficients.
         """
-        return cls._from_fields(file_fields(path, **options), drag)
+        return cls._from_fields(file_fields(path, **options), drag, path)
 
     @classmethod
-    def _from_fields(cls, fields_: dict[str, Any], drag: dict[str, float] | None) -> "Vehicle":
+    def _from_fields(cls, fields_: dict[str, Any], drag: dict[str, float] | None,
+                     path: str | os.PathLike[str]) -> "Vehicle":
         names = tuple(preset_drag(1.0, 1.0))            # the six drag fields, in order
         if drag is None:
             drag = preset_drag(fields_["m"], fields_["Ixx"])
@@ -401,7 +404,19 @@ class Vehicle:
                    else plain(drag))
             raise InputError(f"drag: expected None or a table of the six drag coefficients "
                              f"{', '.join(names)} (N s/m, N m s/rad), got {got}")
-        return cls(**{**fields_, **drag})
+        vehicle = cls(**{**fields_, **drag})
+        # a file's CoG comes with its inertia, so the model's admissible radius does not bound
+        # it: a CoG outside the rotors' polygon (or too near a rotor) leaves no level hover
+        # within the rotors' thrusts, and the file was flown as if it had one
+        f = vehicle.rotor_thrusts(vehicle.hover_input())
+        if not ((f >= vehicle.min_rotor_thrust).all() and (f <= vehicle.max_rotor_thrust).all()):
+            raise VehicleFileError(
+                f"{path}: the links' CoG at ({vehicle.x_G:.4g}, {vehicle.y_G:.4g}) m from the "
+                f"rotors' centre needs rotor thrusts {[float(f'{x:.4g}') for x in f]} N to hover; "
+                f"expected each in [{vehicle.min_rotor_thrust:g}, "
+                f"{vehicle.max_rotor_thrust:.4g}] N (a CoG inside the rotors' polygon, which "
+                "the rotors can hold level)")
+        return vehicle
 
     # -- what the generated functions and the plant need --------------------------------
     def parameters(self) -> npt.NDArray[np.float64]:
