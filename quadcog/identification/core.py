@@ -428,8 +428,8 @@ def identify(logs: FlightLog | str | Path | Sequence[FlightLog | str | Path],
     # the units and the physics of every log, before any estimate
     check_types(logs, base or [], vehicle if preset else None)
     _check_distinct(logs, base or [])
-    for log in logs + (base or []):
-        _check_physics(log, vehicle, rotor_model)
+    _check_thrust_sources(logs, base or [], [_check_physics(log, vehicle, rotor_model)
+                                             for log in logs + (base or [])])
     flights = _estimate(logs, vehicle, chosen, rotor_model)
     r, half, m, m_half, samples = pooled_estimate(flights)
     base_est = ()
@@ -483,13 +483,34 @@ def _check_distinct(logs: list[FlightLog], baseline: list[FlightLog]) -> None:
 
 
 def _check_physics(log, vehicle, rotor_model):
-    """The plausibility checks of one log (quadcog.identification.plausibility)."""
+    """The plausibility checks of one log (quadcog.identification.plausibility); returns
+    the sentence saying where its thrust comes from (``rotor_thrusts``)."""
     from quadcog.identification.segments import hover_window, rotor_thrusts, vertical_acceleration
     check_log(log)
     window = hover_window(log)
-    thrusts, _, _ = rotor_thrusts(log, vehicle, rotor_model)
+    thrusts, described, model = rotor_thrusts(log, vehicle, rotor_model)
     a_z, a_from = vertical_acceleration(log)
-    hover_physics(log, vehicle, window.mask, thrusts, a_z, a_from)
+    hover_physics(log, vehicle, window.mask, thrusts, a_z, a_from, model)
+    return described
+
+
+def _check_thrust_sources(logs, baseline, described):
+    """Refuse logs (and baseline logs) whose thrusts come from different rotor models or
+    signals (``segments.thrust_source``): each source has its own error, which pooling mixes
+    and a baseline does not cancel (a payload would read as a change of the model's error:
+    a mass that falls when the payload is added)."""
+    from quadcog.identification.segments import thrust_source
+    roles = [f"logs[{i}]" for i in range(len(logs))] + \
+        [f"baseline[{i}]" for i in range(len(baseline))]
+    items = list(zip(roles, logs + baseline, map(thrust_source, described)))
+    first_role, first, source = items[0]
+    for role, log, other in items[1:]:
+        if other != source:
+            raise IdentificationError(
+                f"{role}: expected a log whose thrust comes from {source} as in {first_role} "
+                f"({first.source}), got {log.source}, whose thrust comes from {other}: each "
+                "rotor model and signal has its own error, which pooling mixes and a baseline "
+                "does not cancel; give logs that log the same signals")
 
 
 def _check_answer(logs, vehicle, r, half, m, m_half, mass_change):

@@ -2,9 +2,9 @@
 estimate (``quadcog.identify``), so that an impossible log is refused in its own terms, naming
 the log and the column, instead of giving a number that means nothing.
 
-- time: seconds; the median step must be a logger's (``RATE_HZ``: 2 Hz .. 100 kHz) and the
-  log at most ``MAX_SPAN`` long. A time column in milliseconds or microseconds fails here, and
-  the message says which unit it looks like;
+- time: seconds; the median step must be a logger's (``RATE_HZ``: 2 Hz .. 100 kHz), no step
+  shorter than its fastest one, and the log at most ``MAX_SPAN`` long. A time column in
+  milliseconds or microseconds fails here, and the message says which unit it looks like;
 - values: each signal within what a quadrotor and its sensors can give (``LIMITS``: speed,
   acceleration, the full scale of a flight controller's gyroscope, angles in radians, an
   unwrapped yaw no day at that full scale exceeds, motor outputs 0..1, moment commands
@@ -14,7 +14,7 @@ the log and the column, instead of giving a number that means nothing.
   kinematic acceleration), the rotors must carry the vehicle's weight within
   ``WEIGHT_RATIO`` (motors off, a vehicle standing or carried by hand, or a rotor model of
   another vehicle fail here), no motor output (or command of the mixer) at full scale over
-  most of the hover, and the angular
+  most of the hover, nor a rotor at its rotor model's largest thrust, and the angular
   acceleration of the logged rates must be one the airframe's rotors can give
   (``RATE_MARGIN``) and the rates integrated over ``AGREE_SECONDS`` must turn the logged
   roll and pitch as far as they turn (ZYX kinematics, to ``AGREE_TOLERANCE``): deg/s read as
@@ -34,6 +34,7 @@ from quadcog.logs.limits import BODY_RATE_MAX_DEG_S
 from quadcog.logs.signals import SIGNALS, TIME_COLUMN, signal_columns
 from quadcog.logs.ulog import WRITER_HW, WRITER_NAME
 from quadcog.validate import array, choice, fail, integer
+from quadcog.vehicles.rotor_model import MAX_BATTERY_VOLTAGE, RotorModel
 from quadcog.vehicles.vehicle import Vehicle
 
 __all__ = ["RATE_HZ", "MAX_SPAN", "LIMITS", "WEIGHT_RATIO", "RATE_MARGIN", "MAX_BODY_RATE",
@@ -152,6 +153,18 @@ def check_log(log: FlightLog) -> None:
             f"{1.0 / step:.3g} Hz, over {span:.3g} s; a flight log is sampled at "
             f"{RATE_HZ[0]:g} Hz to {RATE_HZ[1]:g} Hz and lasts at most a day"
             + _unit_guess(step))
+    # every step, not only the median: a sample closer to the one before than any logger
+    # writes (a stamp repeated with a jitter, or rewritten) makes the derivatives of the
+    # velocity and the position that the checks and estimators take numbers of no flight
+    short = np.diff(log.t) < 1.0 / RATE_HZ[1]
+    if short.any():
+        k = int(np.argmax(short))
+        raise IdentificationError(
+            f"{log.source}: {column_name(log, 't')}: sample {k + 1} at "
+            f"t = {float(log.t[k + 1])!r} s follows sample {k} by "
+            f"{float(log.t[k + 1] - log.t[k]):.3g} s (the first of {int(short.sum())} such "
+            f"step(s)); expected steps of at least {1.0 / RATE_HZ[1]:g} s (a logger writes at "
+            f"most {RATE_HZ[1]:g} Hz): a time stamp repeated or rewritten?")
     for name, (lo, hi, unit, why) in LIMITS.items():
         if not log.has(name):
             continue
@@ -196,7 +209,7 @@ def _position_speed(log):
 
 
 def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: np.ndarray,
-                  a_z: np.ndarray, a_from: str) -> None:
+                  a_z: np.ndarray, a_from: str, rotor_model: RotorModel | None = None) -> None:
     """Refuse a hover that gravity, the rotors or the airframe cannot give (module docstring).
 
     Parameters
@@ -213,13 +226,17 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
         Kinematic vertical acceleration (m/s^2).
     a_from : str
         Where ``a_z`` came from (for the message).
+    rotor_model : RotorModel, optional
+        The model that gave ``thrusts``: a rotor at its largest thrust over most of the
+        hover (``SATURATED_FRACTION``) is refused, as a saturated output is.
 
     Raises
     ------
     IdentificationError
         Naming the log and what is impossible; arguments of another type or shape (``mask``
         not a bool array of the log's samples selecting one at least, ``thrusts`` not finite
-        (N, 4), ``a_z`` not finite (N,), ``a_from`` not a str).
+        (N, 4), ``a_z`` not finite (N,), ``a_from`` not a str, ``rotor_model`` not a
+        RotorModel or None).
     """
     check_arguments("hover_physics", log)
     _checks.vehicle(vehicle, "hover_physics: vehicle")
@@ -228,10 +245,15 @@ def hover_physics(log: FlightLog, vehicle: Vehicle, mask: np.ndarray, thrusts: n
     thrusts = array(thrusts, "hover_physics: thrusts", shape=(n, 4), error=IdentificationError)
     a_z = array(a_z, "hover_physics: a_z", shape=(n,), error=IdentificationError)
     _checks.text(a_from, "hover_physics: a_from")
+    if rotor_model is not None and not isinstance(rotor_model, RotorModel):
+        fail("hover_physics: rotor_model", "a RotorModel or None", rotor_model,
+             IdentificationError)
     g, weight = vehicle.g, vehicle.m * vehicle.g
     h = float(np.median(log.signal("position")[mask, 2]))
     cos_tilt = _hover_tilt(log, mask, h)
     _saturation(log, vehicle, mask, h)
+    if rotor_model is not None:
+        _thrust_ceiling(log, mask, thrusts, rotor_model, h)
     _yaw_balance(log, vehicle, mask, thrusts, h)
     if log.has("velocity"):
         _velocity_agrees_with_position(log, mask)
@@ -307,6 +329,26 @@ def _saturation(log, vehicle, mask, h):
                 "the motor is saturated, so its thrust is not known and the vehicle is not "
                 "hovering on it; expected outputs below full scale (a log of a flight that "
                 "held its height)")
+
+
+def _thrust_ceiling(log, mask, thrusts, model, h):
+    """A rotor at the largest thrust its model gives (full output at the highest battery
+    voltage; a voltage fit saturates beyond its parabola's vertex) over most of the hover:
+    its thrust is not known, and rotors all at that ceiling read as a CoG at O with no
+    spread (a battery voltage in other units puts every rotor there)."""
+    top = float(model.thrust(np.ones((1, 4)), MAX_BATTERY_VOLTAGE if model.uses_voltage
+                             else None)[0, 0])
+    at_top = (thrusts[mask] >= top * (1.0 - 1e-9)).mean(axis=0)
+    j = int(np.argmax(at_top))
+    if top > 0 and at_top[j] > SATURATED_FRACTION:
+        volts = (f": is the battery voltage in other units? ({column_name(log, 'battery_voltage')} "
+                 f"is {float(np.median(log.signal('battery_voltage')[mask])):.3g} V, median)"
+                 if model.uses_voltage and log.has("battery_voltage") else "")
+        raise IdentificationError(
+            f"{log.source}: rotor {j + 1} gives the largest thrust of rotor model "
+            f"{model.name!r} ({top:.4g} N) over {100 * float(at_top[j]):.3g} % of the hover at "
+            f"{h:.2f} m, beyond the range of its fit, so its thrust is not known; expected "
+            f"thrusts below the model's largest{volts}")
 
 
 def _yaw_balance(log, vehicle, mask, thrusts, h):

@@ -24,7 +24,7 @@ from quadcog.vehicles.vehicle import Vehicle
 __all__ = ["check_arguments", "MAX_GAP", "HOVER_BAND", "HOVER_TRIM", "BLOCK_SECONDS", "MIN_BLOCKS", "HoverWindow",
            "hover_window", "rotor_thrusts", "vertical_acceleration", "block_means",
            "block_mean_ci95", "ar1_inflation", "speed_corrected", "body_velocity",
-           "SPEED_SPREAD", "t_quantile", "commands_from_mixer"]
+           "SPEED_SPREAD", "t_quantile", "commands_from_mixer", "FALLBACK_NOTE", "thrust_source"]
 
 HOVER_BAND = 0.25        # fraction of the plateau height: |z - h| < 0.25 h is "at the plateau"
 HOVER_TRIM = 1.5         # s cut at both ends of the plateau (the climb and descent settle)
@@ -39,6 +39,9 @@ SPEED_SPREAD = 0.1       # m/s
 # samples further apart than this are two stretches (a logging gap, or two flights in one
 # log): no plateau and no block spans the gap
 MAX_GAP = 0.5            # s
+# how ``rotor_thrusts`` starts the note on a fallback in its sentence; the sentence before it
+# names the rotor model and the signals the thrust came from (``thrust_source``)
+FALLBACK_NOTE = " (the log has no "
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,16 +135,21 @@ class HoverWindow:
         t = array(t, "HoverWindow.blocks: t", shape=(None,), error=IdentificationError)
         seconds = positive(seconds, "HoverWindow.blocks: seconds", "s", IdentificationError)
         index = np.full(len(t), -1)
-        first = 0
-        for a, b in self.segments:
-            inside = (t >= a) & (t <= b)
-            n = int((b - a) // seconds)
-            if n == 0:
-                continue
-            # n equal blocks tile the segment, each at least ``seconds`` long
-            k = np.minimum(np.floor((t[inside] - a) / ((b - a) / n)).astype(int), n - 1)
-            index[inside] = k + first
-            first += n
+        # n equal blocks tile a segment, each at least ``seconds`` long; a segment shorter
+        # than a block has none
+        a, b = np.array(self.segments, dtype=float).reshape(-1, 2).T
+        n = ((b - a) // seconds).astype(int)
+        a, b, n = a[n > 0], b[n > 0], n[n > 0]
+        first = np.cumsum(n) - n
+        # each time's segment found by bisection (a loop over the segments, each over every
+        # time, was quadratic in a long log of many plateaus); where two segments touch,
+        # the later one holds the shared time
+        seg = np.searchsorted(a, t, side="right") - 1
+        inside = seg >= 0
+        inside[inside] = t[inside] <= b[seg[inside]]
+        s = seg[inside]
+        k = np.minimum(np.floor((t[inside] - a[s]) / ((b[s] - a[s]) / n[s])).astype(int), n[s] - 1)
+        index[inside] = k + first[s]
         return index
 
 
@@ -220,9 +228,10 @@ def hover_window(log: FlightLog, band: float = HOVER_BAND, trim: float = HOVER_T
         a, b = t[i] + trim, t[j - 1] - trim
         if b - a >= BLOCK_SECONDS:
             segments.append((float(a), float(b)))
+    # each segment's samples by bisection of the increasing times: linear in the log
     mask = np.zeros(len(t), bool)
     for a, b in segments:
-        mask |= (t >= a) & (t <= b)
+        mask[np.searchsorted(t, a, side="left"):np.searchsorted(t, b, side="right")] = True
     window = HoverWindow(tuple(segments), h, mask)
     n_blocks = window.blocks(t[mask]).max(initial=-1) + 1
     if n_blocks < MIN_BLOCKS:
@@ -316,16 +325,39 @@ def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | st
     fallback = CRAZYFLIE_FIRMWARE_COMMAND if crazyflie else None
     if fallback is not None and log.has("motor_command"):
         return (fallback.thrust(log.signal("motor_command")),
-                f"{fallback.name} from motor_command (the log has no {', '.join(missing)})",
+                f"{fallback.name} from motor_command{FALLBACK_NOTE}{', '.join(missing)})",
                 fallback)
     if fallback is not None and log.has("thrust_command") and log.has("moment_command"):
         u = commands_from_mixer(log, vehicle)
         return (fallback.thrust(u), f"{fallback.name} from thrust_command and moment_command "
-                "through the firmware's mixer (the log has no motor outputs)", fallback)
+                f"through the firmware's mixer{FALLBACK_NOTE}motor outputs)", fallback)
     raise IdentificationError(
         f"{log.source}: rotor model {model.name!r} needs the signal(s) "
         f"{', '.join(missing)}, which the log lacks (it has "
         f"{', '.join(log.signals) or 'no standard signals'})")
+
+
+def thrust_source(description: str) -> str:
+    """The rotor model and the signals a thrust came from: a sentence of ``rotor_thrusts``
+    without its note on what the log lacks (two logs whose thrusts have one source carry the
+    same model error, which a baseline cancels).
+
+    Parameters
+    ----------
+    description : str
+        The sentence ``rotor_thrusts`` returned (``FlightEstimate.rotor``).
+
+    Returns
+    -------
+    str
+        E.g. ``"bitcraze-voltage from motor_pwm and battery_voltage"``.
+
+    Raises
+    ------
+    IdentificationError
+        ``description`` not a str.
+    """
+    return _checks.text(description, "thrust_source: description").partition(FALLBACK_NOTE)[0]
 
 
 def vertical_acceleration(log: FlightLog) -> tuple[npt.NDArray[np.float64], str]:
