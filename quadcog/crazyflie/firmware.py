@@ -96,8 +96,14 @@ def firmware_tree(firmware: str | os.PathLike[str] | None = None) -> Path:
     Raises
     ------
     quadcog.StackError
-        A folder that is not a firmware tree (the first missing file named), or none at all.
+        A folder that is not a firmware tree (the first missing file named), none at all, or
+        ``firmware`` not a path (an empty one would name the current folder).
     """
+    if firmware is not None and (not isinstance(firmware, (str, os.PathLike))
+                                 or not isinstance(os.fspath(firmware), str)
+                                 or not os.fspath(firmware)):
+        validate.fail("firmware", "None or the path of a Crazyflie firmware tree", firmware,
+                      StackError)
     return find_tree(firmware, FIRMWARE_ENV, "crazyflie-firmware.tar.xz", "crazyflie-firmware",
                      MARKERS, "Crazyflie firmware tree", GET_FIRMWARE)
 

@@ -269,23 +269,37 @@ def _unpack(source: Path, folder: Path) -> Path:
     tmp = folder / "unpacking"
     shutil.rmtree(tmp, ignore_errors=True)
     tmp.mkdir(parents=True)
-    if source.is_file():
-        try:
-            with tarfile.open(source) as tar:
-                tar.extractall(tmp, filter="data")
-        except (tarfile.TarError, OSError, EOFError) as e:
-            raise Px4Error(f"{source}: cannot unpack ({e})") from None
-        tops = [p for p in tmp.iterdir() if p.is_dir()]
-        if len(tops) != 1 or not (tops[0] / "Makefile").is_file():
-            raise Px4Error(f"{source}: expected one PX4-Autopilot folder in the tarball, found "
-                           f"{sorted(p.name for p in tmp.iterdir())}")
-        tops[0].rename(target)
-    else:
-        shutil.copytree(source, tmp / "PX4-Autopilot", symlinks=True,
-                        ignore=lambda d, names: ["build"] if Path(d) == source else [])
-        (tmp / "PX4-Autopilot").rename(target)
-    tmp.rmdir()
+    try:
+        if source.is_file():
+            try:
+                with tarfile.open(source) as tar:
+                    tar.extractall(tmp, filter="data")
+            except (tarfile.TarError, OSError, EOFError) as e:
+                raise Px4Error(f"{source}: cannot unpack ({e})") from None
+            tops = [p for p in tmp.iterdir() if p.is_dir()]
+            if len(tops) != 1 or not (tops[0] / "Makefile").is_file():
+                raise Px4Error(f"{source}: expected one PX4-Autopilot folder in the tarball, "
+                               f"found {sorted(p.name for p in tmp.iterdir())}")
+            tops[0].rename(target)
+        else:
+            try:
+                shutil.copytree(source, tmp / "PX4-Autopilot", symlinks=True,
+                                ignore=lambda d, names: _not_copied(source, Path(d), names))
+            except (shutil.Error, OSError) as e:
+                raise Px4Error(f"{source}: cannot copy the tree into the cache "
+                               f"({str(e)[:300]})") from None
+            (tmp / "PX4-Autopilot").rename(target)
+    finally:        # a failed or interrupted copy leaves nothing half-made in the cache
+        shutil.rmtree(tmp, ignore_errors=True)
     return target
+
+
+def _not_copied(source: Path, folder: Path, names: list[str]) -> list[str]:
+    """What a tree's copy leaves out: its top ``build/`` and what ``tree_key`` does not hash,
+    i.e. all but folders, regular files and links (a FIFO would be read without end)."""
+    return [n for n in names if (n == "build" and folder == source)
+            or not ((folder / n).is_symlink() or (folder / n).is_dir()
+                    or (folder / n).is_file())]
 
 
 def _git(args: list[str], cwd: Path) -> None:

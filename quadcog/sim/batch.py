@@ -4,6 +4,7 @@ flights) instead of trajectories: the monitored closed-loop step run by the vect
 or, where that cannot be built, by CasADi's map."""
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+import itertools
 import time
 from typing import Any
 
@@ -20,14 +21,25 @@ from quadcog.model.parameters import MARGIN, check_parameters, inertia_ratio
 from quadcog.sim.closed_loop import ACCUMULATORS, CHUNK, SLOW_INPUTS, monitored_chunk_function, monitored_step, packed
 from quadcog.sim.divergence import DivergenceCause, Limits, divergence_rule, magnitude
 from quadcog.sim.plant import Actuation, TruthOptions
-from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference, whole_body
+from quadcog.sim.prepare import (
+    RK4_LIMIT,
+    batch_start,
+    check_fastest_eigenvalue,
+    check_step_size,
+    check_time,
+    run_options,
+    start_at_reference,
+    warn_late_disturbances,
+    whole_body,
+)
 from quadcog.sim.result import metric_arrays, position_errors
 from quadcog.sim.schedule import STEP_INPUTS, Schedule, cog_at
 from quadcog.sim.timeline import CogProfile, PayloadProfile
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["BatchResult", "batch_kernel", "simulate_batch", "check_cog_range", "run_kernel", "run_map",
+__all__ = ["BatchResult", "MAX_FLIGHTS", "BYTES_PER_FLIGHT", "batch_kernel", "simulate_batch",
+           "check_vehicles", "check_cog_range", "check_step_sizes", "run_kernel", "run_map",
            "batch_metrics", "slow_row_entries"]
 
 
@@ -177,20 +189,67 @@ _ROTOR_FIELDS = ("rotor_positions", "rotor_directions", "thrust_constant", "mome
                  "max_rotor_thrust", "min_rotor_thrust", "motor_time_constant")
 
 
-def _vehicles(vehicles: Any, options: TruthOptions
-              ) -> tuple[list[Vehicle], npt.NDArray[np.float64], Actuation]:
+# Flights of one batch: each costs its state, parameters and metrics (about BYTES_PER_FLIGHT:
+# 1.37 kB measured as peak RSS per flight of a 1e5-flight batch, rounded up), so a million
+# is about 1.4 GB; more is refused before the vehicles are even listed.
+MAX_FLIGHTS = 1_000_000
+BYTES_PER_FLIGHT = 1400
+# rows of check_step_sizes per mapped call: its Jacobians take n^2 doubles each
+STEP_CHECK_BLOCK = 4096
+
+
+def check_vehicles(vehicles: Any, options: TruthOptions
+                   ) -> tuple[list[Vehicle], npt.NDArray[np.float64], Actuation]:
     """The checked list of truth vehicles, their parameters (B, 14) and shared Actuation.
 
     Each Vehicle was checked when it was built; here only what the batch adds is checked, in
-    vectorized form: that all share the rotors (the compiled step holds them)."""
+    vectorized form: at most ``MAX_FLIGHTS`` of them, in an order (one result per flight),
+    sharing the rotors (the compiled step holds them).
+
+    Parameters
+    ----------
+    vehicles : Vehicle or sequence of Vehicle
+        The truth vehicles.
+    options : TruthOptions
+        The truth options (for the Actuation).
+
+    Returns
+    -------
+    vehicles : list of Vehicle
+        The B vehicles.
+    params : (B, 14) numpy.ndarray
+        Their airframes' parameters.
+    actuation : Actuation
+        Their rotors.
+
+    Raises
+    ------
+    quadcog.InputError
+        Naming the first vehicle that is none, or differs from vehicles[0] in its rotors or
+        payloads, or giving the count and its memory beyond ``MAX_FLIGHTS``.
+    """
+    what = "a non-empty sequence of quadcog Vehicles"
     if isinstance(vehicles, Vehicle):
         vehicles = [vehicles]
-    elif isinstance(vehicles, (str, bytes)) or not hasattr(vehicles, "__iter__"):
-        validate.fail("vehicles", "a non-empty sequence of quadcog Vehicles", vehicles)
-    vehicles = list(vehicles)
-    if not vehicles or not all(isinstance(v, Vehicle) for v in vehicles):
-        raise InputError("vehicles must be a non-empty sequence of quadcog Vehicles, got "
-                         f"{vehicles!r:.200}")
+    elif (isinstance(vehicles, (str, bytes, dict, set, frozenset))      # no order of flights
+          or not hasattr(vehicles, "__iter__")):
+        validate.fail("vehicles", what, vehicles)
+    # a sized sequence is counted before it is copied; an iterator is read one past the limit
+    sized = hasattr(vehicles, "__len__")
+    n = len(vehicles) if sized else 0
+    if n <= MAX_FLIGHTS:
+        vehicles = list(itertools.islice(vehicles, MAX_FLIGHTS + 1))
+        n = len(vehicles)
+    if n > MAX_FLIGHTS:
+        count = f"{n:,} flights" if sized else f"more than {MAX_FLIGHTS:,} flights"
+        raise InputError(f"vehicles: expected at most {MAX_FLIGHTS:,} flights (about "
+                         f"{MAX_FLIGHTS * BYTES_PER_FLIGHT / 2**30:.3g} GiB), got {count}, "
+                         f"about {n * BYTES_PER_FLIGHT / 2**30:.3g} GiB")
+    if not vehicles:
+        validate.fail("vehicles", what, vehicles)
+    for b, v in enumerate(vehicles):
+        if not isinstance(v, Vehicle):
+            validate.fail(f"vehicles[{b}]", "a quadcog Vehicle", v)
     actuation = Actuation.of(vehicles[0], options)
     rotors = tuple(getattr(vehicles[0], f) for f in _ROTOR_FIELDS)
     for b, v in enumerate(vehicles):
@@ -220,6 +279,10 @@ def _cog_scale(cog_shape: Any) -> Callable[[float], float] | None:
         return None
     if isinstance(cog_shape, CogProfile):
         profile = cog_shape
+        for i, change in enumerate(profile.changes):
+            if change.r[1] or change.r[2]:      # only x is the shape: y, z would be dropped
+                validate.fail(f"cog_shape change {i}", "a shape in x alone (r = (s, 0, 0))",
+                              list(change.r))
         return lambda t: profile.sample([t])[0, 0]
     if not callable(cog_shape):
         validate.fail("cog_shape", "None, a CogProfile or a function of time", cog_shape)
@@ -262,6 +325,65 @@ def check_cog_range(params: npt.NDArray[np.float64], schedule: Schedule) -> None
             b = int(np.flatnonzero(~ok)[0])
             check_parameters(P[b], f"vehicles[{b}] at t = {validate.plain(schedule.t[k])} s "
                                    f"(cog_shape {validate.plain(scale[k])} x its r_G)")
+
+
+def check_step_sizes(controller: Controller, x0: npt.NDArray[np.float64],
+                     ref0: npt.NDArray[np.float64], P: npt.NDArray[np.float64], dt: float,
+                     actuation: Actuation) -> None:
+    """``quadcog.sim.prepare.check_step_size`` for each flight, as ``simulate`` checks one.
+
+    Flights of equal parameters share a closed loop, so each distinct row is checked once:
+    the first by ``check_step_size`` (the motor lag too), the others' Jacobians in one mapped
+    call, ``STEP_CHECK_BLOCK`` rows at a time, bounded by their norms, and the eigenvalues
+    computed only where the bound does not pass (a thousand flights in about 30 ms, where a
+    call per flight took 0.15 s).
+
+    Parameters
+    ----------
+    controller : Controller
+        Designed for its model already.
+    x0 : (12,) numpy.ndarray
+        The start state, shared.
+    ref0 : (14,) numpy.ndarray
+        The reference row at t = 0.
+    P : (B, 14) numpy.ndarray
+        Each flight's truth parameters at t = 0, with the payloads on board.
+    dt : float
+        The step (s).
+    actuation : Actuation
+        The rotors.
+
+    Raises
+    ------
+    quadcog.InputError
+        Naming the first flight for which dt is too large.
+    """
+    rows = np.sort(np.unique(P, axis=0, return_index=True)[1])
+    try:
+        check_step_size(controller, x0, ref0, P[rows[0]], dt, actuation)
+    except InputError as e:
+        raise InputError(f"vehicles[{rows[0]}]: {e}") from None
+    jacobian = controller.closed_loop_jacobian()
+    n = jacobian.size1_out(0)
+    for a in range(1, rows.size, STEP_CHECK_BLOCK):
+        block = rows[a:a + STEP_CHECK_BLOCK]
+        # the mapped Jacobians side by side, (n, n k), as k (n, n) matrices
+        A = np.array(jacobian.map(block.size)(x0, ref0, P[block].T))
+        A = A.reshape(n, block.size, n).transpose(1, 0, 2)
+        bad = np.flatnonzero(~np.isfinite(A).all(axis=(1, 2)))
+        if bad.size:
+            raise InputError(f"vehicles[{block[bad[0]]}]: the closed loop's Jacobian at the "
+                             f"start is not finite; expected a vehicle the law can fly")
+        # the spectral radius is at most any induced norm: a row whose smaller of the 1- and
+        # inf-norms passes the rule needs no eigenvalues (at 1 ms, every row of a usual batch)
+        bound = np.minimum(np.abs(A).sum(axis=1).max(axis=1), np.abs(A).sum(axis=2).max(axis=1))
+        near = np.flatnonzero(bound * dt > RK4_LIMIT)
+        fastest = np.abs(np.linalg.eigvals(A[near])).max(axis=1) if near.size else ()
+        for b, f in zip(block[near].tolist(), list(fastest)):
+            try:
+                check_fastest_eigenvalue(float(f), dt)
+            except InputError as e:
+                raise InputError(f"vehicles[{b}]: {e}") from None
 
 
 def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle,
@@ -323,7 +445,7 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
     threads = validate.integer(threads, "threads", lo=1, hi=1024)
     cog_scale = _cog_scale(cog_shape)
     dt = config.get("simulate.dt", dt)
-    vehicles, params, actuation = _vehicles(vehicles, options)
+    vehicles, params, actuation = check_vehicles(vehicles, options)
     if controller_model is None:
         b = _same_but_cog(params)
         if b is not None:
@@ -338,12 +460,15 @@ def simulate_batch(controller: Controller, vehicles: Sequence[Vehicle] | Vehicle
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
                               disturbances=disturbances, cog_scale=cog_scale,
                               payloads=PayloadProfile([], vehicles[0].payloads))
+    warn_late_disturbances(disturbances, duration)
     check_cog_range(params, schedule)
     x0 = start_at_reference(schedule.ref[0])
     nX = N_STATE + actuation.n_rotor_states + controller.n_state
     P0 = params.copy()
     P0[:, R_G] = cog_at(params[:, R_G], schedule.cog_scale[0], schedule.cog[0])
-    Z = batch_start(controller, actuation, whole_body(P0, schedule.payload[0]), x0)
+    P0 = whole_body(P0, schedule.payload[0])
+    check_step_sizes(controller, x0, schedule.ref[0], P0, dt, actuation)
+    Z = batch_start(controller, actuation, P0, x0)
     t0 = time.perf_counter()
     kernel = batch_kernel(controller, actuation, limits)
     if kernel is not None:

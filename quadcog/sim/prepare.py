@@ -36,8 +36,9 @@ from quadcog.vehicles.payload import check_lift, check_reach
 from quadcog.vehicles.vehicle import HUMMINGBIRD, N_ROTORS, Vehicle
 
 __all__ = ["RK4_LIMIT", "FlightSetup", "prepare_flight", "batch_start", "check_time",
-           "run_options", "check_step_size", "start_at_reference", "as_cog_profile",
-           "check_cog_changes", "as_payload_profile", "check_payload_events", "whole_body"]
+           "run_options", "check_start", "check_step_size", "check_fastest_eigenvalue", "start_at_reference",
+           "as_cog_profile", "check_cog_changes", "warn_late_disturbances", "as_payload_profile",
+           "check_payload_events", "whole_body"]
 
 RK4_LIMIT = 2.5       # |lambda| dt below this: inside RK4's stability region with margin
 
@@ -158,21 +159,10 @@ def prepare_flight(controller: Any, trajectory: Any, duration: float, dt: float 
     P = vehicle.airframe.parameters()        # the payloads reach the truth through the schedule
     check_cog_changes(P, cog, duration)
     check_payload_events(vehicle, loads, duration)
-    # the type is checked by Schedule.build; only a sequence can hold a late disturbance
-    for i, d in enumerate(disturbances if isinstance(disturbances, (list, tuple)) else ()):
-        start = getattr(d, "t", None)
-        if isinstance(start, (int, float)) and start > duration:
-            warnings.warn(f"disturbance[{i}] (at t = {start:g} s): after the end of the run "
-                          f"(duration {duration:g} s), so it never happens in this run",
-                          QuadcogWarning, stacklevel=2)
+    warn_late_disturbances(disturbances, duration)
     schedule = Schedule.build(trajectory, duration, dt, cog, disturbances, payloads=loads)
-    x0 = start_at_reference(schedule.ref[0]) if x0 is None else validate.vector(x0, "x0", 12)
-    if not np.abs(x0).max() <= LARGEST:
-        validate.fail("x0", f"12 finite numbers within +-{LARGEST:g}", x0.tolist())
-    _, cause = first_divergence(x0[None, :], position_errors(x0[None, :], schedule.ref[:1]),
-                                limits)
-    if cause is not None:
-        raise InputError(f"x0 = {x0.tolist()} has already diverged: {cause.describe(limits)}")
+    x0 = start_at_reference(schedule.ref[0]) if x0 is None else check_start(x0, schedule.ref[0],
+                                                                            limits)
     actuation = Actuation.of(vehicle, options)
     P0 = whole_body(truth_parameters(P, schedule.cog_scale[0], schedule.cog[0]),
                     schedule.payload[0])
@@ -226,6 +216,40 @@ def batch_start(controller: Controller, actuation: Actuation, P0: npt.NDArray[np
     Z[:, N_STATE + nf:nX] = controller.initial_state()
     Z[:, nX + ACCUMULATORS.index("diverged_at")] = -1.0
     return Z
+
+
+def check_start(x0: npt.ArrayLike, ref0: npt.NDArray[np.float64], limits: Limits
+                ) -> npt.NDArray[np.float64]:
+    """A start state the caller gave, checked: 12 numbers within the model's scale, not
+    diverged already (a flight from there would only report its divergence).
+
+    Parameters
+    ----------
+    x0 : (12,) array_like
+        The start state [m, rad, m/s, rad/s].
+    ref0 : (14,) numpy.ndarray
+        The reference row at t = 0.
+    limits : Limits
+        The divergence limits.
+
+    Returns
+    -------
+    (12,) numpy.ndarray
+        x0 as floats.
+
+    Raises
+    ------
+    quadcog.InputError
+        x0 not 12 finite numbers within +-``LARGEST``, or diverged at t = 0.
+    """
+    x0 = validate.vector(x0, "x0", N_STATE)
+    if not np.abs(x0).max() <= LARGEST:
+        validate.fail("x0", f"12 finite numbers within +-{LARGEST:g}", x0.tolist())
+    _, cause = first_divergence(x0[None, :], position_errors(x0[None, :], ref0[None, :]),
+                                limits)
+    if cause is not None:
+        raise InputError(f"x0 = {x0.tolist()} has already diverged: {cause.describe(limits)}")
+    return x0
 
 
 def run_options(truth: TruthOptions | None, limits: Limits | None,
@@ -309,7 +333,25 @@ def check_step_size(controller: Controller | None, x0: npt.NDArray[np.float64],
     if controller is None:
         return
     lam = np.linalg.eigvals(evaluate(controller.closed_loop_jacobian(), x0, ref0, P)[0])
-    fastest = float(np.max(np.abs(lam)))
+    check_fastest_eigenvalue(float(np.max(np.abs(lam))), dt)
+
+
+def check_fastest_eigenvalue(fastest: float, dt: float) -> None:
+    """Raise InputError if RK4 with step dt is unstable for a closed loop whose fastest
+    eigenvalue has magnitude ``fastest`` (the rule of ``check_step_size``).
+
+    Parameters
+    ----------
+    fastest : float
+        The largest magnitude of the closed-loop Jacobian's eigenvalues (1/s).
+    dt : float
+        The step (s).
+
+    Raises
+    ------
+    quadcog.InputError
+        ``fastest * dt`` beyond ``RK4_LIMIT``.
+    """
     if fastest * dt > RK4_LIMIT:
         raise InputError(f"dt = {dt} s is too large: the closed loop has an eigenvalue of "
                          f"magnitude {fastest:.3g} 1/s, and RK4 needs dt < "
@@ -414,6 +456,32 @@ def check_cog_changes(P: npt.NDArray[np.float64], cog: CogProfile,
                           QuadcogWarning, stacklevel=2)
         check_parameters(with_cog(P, cog_at(P[R_G], 1.0, np.asarray(change.r))),
                          f"vehicle with the CoG of cog change {i} (r = {list(change.r)} m)")
+
+
+def warn_late_disturbances(disturbances: Any, duration: float, stacklevel: int = 2) -> None:
+    """A QuadcogWarning for each disturbance that starts after the end of the run.
+
+    Parameters
+    ----------
+    disturbances : sequence of Disturbance
+        The pulses (their type is checked by ``Schedule.build``).
+    duration : float
+        The run's length (s).
+    stacklevel : int
+        The warning's, as for ``warnings.warn`` from the caller.
+
+    Warns
+    -----
+    QuadcogWarning
+        A pulse after the end: it never happens in this run.
+    """
+    # only a sequence can hold a late disturbance
+    for i, d in enumerate(disturbances if isinstance(disturbances, (list, tuple)) else ()):
+        start = getattr(d, "t", None)
+        if isinstance(start, (int, float)) and start > duration:
+            warnings.warn(f"disturbance[{i}] (at t = {start:g} s): after the end of the run "
+                          f"(duration {duration:g} s), so it never happens in this run",
+                          QuadcogWarning, stacklevel=stacklevel + 1)
 
 
 def as_payload_profile(payloads: Any, vehicle: Vehicle) -> PayloadProfile:

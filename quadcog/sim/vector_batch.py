@@ -16,21 +16,22 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from quadcog import config
+from quadcog import config, validate
 from quadcog.controllers.base import Controller
 from quadcog.errors import InputError
 from quadcog.model.conventions import N_PARAM, N_STATE, R_G
-from quadcog.sim.batch import BatchResult, batch_metrics, run_kernel, run_map, slow_row_entries
+from quadcog.model.parameters import MARGIN, check_parameters, inertia_ratio
+from quadcog.sim.batch import BatchResult, batch_metrics, check_vehicles, run_kernel, run_map, slow_row_entries
 from quadcog.sim.closed_loop import chunk_of, monitored_step, packed
 from quadcog.sim.divergence import Limits
 from quadcog.sim.plant import Actuation, TruthOptions
-from quadcog.sim.prepare import batch_start, check_time, run_options, start_at_reference, whole_body
+from quadcog.sim.prepare import batch_start, check_start, check_time, run_options, start_at_reference, whole_body
 from quadcog.sim.schedule import STEP_INPUTS, Schedule, cog_at
 from quadcog.sim.timeline import CogChange, CogProfile, PayloadProfile
 from quadcog.trajectories.registry import as_trajectory
 from quadcog.vehicles.vehicle import Vehicle
 
-__all__ = ["sweep_step", "cog_shapes", "fly_batch"]
+__all__ = ["sweep_step", "cog_shapes", "check_cog_increments", "fly_batch"]
 
 
 def sweep_step(controller: Controller, actuation: Actuation, limits: Limits, n_changes: int
@@ -95,6 +96,41 @@ def cog_shapes(times: npt.NDArray[np.float64], cog_times: Sequence[tuple[float, 
                                 np.zeros((len(times), 0)))
 
 
+def check_cog_increments(P: npt.NDArray[np.float64], D: npt.NDArray[np.float64],
+                         cog_times: Sequence[tuple[float, float]]) -> None:
+    """Refuse CoG increments that take a flight where no rigid body is.
+
+    Between the starts and ends of the changes every shape s_j is linear in t, so each
+    flight's r_G(t) is too, and the admissible set of r_G is convex
+    (``quadcog.sim.prepare.check_cog_changes``): the CoGs at those instants cover the run.
+
+    Parameters
+    ----------
+    P : (B, 14) numpy.ndarray
+        The flights' parameters (their own r_G).
+    D : (B, 3 J) numpy.ndarray
+        The increments (m).
+    cog_times : sequence of (t, ramp)
+        The changes' starts and ramps (s).
+
+    Raises
+    ------
+    quadcog.ParameterError
+        Naming the first flight and the instant where its CoG is not admissible.
+    """
+    B, J = len(P), len(cog_times)
+    instants = np.unique([t + a for t, ramp in cog_times for a in (0.0, ramp)])
+    for t, s in zip(instants.tolist(), cog_shapes(instants, cog_times)):
+        Pk = P.copy()
+        with np.errstate(over="ignore", invalid="ignore"):
+            Pk[:, R_G] = cog_at(P[:, R_G], 1.0, np.einsum("j,bjk->bk", s, D.reshape(B, J, 3)))
+        ok = inertia_ratio(Pk) >= MARGIN       # NaN (overflow) is not
+        if not ok.all():
+            b = int(np.flatnonzero(~ok)[0])
+            check_parameters(Pk[b], f"vehicles[{b}] with the CoG increments D[{b}] at "
+                                    f"t = {validate.plain(t)} s")
+
+
 def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayLike,
               trajectory: Any = "hover", duration: float = 10.0, dt: float | None = None,
               cog_times: Sequence[tuple[float, float]] = (), disturbances: Any = (),
@@ -150,26 +186,39 @@ def fly_batch(controller: Controller, vehicles: Sequence[Vehicle], D: npt.ArrayL
     Raises
     ------
     quadcog.InputError
-        A precision other than float64 with kernel='casadi'.
+        An argument of the wrong kind or shape (named), vehicles of other rotors, a start
+        state beyond the scale or diverged already, or a precision other than float64 with
+        kernel='casadi'.
+    quadcog.ParameterError
+        A flight whose CoG increments take it where no rigid body is.
     """
+    validate.choice(kernel, "kernel", ("auto", "vector", "casadi"))
+    validate.choice(precision, "precision", ("float64", "float32"))
     if precision != "float64" and kernel == "casadi":
         raise InputError(f"precision={precision!r} needs kernel='auto' or 'vector' (CasADi's "
                          "map runs in float64), got kernel='casadi'")
+    if not isinstance(controller, Controller):
+        validate.fail("controller", "a quadcog Controller", controller)
+    threads = validate.integer(threads, "threads", lo=1, hi=1024)
     options, limits = run_options(truth, limits, None)
     dt = config.get("simulate.dt", dt)
     duration, dt = check_time(duration, dt)
+    vehicles, P, actuation = check_vehicles(vehicles, options)
+    if isinstance(cog_times, (str, bytes)) or not isinstance(cog_times, Sequence):
+        validate.fail("cog_times", "a sequence of (t, ramp) pairs (s)", cog_times)
+    cog_times = [(float(t), float(ramp)) for t, ramp in
+                 (validate.vector(c, f"cog_times[{j}]", 2) for j, c in enumerate(cog_times))]
     if payloads is None:
         payloads = PayloadProfile([], vehicles[0].payloads)
     schedule = Schedule.build(as_trajectory(trajectory), duration, dt,
                               disturbances=disturbances, payloads=payloads)
-    actuation = Actuation.of(vehicles[0], options)
-    P = np.array([v.airframe.parameters() for v in vehicles])
     B, J = P.shape[0], len(cog_times)
-    D = np.asarray(D, dtype=float).reshape(B, 3 * J)
+    D = validate.array(D, "D", (B, 3 * J))
     shapes = cog_shapes(schedule.t, cog_times)
+    check_cog_increments(P, D, cog_times)
     nX = N_STATE + actuation.n_rotor_states + controller.n_state
-    if x0 is None:
-        x0 = start_at_reference(schedule.ref[0])
+    x0 = (start_at_reference(schedule.ref[0]) if x0 is None
+          else check_start(x0, schedule.ref[0], limits))
     P0 = P.copy()
     if J:           # each flight's CoG at t = 0
         P0[:, R_G] = cog_at(P[:, R_G], 1.0,
