@@ -185,6 +185,17 @@ def test_sdf_degrees_as_sdformat_reads_them(x500_base):
     assert by_one == by_true
 
 
+def test_sdf_inertial_auto_false_is_the_numbers_as_written(x500_base):
+    """auto="false" (and "0") is SDF 1.11's default, the inertia as written: read, the same
+    vehicle as without it (auto="true" is refused above)."""
+    path = x500_base.parent.parent / "x500" / "model.sdf"
+    plain = Vehicle.from_sdf(path, name="x")
+    text = x500_base.read_text()
+    for value in ("false", "0", " False "):
+        x500_base.write_text(text.replace("<inertial>", f'<inertial auto="{value}">'))
+        assert Vehicle.from_sdf(path, name="x") == plain
+
+
 # -- a vehicle that cannot hover -------------------------------------------------------------
 
 @pytest.mark.parametrize("x", ["0.03", "0.1"])
