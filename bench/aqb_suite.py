@@ -26,7 +26,7 @@ import time
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from quadcog.files import cpu_model
+from quadcog.files import atomic_write, cpu_model
 
 PEERS = ("geo", "geo-a", "l1geo", "indi-a")
 OURS = ("geometric", "composite", "payload_adaptive")
@@ -93,7 +93,7 @@ def run_one(controller, trials, out):
     margins = runner.run()[controller]["delay_margins"]
     record["delay_margin"] = {"margins": [float(m) for m in margins],
                               "mean": float(np.mean(margins)), "seconds": time.time() - t0}
-    Path(out).write_text(json.dumps(record, indent=1))
+    atomic_write(out, json.dumps(record, indent=1), "the controller's results")
 
 
 def fmt(v, spec):
@@ -144,18 +144,25 @@ def main():
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    if a.one:
-        run_one(a.one, a.trials, out / f"{a.one}.json")
+    if a.one:       # into a file of its own: the parent keeps the last result until it is done
+        run_one(a.one, a.trials, out / f"{a.one}.json.part")
         return
     records = []
     for c in [] if a.table else a.controllers or default_controllers():
-        f = out / f"{c}.json"
-        f.unlink(missing_ok=True)
+        f, part = out / f"{c}.json", out / f"{c}.json.part"
+        part.unlink(missing_ok=True)
         print(f"== {c}: {a.trials} trials", flush=True)
         done = subprocess.run([sys.executable, __file__, "--one", c, "--trials", str(a.trials),
                                "--out", str(out)], cwd=ROOT)
-        records.append(json.loads(f.read_text()) if done.returncode == 0 and f.is_file()
-                       else {"controller": c, "error": f"exit status {done.returncode}"})
+        if done.returncode == 0 and part.is_file():
+            os.replace(part, f)
+            records.append(json.loads(f.read_text()))
+        else:       # a failed or interrupted run replaces no earlier result
+            part.unlink(missing_ok=True)
+            records.append({"controller": c, "error": f"exit status {done.returncode}"})
+            if f.is_file():
+                print(f"   {c} failed; its earlier result is kept in {f} (--table rebuilds "
+                      "the table from the kept results)", flush=True)
     # the table holds every controller measured into this folder (a rerun of one keeps the rest)
     known = default_controllers() + sorted(p.stem for p in out.glob("*.json")
                                            if p.stem not in default_controllers() + ["aqb"])
@@ -164,7 +171,7 @@ def main():
                if c in ran or (out / f"{c}.json").is_file()]
     text = table(records, a.trials)
     result = {"table": text, "machine": machine_line(records), "records": records}
-    (out / "aqb.json").write_text(json.dumps(result, indent=1))
+    atomic_write(out / "aqb.json", json.dumps(result, indent=1), "the table's results")
     print(result["machine"])
     print(text)
 

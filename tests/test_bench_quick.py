@@ -57,3 +57,23 @@ def test_every_bench_script_imports(script, monkeypatch):
     spec = importlib.util.spec_from_file_location(f"bench_{script[:-3]}", ROOT / "bench" / script)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)          # module level only: main() is not called
+
+
+def test_a_failed_aqb_rerun_keeps_the_earlier_result(tmp_path):
+    """bench/aqb_suite.py --controllers X reruns X: a run that fails (here a controller no
+    registry has; without AdaptiveQuadBench installed, at once) must leave X's earlier
+    result and no partial file; it deleted it before the run."""
+    import json
+    import subprocess
+    earlier = {"controller": "qc-none", "trials": 1, "error": "an earlier result"}
+    kept = tmp_path / "qc-none.json"
+    kept.write_text(json.dumps(earlier))
+    done = subprocess.run([sys.executable, str(ROOT / "bench" / "aqb_suite.py"), "--trials",
+                           "1", "--controllers", "qc-none", "--out", str(tmp_path)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert json.loads(kept.read_text()) == earlier
+    assert not list(tmp_path.glob("*.part")) and not list(tmp_path.glob(".*"))
+    assert "qc-none failed; its earlier result is kept" in done.stdout
+    table = json.loads((tmp_path / "aqb.json").read_text())["table"]
+    assert "| qc-none | 1 | failed to run" in table
