@@ -170,3 +170,18 @@ def test_firmware_tree_refuses_what_is_no_path(firmware):
     with pytest.raises(StackError, match="firmware: expected None or the path of a Crazyflie "
                                          "firmware tree, got"):
         firmware_tree(firmware)
+
+
+def test_a_step_longer_than_the_run_is_named_in_the_validate_grammar():
+    """It said "dt = 0.001 s is longer than the duration 1e-12 s", not where and what."""
+    with pytest.raises(InputError, match=r"^dt: expected a step no longer than the duration "
+                                         r"\(1e-12 s\), got 0.001$"):
+        q.simulate(q.CascadePD(), duration=1e-12)
+
+
+def test_a_quoted_tilde_in_the_vendor_folder_is_the_home_folder(monkeypatch):
+    """QUADCOG_VENDOR_DIR='~/vendor' (quoted, so the shell left the ~) was read as a folder
+    named ~ in the current folder."""
+    from quadcog.codegen.third_party import VENDOR_ENV, vendor_dir
+    monkeypatch.setenv(VENDOR_ENV, "~/vendor")
+    assert vendor_dir() == Path.home() / "vendor"

@@ -48,12 +48,12 @@ def vendor_dir() -> Path:
     Returns
     -------
     pathlib.Path
-        ``$QUADCOG_VENDOR_DIR``, else ``shared/vendor`` beside the repository that holds the
-        package (it may not exist).
+        ``$QUADCOG_VENDOR_DIR`` (``~`` expanded), else ``shared/vendor`` beside the
+        repository that holds the package (it may not exist).
     """
     env = os.environ.get(VENDOR_ENV)
     if env:
-        return Path(env)
+        return Path(env).expanduser()       # a "~" the shell did not expand (quoted)
     return Path(__file__).resolve().parents[3] / "shared" / "vendor"
 
 

@@ -17,7 +17,6 @@ import numpy as np
 import numpy.typing as npt
 
 from quadcog import config, validate
-from quadcog.errors import InputError
 from quadcog.model.conventions import R_G
 from quadcog.model.inertial_parameters import N_PI
 from quadcog.numerics import repeated_row
@@ -57,7 +56,7 @@ def check_time(duration: Any, dt: Any) -> tuple[float, float]:
     duration = validate.positive(duration, "duration", "s")
     dt = validate.positive(dt, "dt", "s")
     if dt > duration:
-        raise InputError(f"dt = {dt} s is longer than the duration {duration} s")
+        validate.fail("dt", f"a step no longer than the duration ({duration!r} s)", dt)
     validate.step_count(duration, dt, int(config.get("simulate.max_steps")))
     return duration, dt
 
