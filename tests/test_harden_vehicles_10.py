@@ -232,3 +232,29 @@ def test_payloads_at_times_out_of_order_are_those_at_the_times_in_order():
     t = np.array([0.0, 1.5, 2.5, 3.5, 4.5])
     np.testing.assert_allclose(profile.sample(t[::-1])[::-1], profile.sample(t), rtol=0,
                                atol=1e-15)
+
+
+# -- no airframe denser than osmium ------------------------------------------------------------
+
+def test_an_airframe_lighter_in_inertia_than_a_ball_of_osmium_is_refused(tmp_path):
+    """A solid ball has I = 2/5 m R^2 about each axis (the textbook formula, written here);
+    of all bodies of a mass and a largest density it has the least trace. cf2x.urdf with its
+    27 g written as 27 (read as kg) has 3e-4 of the trace a ball of osmium of 27 kg has, and
+    passed every other check (its thrust is read per mass)."""
+    from quadcog import HUMMINGBIRD
+    from quadcog.errors import ParameterError
+    from quadcog.vehicles.vehicle import DENSEST, least_inertia_trace
+    for m in (0.027, 1.0, 27.0):
+        radius = (m / DENSEST / (4.0 / 3.0 * np.pi)) ** (1.0 / 3.0)
+        assert least_inertia_trace(m) == pytest.approx(3 * 0.4 * m * radius ** 2, rel=1e-12)
+    assert DENSEST == 22_590.0                                # osmium, kg/m^3
+    path = _cf2x(tmp_path, '<mass value="0.027"', '<mass value="27"')
+    with pytest.raises(ParameterError, match=r"Ixx \+ Iyy \+ Izz: expected at least 0.14 kg "
+                                             r"m\^2, .* m = 27 kg .*\(a mass in grams\?\), "
+                                             r"got 4.97e-05"):
+        Vehicle.from_urdf(path)
+    least = least_inertia_trace(HUMMINGBIRD.m)
+    with pytest.raises(ParameterError, match="a ball of osmium"):
+        HUMMINGBIRD.replace(Ixx=0.1 * least, Iyy=0.1 * least, Izz=0.15 * least)
+    kept = HUMMINGBIRD.replace(Ixx=0.3 * least, Iyy=0.3 * least, Izz=0.45 * least)
+    assert kept.Ixx + kept.Iyy + kept.Izz > least

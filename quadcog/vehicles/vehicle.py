@@ -50,9 +50,33 @@ from quadcog.vehicles.payload import Payload, as_payload, check_lift, check_reac
 from quadcog.vehicles.rotor_model import CRAZYFLIE_21_PLUS_CUBIC, CRAZYFLIE_BITCRAZE_VOLTAGE, ROTOR_MODELS, RotorModel
 
 __all__ = ["Vehicle", "HUMMINGBIRD", "CRAZYFLIE", "CRAZYFLIE_21", "X500", "PRESETS", "FIELD_NAMES", "N_ROTORS",
-           "plus_layout", "x_layout", "default_parameters", "preset_drag"]
+           "plus_layout", "x_layout", "default_parameters", "preset_drag", "DENSEST",
+           "least_inertia_trace"]
 
 N_ROTORS = 4
+# kg/m^3, osmium's, the densest element: no airframe is denser, which bounds its inertia
+DENSEST = 22_590.0
+
+
+def least_inertia_trace(m: float) -> float:
+    """The least Ixx + Iyy + Izz a body of mass ``m`` can have, no part denser than DENSEST.
+
+    Among bodies of a given mass and largest density, a ball of that density has the least
+    trace about its centre: 6/5 m R^2, R = (3 m / (4 pi DENSEST))^(1/3); about any other
+    point the trace is larger still.
+
+    Parameters
+    ----------
+    m : float
+        The mass (kg), >= 0.
+
+    Returns
+    -------
+    float
+        The least trace (kg m^2).
+    """
+    radius = (3.0 * m / (4.0 * np.pi * DENSEST)) ** (1.0 / 3.0)
+    return 1.2 * m * radius ** 2
 
 Layout = tuple[tuple[float, float], ...]
 
@@ -274,6 +298,14 @@ class Vehicle:
         # radius of the paper's model (I_O held as the CoG moves) moot for it
         check_parameters(np.array([getattr(self, n) for n in PARAM_NAMES], dtype=float),
                          where("parameters"))
+        # an airframe lighter in inertia than a ball of osmium of its mass has its mass or its
+        # inertias in other units (a file's 27 g read as 27 kg); each unit alone passes the
+        # checks above, since the rotors' thrust is read per mass
+        trace, least = self.Ixx + self.Iyy + self.Izz, least_inertia_trace(self.m)
+        if not trace >= least:
+            fail(where("Ixx + Iyy + Izz"), f"at least {least:.3g} kg m^2, what a ball of "
+                 f"osmium (the densest element) of m = {self.m:g} kg has: a mass in kg and "
+                 "inertias in kg m^2 (a mass in grams?)", trace, ParameterError)
         _check_payloads(self, where)
         _check_rigid_body(self, where)
 
