@@ -151,3 +151,18 @@ def test_the_hover_window_of_many_plateaus_grows_linearly():
     assert blocks.max() + 1 == 1600 and (blocks >= 0).all() and (np.diff(blocks) >= 0).all()
     fast, slow = _seconds(short), _seconds(long)
     assert slow < 10 * fast + 0.05, (fast, slow)
+
+
+def test_the_thrust_note_names_what_the_log_lacks():
+    """A PWM log without its battery voltage, thrust from the mixer's commands: the note said
+    "(the log has no motor outputs)", though the log has motor_pwm."""
+    from quadcog.identification.segments import rotor_thrusts
+    from quadcog.vehicles.rotor_model import CRAZYFLIE_BITCRAZE_VOLTAGE as voltage_model
+    n = 200
+    f = _thrusts(n)
+    U = f @ CRAZYFLIE.mixer().T
+    log = FlightLog("pwm.csv", "csv", np.arange(n) * 0.01, {
+        "motor_pwm": voltage_model.command(f, np.full(n, 3.7)),
+        "thrust_command": U[:, 0], "moment_command": U[:, 1:]}, {}, {})
+    _, described, _ = rotor_thrusts(log, CRAZYFLIE, voltage_model)
+    assert described.endswith("(the log has no battery_voltage)"), described

@@ -330,7 +330,7 @@ def rotor_thrusts(log: FlightLog, vehicle: Vehicle, rotor_model: RotorModel | st
     if fallback is not None and log.has("thrust_command") and log.has("moment_command"):
         u = commands_from_mixer(log, vehicle)
         return (fallback.thrust(u), f"{fallback.name} from thrust_command and moment_command "
-                f"through the firmware's mixer{FALLBACK_NOTE}motor outputs)", fallback)
+                f"through the firmware's mixer{FALLBACK_NOTE}{', '.join(missing)})", fallback)
     raise IdentificationError(
         f"{log.source}: rotor model {model.name!r} needs the signal(s) "
         f"{', '.join(missing)}, which the log lacks (it has "
