@@ -248,6 +248,7 @@ class _Counter(HTMLParser):
 def _site():
     # one build for every page: a second background_result() call would build the site again
     from conftest import background_result
+    import test_docsite  # noqa: F401  (registers the "docs site" job when this file runs alone)
     return background_result("docs site")
 
 
