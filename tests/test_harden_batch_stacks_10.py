@@ -165,9 +165,14 @@ def test_a_failed_px4_tree_copy_is_a_px4_error_and_leaves_nothing(tmp_path, monk
 
 
 @pytest.mark.parametrize("firmware", ["", 5, b"/tmp", ["x"]])
-def test_firmware_tree_refuses_what_is_no_path(firmware):
-    from quadcog.crazyflie.firmware import firmware_tree
-    with pytest.raises(StackError, match="firmware: expected None or the path of a Crazyflie "
+@pytest.mark.parametrize("module", ["quadcog.crazyflie.firmware",
+                                    "quadcog.embedded.crazyflie_firmware"])
+def test_firmware_tree_refuses_what_is_no_path(firmware, module):
+    """Both finders of the firmware (the loop's and the app build's) share locate_tree: ""
+    fell back to the tarball, a non-path raised a raw TypeError."""
+    import importlib
+    firmware_tree = importlib.import_module(module).firmware_tree
+    with pytest.raises(StackError, match="^firmware: expected None or the path of a Crazyflie "
                                          "firmware tree, got"):
         firmware_tree(firmware)
 

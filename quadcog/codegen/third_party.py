@@ -32,6 +32,7 @@ import tempfile
 from quadcog.codegen.compiler import DIGEST_SUFFIX, file_digest, find_compiler, is_verified
 from quadcog.errors import StackError
 from quadcog.paths import cache_dir
+from quadcog.validate import plain
 
 __all__ = ["VENDOR_ENV", "SKIP_FOLDERS", "Source", "vendor_dir", "unpack_tarball", "check_tree",
            "locate_tree", "find_tree", "tree_digest", "tree_hash", "first_error_line",
@@ -184,9 +185,17 @@ def locate_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str,
     Raises
     ------
     quadcog.StackError
-        The argument or the variable names a folder that is not such a tree, or there is
-        neither a folder nor the tarball.
+        The argument is not a path (``""``, bytes, a number), the argument or the variable
+        names a folder that is not such a tree, or there is neither a folder nor the
+        tarball.
     """
+    # an empty path would name the current folder, bytes or a number no folder: refused, not
+    # passed over to the environment or the tarball
+    if argument is not None and (not isinstance(argument, (str, os.PathLike))
+                                 or not isinstance(os.fspath(argument), str)
+                                 or not os.fspath(argument)):
+        raise error(f"{argument_name}: expected None or the path of a {what}, got "
+                    f"{plain(argument)}")
     if (tarball_argument and argument is not None and Path(argument).is_file()
             and tarfile.is_tarfile(argument)):
         return Path(argument).resolve(), True
@@ -202,7 +211,8 @@ def locate_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str,
 
 
 def find_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str, inner: str,
-              markers: Sequence[str], what: str, get: str) -> Path:
+              markers: Sequence[str], what: str, get: str,
+              argument_name: str = "argument") -> Path:
     """The root of a third-party tree: from the argument, the environment, or the tarball.
 
     Parameters
@@ -221,6 +231,8 @@ def find_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str, i
         The tree's name for messages, e.g. ``"Crazyflie firmware tree"``.
     get : str
         How to get one, for messages (e.g. a ``git clone`` line).
+    argument_name : str
+        The argument's name in messages.
 
     Returns
     -------
@@ -230,10 +242,12 @@ def find_tree(argument: str | os.PathLike[str] | None, env: str, tarball: str, i
     Raises
     ------
     quadcog.StackError
-        The argument or the variable names a folder that is not such a tree (the message
-        names the first missing marker), or there is neither a folder nor the tarball.
+        The argument is not a path, the argument or the variable names a folder that is not
+        such a tree (the message names the first missing marker), or there is neither a
+        folder nor the tarball.
     """
-    path, is_tarball = locate_tree(argument, env, tarball, markers, what, get)
+    path, is_tarball = locate_tree(argument, env, tarball, markers, what, get,
+                                   argument_name=argument_name)
     return (unpack_tarball(path) / inner).resolve() if is_tarball else path
 
 

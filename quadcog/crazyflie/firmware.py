@@ -99,13 +99,8 @@ def firmware_tree(firmware: str | os.PathLike[str] | None = None) -> Path:
         A folder that is not a firmware tree (the first missing file named), none at all, or
         ``firmware`` not a path (an empty one would name the current folder).
     """
-    if firmware is not None and (not isinstance(firmware, (str, os.PathLike))
-                                 or not isinstance(os.fspath(firmware), str)
-                                 or not os.fspath(firmware)):
-        validate.fail("firmware", "None or the path of a Crazyflie firmware tree", firmware,
-                      StackError)
     return find_tree(firmware, FIRMWARE_ENV, "crazyflie-firmware.tar.xz", "crazyflie-firmware",
-                     MARKERS, "Crazyflie firmware tree", GET_FIRMWARE)
+                     MARKERS, "Crazyflie firmware tree", GET_FIRMWARE, argument_name="firmware")
 
 
 def autoconf(propellers: str = "2.1+", out_of_tree: bool = False) -> str:
