@@ -280,7 +280,7 @@ def app_file_names(name: str) -> list[str]:
     Parameters
     ----------
     name : str
-        The law's C name part (``<name>`` of ``quadcog_<name>_step``).
+        As for ``quadcog.embedded.controller_export.file_names``.
 
     Returns
     -------
